@@ -1,0 +1,108 @@
+// PolyMesh: halfedge connectivity of a polygon cage. No coordinates (topology decides,
+// geometry follows). Faces are stored as one flat list of "corners"; corner h of face f is
+// also the halfedge leaving corner_vertex(h) along f's boundary, so a halfedge needs no
+// storage of its own beyond twin / edge / face.
+#pragma once
+
+#include <vector>
+
+#include "core/mesh/errors.h"
+
+namespace subd2nurbs {
+
+class PolyMesh {
+ public:
+  PolyMesh() = default;
+
+  /// Builds connectivity from a face list and validates the topology: face size >= 3,
+  /// indices in range and not repeated within a face, every edge on at most two faces,
+  /// consistent orientation, every vertex's faces forming one fan.
+  /// \throw InvalidMeshError naming the first offending element.
+  /// Unused vertices are reported in `diagnostics` (if given), not rejected.
+  static PolyMesh build(int num_vertices, const std::vector<int>& face_sizes,
+                        const std::vector<int>& face_indices, Diagnostics* diagnostics = nullptr);
+
+  int num_vertices() const { return num_vertices_; }
+  int num_faces() const { return static_cast<int>(face_offsets_.size()) - 1; }
+  int num_edges() const { return static_cast<int>(edge_corner_.size()); }
+  int num_corners() const { return static_cast<int>(corner_vertex_.size()); }
+
+  // --- faces --------------------------------------------------------------------------
+  int face_begin(int f) const { return face_offsets_[f]; }
+  int face_end(int f) const { return face_offsets_[f + 1]; }
+  int face_size(int f) const { return face_offsets_[f + 1] - face_offsets_[f]; }
+  const int* face_vertices(int f) const { return corner_vertex_.data() + face_offsets_[f]; }
+  bool all_quads() const { return num_corners() == 4 * num_faces(); }
+
+  // --- corners = halfedges ------------------------------------------------------------
+  /// Halfedge h runs from corner_vertex(h) to corner_vertex(next(h)) inside corner_face(h).
+  int corner_vertex(int h) const { return corner_vertex_[h]; }
+  int corner_face(int h) const { return corner_face_[h]; }
+  int corner_edge(int h) const { return corner_edge_[h]; }
+  /// The opposite halfedge in the neighbouring face, or -1 on the boundary.
+  int twin(int h) const { return twin_[h]; }
+  int next(int h) const {
+    int f = corner_face_[h];
+    return h + 1 == face_offsets_[f + 1] ? face_offsets_[f] : h + 1;
+  }
+  int prev(int h) const {
+    int f = corner_face_[h];
+    return h == face_offsets_[f] ? face_offsets_[f + 1] - 1 : h - 1;
+  }
+  int to_vertex(int h) const { return corner_vertex_[next(h)]; }
+
+  // --- edges --------------------------------------------------------------------------
+  /// A halfedge of edge e; for a boundary edge, its only one.
+  int edge_corner(int e) const { return edge_corner_[e]; }
+  int edge_vertex(int e, int end) const {
+    int h = edge_corner_[e];
+    return end == 0 ? corner_vertex_[h] : to_vertex(h);
+  }
+  bool is_boundary_edge(int e) const { return twin_[edge_corner_[e]] < 0; }
+  int edge_face_count(int e) const { return is_boundary_edge(e) ? 1 : 2; }
+  /// Edge joining a and b, or -1.
+  int find_edge(int a, int b) const;
+
+  // --- vertices -----------------------------------------------------------------------
+  /// Corners at v (one per incident face) in fan order: each next corner is
+  /// twin(prev(previous corner)), i.e. counter-clockwise seen from outside. A boundary
+  /// vertex's fan starts at the corner whose outgoing halfedge is on the boundary.
+  const int* vertex_corners(int v) const { return vertex_corners_.data() + vertex_offsets_[v]; }
+  int vertex_face_count(int v) const { return vertex_offsets_[v + 1] - vertex_offsets_[v]; }
+  bool is_boundary_vertex(int v) const {
+    return vertex_face_count(v) > 0 && twin_[vertex_corners(v)[0]] < 0;
+  }
+  /// Number of incident edges.
+  int valence(int v) const { return vertex_face_count(v) + (is_boundary_vertex(v) ? 1 : 0); }
+  bool is_unused_vertex(int v) const { return vertex_face_count(v) == 0; }
+
+ private:
+  friend class PolyMeshAssembler;
+
+  int num_vertices_ = 0;
+  std::vector<int> face_offsets_{0};
+  std::vector<int> corner_vertex_;
+  std::vector<int> corner_face_;
+  std::vector<int> corner_edge_;
+  std::vector<int> twin_;
+  std::vector<int> edge_corner_;
+  std::vector<int> vertex_offsets_{0};
+  std::vector<int> vertex_corners_;
+};
+
+/// Low-level access for code that constructs a PolyMesh directly from known connectivity
+/// (the refiner builds a child mesh from its parent without searching for twins).
+class PolyMeshAssembler {
+ public:
+  static int& num_vertices(PolyMesh& m) { return m.num_vertices_; }
+  static std::vector<int>& face_offsets(PolyMesh& m) { return m.face_offsets_; }
+  static std::vector<int>& corner_vertex(PolyMesh& m) { return m.corner_vertex_; }
+  static std::vector<int>& corner_face(PolyMesh& m) { return m.corner_face_; }
+  static std::vector<int>& corner_edge(PolyMesh& m) { return m.corner_edge_; }
+  static std::vector<int>& twin(PolyMesh& m) { return m.twin_; }
+  static std::vector<int>& edge_corner(PolyMesh& m) { return m.edge_corner_; }
+  static std::vector<int>& vertex_offsets(PolyMesh& m) { return m.vertex_offsets_; }
+  static std::vector<int>& vertex_corners(PolyMesh& m) { return m.vertex_corners_; }
+};
+
+}  // namespace subd2nurbs

@@ -1,0 +1,60 @@
+#include "core/mesh/validate.h"
+
+#include <cmath>
+#include <string>
+
+namespace subd2nurbs {
+
+namespace {
+bool valid_sharpness(double s) { return std::isfinite(s) && s >= 0.0; }
+}  // namespace
+
+PolyMesh validate_and_build(const MeshInput& input, Diagnostics* diagnostics) {
+  const int nv = input.num_vertices();
+  if (nv == 0 || input.num_faces() == 0)
+    throw InvalidMeshError(MeshErrorCode::EmptyMesh, ElementKind::None, -1, -1,
+                           "mesh is empty (" + std::to_string(nv) + " vertices, " +
+                               std::to_string(input.num_faces()) + " faces)");
+  for (int v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(input.positions[v][k]))
+        throw InvalidMeshError(MeshErrorCode::NonFiniteCoordinate, ElementKind::Vertex, v, k,
+                               "vertex " + std::to_string(v) + " has a non-finite coordinate (" +
+                                   "xyz"[k] + " = " + std::to_string(input.positions[v][k]) + ")");
+
+  PolyMesh mesh = PolyMesh::build(nv, input.face_sizes, input.face_indices, diagnostics);
+
+  for (size_t i = 0; i < input.creases.size(); ++i) {
+    const CreaseTag& c = input.creases[i];
+    if (mesh.find_edge(c.v0, c.v1) < 0)
+      throw InvalidMeshError(MeshErrorCode::InvalidTag, ElementKind::Tag, static_cast<long>(i), -1,
+                             "crease tag " + std::to_string(i) + " names edge (" +
+                                 std::to_string(c.v0) + ", " + std::to_string(c.v1) +
+                                 "), which is not an edge of the mesh");
+    if (!valid_sharpness(c.sharpness))
+      throw InvalidMeshError(MeshErrorCode::InvalidTag, ElementKind::Tag, static_cast<long>(i), -1,
+                             "crease tag " + std::to_string(i) + " has invalid sharpness " +
+                                 std::to_string(c.sharpness));
+  }
+  for (size_t i = 0; i < input.corners.size(); ++i) {
+    const CornerTag& c = input.corners[i];
+    if (c.vertex < 0 || c.vertex >= nv)
+      throw InvalidMeshError(MeshErrorCode::InvalidTag, ElementKind::Tag, static_cast<long>(i), -1,
+                             "corner tag " + std::to_string(i) + " names vertex " +
+                                 std::to_string(c.vertex) + ", but the mesh has " +
+                                 std::to_string(nv) + " vertices");
+    if (!valid_sharpness(c.sharpness))
+      throw InvalidMeshError(MeshErrorCode::InvalidTag, ElementKind::Tag, static_cast<long>(i), -1,
+                             "corner tag " + std::to_string(i) + " has invalid sharpness " +
+                                 std::to_string(c.sharpness));
+  }
+  for (size_t i = 0; i < input.holes.size(); ++i)
+    if (input.holes[i] < 0 || input.holes[i] >= mesh.num_faces())
+      throw InvalidMeshError(MeshErrorCode::InvalidTag, ElementKind::Tag, static_cast<long>(i), -1,
+                             "hole tag names face " + std::to_string(input.holes[i]) +
+                                 ", but the mesh has " + std::to_string(mesh.num_faces()) +
+                                 " faces");
+  return mesh;
+}
+
+}  // namespace subd2nurbs

@@ -1,0 +1,94 @@
+// Small generated cages for tests and benchmarks (header-only).
+#pragma once
+
+#include <cmath>
+
+#include "core/mesh/mesh_input.h"
+
+namespace subd2nurbs::testing {
+
+inline void add_face(MeshInput& m, std::initializer_list<int> vs) {
+  m.face_sizes.push_back(static_cast<int>(vs.size()));
+  m.face_indices.insert(m.face_indices.end(), vs);
+}
+
+/// Unit cube [0,1]^3, six outward quads.
+inline MeshInput cube() {
+  MeshInput m;
+  for (int i = 0; i < 8; ++i) m.positions.push_back({double(i & 1), double((i >> 1) & 1), double(i >> 2)});
+  add_face(m, {0, 2, 3, 1});
+  add_face(m, {4, 5, 7, 6});
+  add_face(m, {0, 1, 5, 4});
+  add_face(m, {2, 6, 7, 3});
+  add_face(m, {0, 4, 6, 2});
+  add_face(m, {1, 3, 7, 5});
+  return m;
+}
+
+/// The unit cube with its top face split into two quads by a raised vertex (index 8) joined
+/// to two opposite corners only: vertex 8 is interior with valence 2.
+inline MeshInput cube_with_valence_two_vertex() {
+  MeshInput m = cube();
+  m.positions.push_back({0.5, 0.5, 1.2});
+  m.face_sizes.erase(m.face_sizes.begin() + 1);
+  m.face_indices.erase(m.face_indices.begin() + 4, m.face_indices.begin() + 8);  // {4,5,7,6}
+  add_face(m, {4, 5, 7, 8});
+  add_face(m, {7, 6, 4, 8});
+  return m;
+}
+
+/// Open nx-by-ny grid of quads in the plane z = 0 (a bit of z noise keeps it non-planar).
+inline MeshInput grid(int nx, int ny) {
+  MeshInput m;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i)
+      m.positions.push_back({double(i), double(j), 0.1 * std::sin(1.3 * i + 0.7 * j)});
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      int a = j * (nx + 1) + i;
+      add_face(m, {a, a + 1, a + nx + 2, a + nx + 1});
+    }
+  return m;
+}
+
+/// Closed torus of nu x nv quads (major radius R, minor r).
+inline MeshInput torus(int nu, int nv, double R = 3.0, double r = 1.0) {
+  MeshInput m;
+  m.positions.reserve(static_cast<size_t>(nu) * nv);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+      m.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u),
+                             r * std::sin(v)});
+    }
+  m.face_sizes.assign(static_cast<size_t>(nu) * nv, 4);
+  m.face_indices.reserve(static_cast<size_t>(4) * nu * nv);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      int i1 = (i + 1) % nu, j1 = (j + 1) % nv;
+      for (int v : {i * nv + j, i1 * nv + j, i1 * nv + j1, i * nv + j1}) m.face_indices.push_back(v);
+    }
+  return m;
+}
+
+/// A closed "star" around an extraordinary vertex of valence n: a pyramid-like fan of n quads
+/// on top, closed by one n-gon at the bottom. Exercises n-gons and high valence.
+inline MeshInput star(int n) {
+  MeshInput m;
+  m.positions.push_back({0, 0, 1});
+  for (int r = 0; r < n; ++r) {
+    double a = 2 * M_PI * r / n, b = 2 * M_PI * (r + 0.5) / n;
+    m.positions.push_back({std::cos(a), std::sin(a), 0.6});
+    m.positions.push_back({1.3 * std::cos(b), 1.3 * std::sin(b), 0.0});
+  }
+  for (int r = 0; r < n; ++r) {
+    int e0 = 1 + 2 * r, d = 2 + 2 * r, e1 = 1 + 2 * ((r + 1) % n);
+    add_face(m, {0, e0, d, e1});
+  }
+  // Bottom: the ring of e and d vertices, reversed so it faces down.
+  m.face_sizes.push_back(2 * n);
+  for (int k = 2 * n; k >= 1; --k) m.face_indices.push_back(k);
+  return m;
+}
+
+}  // namespace subd2nurbs::testing
