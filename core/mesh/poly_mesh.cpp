@@ -68,7 +68,7 @@ PolyMesh PolyMesh::build(int num_vertices, const std::vector<int>& face_sizes,
     fail(MeshErrorCode::IndexOutOfRange, ElementKind::Face, nf - 1, -1,
          "face sizes add up to " + std::to_string(nc) + " indices but " +
              std::to_string(face_indices.size()) + " were given");
-  m.corner_vertex_ = face_indices;
+  m.corner_vertex_.assign(face_indices.begin(), face_indices.end());
   m.corner_face_.resize(nc);
   for (int f = 0; f < nf; ++f) {
     const int b = m.face_offsets_[f], e = m.face_offsets_[f + 1];
@@ -86,13 +86,15 @@ PolyMesh PolyMesh::build(int num_vertices, const std::vector<int>& face_sizes,
     }
   }
 
+  m.quads_ = nc == 4 * nf;  // sizes are >= 3, so this means every face is a quad
+
   // Outgoing corners per vertex (unordered for now): counting sort.
   m.vertex_offsets_.assign(num_vertices + 1, 0);
   for (int h = 0; h < nc; ++h) ++m.vertex_offsets_[m.corner_vertex_[h] + 1];
   for (int v = 0; v < num_vertices; ++v) m.vertex_offsets_[v + 1] += m.vertex_offsets_[v];
   m.vertex_corners_.resize(nc);
   {
-    std::vector<int> fill(m.vertex_offsets_.begin(), m.vertex_offsets_.end() - 1);
+    Indices fill(m.vertex_offsets_.begin(), m.vertex_offsets_.end() - 1);
     for (int h = 0; h < nc; ++h) m.vertex_corners_[fill[m.corner_vertex_[h]]++] = h;
   }
 

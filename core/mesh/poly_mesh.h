@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/mesh/errors.h"
+#include "core/util/default_init_vector.h"
 
 namespace subd2nurbs {
 
@@ -32,20 +33,22 @@ class PolyMesh {
   int face_end(int f) const { return face_offsets_[f + 1]; }
   int face_size(int f) const { return face_offsets_[f + 1] - face_offsets_[f]; }
   const int* face_vertices(int f) const { return corner_vertex_.data() + face_offsets_[f]; }
-  bool all_quads() const { return num_corners() == 4 * num_faces(); }
+  bool all_quads() const { return quads_; }
 
   // --- corners = halfedges ------------------------------------------------------------
   /// Halfedge h runs from corner_vertex(h) to corner_vertex(next(h)) inside corner_face(h).
   int corner_vertex(int h) const { return corner_vertex_[h]; }
-  int corner_face(int h) const { return corner_face_[h]; }
+  int corner_face(int h) const { return quads_ ? h >> 2 : corner_face_[h]; }
   int corner_edge(int h) const { return corner_edge_[h]; }
   /// The opposite halfedge in the neighbouring face, or -1 on the boundary.
   int twin(int h) const { return twin_[h]; }
   int next(int h) const {
+    if (quads_) return (h & ~3) | ((h + 1) & 3);
     int f = corner_face_[h];
     return h + 1 == face_offsets_[f + 1] ? face_offsets_[f] : h + 1;
   }
   int prev(int h) const {
+    if (quads_) return (h & ~3) | ((h + 3) & 3);
     int f = corner_face_[h];
     return h == face_offsets_[f] ? face_offsets_[f + 1] - 1 : h - 1;
   }
@@ -79,30 +82,35 @@ class PolyMesh {
  private:
   friend class PolyMeshAssembler;
 
+  using Indices = DefaultInitVector<int>;
   int num_vertices_ = 0;
-  std::vector<int> face_offsets_{0};
-  std::vector<int> corner_vertex_;
-  std::vector<int> corner_face_;
-  std::vector<int> corner_edge_;
-  std::vector<int> twin_;
-  std::vector<int> edge_corner_;
-  std::vector<int> vertex_offsets_{0};
-  std::vector<int> vertex_corners_;
+  bool quads_ = false;            ///< every face is a quad: corner h is in face h / 4
+  Indices face_offsets_{0};
+  Indices corner_vertex_;
+  Indices corner_face_;           ///< empty when quads_ (derived from the corner index)
+  Indices corner_edge_;
+  Indices twin_;
+  Indices edge_corner_;
+  Indices vertex_offsets_{0};
+  Indices vertex_corners_;
 };
 
 /// Low-level access for code that constructs a PolyMesh directly from known connectivity
 /// (the refiner builds a child mesh from its parent without searching for twins).
 class PolyMeshAssembler {
  public:
+  using Indices = PolyMesh::Indices;
   static int& num_vertices(PolyMesh& m) { return m.num_vertices_; }
-  static std::vector<int>& face_offsets(PolyMesh& m) { return m.face_offsets_; }
-  static std::vector<int>& corner_vertex(PolyMesh& m) { return m.corner_vertex_; }
-  static std::vector<int>& corner_face(PolyMesh& m) { return m.corner_face_; }
-  static std::vector<int>& corner_edge(PolyMesh& m) { return m.corner_edge_; }
-  static std::vector<int>& twin(PolyMesh& m) { return m.twin_; }
-  static std::vector<int>& edge_corner(PolyMesh& m) { return m.edge_corner_; }
-  static std::vector<int>& vertex_offsets(PolyMesh& m) { return m.vertex_offsets_; }
-  static std::vector<int>& vertex_corners(PolyMesh& m) { return m.vertex_corners_; }
+  /// Declares every face a quad; corner_face is then derived and need not be filled.
+  static bool& all_quads(PolyMesh& m) { return m.quads_; }
+  static Indices& face_offsets(PolyMesh& m) { return m.face_offsets_; }
+  static Indices& corner_vertex(PolyMesh& m) { return m.corner_vertex_; }
+  static Indices& corner_face(PolyMesh& m) { return m.corner_face_; }
+  static Indices& corner_edge(PolyMesh& m) { return m.corner_edge_; }
+  static Indices& twin(PolyMesh& m) { return m.twin_; }
+  static Indices& edge_corner(PolyMesh& m) { return m.edge_corner_; }
+  static Indices& vertex_offsets(PolyMesh& m) { return m.vertex_offsets_; }
+  static Indices& vertex_corners(PolyMesh& m) { return m.vertex_corners_; }
 };
 
 }  // namespace subd2nurbs

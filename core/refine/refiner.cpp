@@ -253,9 +253,10 @@ RefinementStep refine_once(const SubdivLevel& parent) {
   auto& edge_corner = PolyMeshAssembler::edge_corner(cm);
   auto& voff = PolyMeshAssembler::vertex_offsets(cm);
   auto& vcor = PolyMeshAssembler::vertex_corners(cm);
+  PolyMeshAssembler::all_quads(cm) = true;
+  cf.clear();
   offsets.resize(H + 1);
   cv.resize(4 * H);
-  cf.resize(4 * H);
   ce.resize(4 * H);
   tw.resize(4 * H);
   auto half_at = [&](int e, int vertex) { return 2 * e + (pm.edge_vertex(e, 0) == vertex ? 0 : 1); };
@@ -268,7 +269,6 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     cv[c + 1] = V + F + eh;
     cv[c + 2] = V + f;
     cv[c + 3] = V + F + ep;
-    cf[c + 0] = cf[c + 1] = cf[c + 2] = cf[c + 3] = h;
     ce[c + 0] = half_at(eh, v);
     ce[c + 1] = 2 * E + h;
     ce[c + 2] = 2 * E + p;
