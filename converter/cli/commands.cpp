@@ -1,0 +1,297 @@
+#include "converter/cli/commands.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <new>
+#include <vector>
+
+#include "core/analysis/mesh_stats.h"
+#include "core/refine/refiner.h"
+#include "io/input_error.h"
+#include "io/obj_reader.h"
+#include "io/obj_writer.h"
+
+#ifndef SUBD2NURBS_VERSION
+#define SUBD2NURBS_VERSION "0.1.0"
+#endif
+
+namespace subd2nurbs::cli {
+
+namespace {
+
+/// Refinements producing more faces than this are refused (memory grows 4x per level).
+constexpr double kMaxOutputFaces = 50e6;
+/// Beyond the face limit for any cage; keeps 4^levels far from overflowing.
+constexpr int kMaxLevels = 20;
+/// Above this many output faces, refine reports what it is doing on stderr.
+constexpr double kProgressFaces = 100e3;
+
+const char* kExitCodeHelp =
+    "Exit codes:\n"
+    "  0  success\n"
+    "  1  usage error (unknown option, missing or bad argument)\n"
+    "  2  invalid input (unreadable file, malformed OBJ, invalid cage); the message names\n"
+    "     FILE:LINE of the offending vertex, face or tag\n"
+    "  3  the output file could not be written (an existing file is left untouched)\n"
+    "  4  internal error";
+
+// --- loading -----------------------------------------------------------------------------
+
+struct Loaded {
+  LoadedCage cage;
+  SubdivLevel level;
+  std::vector<std::string> warnings;  ///< formatted "FILE:LINE: warning: ..."
+};
+
+Loaded load(const std::string& path) {
+  Loaded result;
+  result.cage = read_obj(path);
+  Diagnostics validation;
+  result.level = load_and_validate(result.cage, &validation);
+  for (const Diagnostic& d : result.cage.diagnostics)
+    result.warnings.push_back(format_diagnostic(result.cage, d));
+  for (const Diagnostic& d : validation) result.warnings.push_back(format_diagnostic(result.cage, d));
+  return result;
+}
+
+std::vector<Point3> base_positions(const LoadedCage& cage) {
+  return std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end());
+}
+
+const char* boundary_name(BoundaryRule rule) {
+  switch (rule) {
+    case BoundaryRule::None: return "none";
+    case BoundaryRule::EdgeOnly: return "edge-only";
+    case BoundaryRule::EdgeAndCorner: return "edge-and-corner";
+  }
+  return "?";
+}
+const char* crease_method_name(CreaseMethod m) {
+  return m == CreaseMethod::Chaikin ? "chaikin" : "uniform";
+}
+const char* triangle_rule_name(TriangleRule r) {
+  return r == TriangleRule::Smooth ? "smooth" : "catmark";
+}
+
+std::string number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", x);
+  return buffer;
+}
+
+// --- info as text --------------------------------------------------------------------------
+
+std::string histogram_text(const std::map<int, int>& histogram, const char* unit) {
+  std::string s;
+  for (const auto& [key, count] : histogram)
+    s += (s.empty() ? "" : ", ") + std::to_string(count) + " " + unit + " " + std::to_string(key);
+  return s.empty() ? "-" : s;
+}
+
+void print_text(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
+  const SubdivOptions& o = loaded.level.options;
+  const BoundingBox& b = s.bounds;
+  out << loaded.cage.path << "\n"
+      << "  vertices     " << s.vertices << " (" << s.unused_vertices << " unused, "
+      << s.extraordinary_vertices << " extraordinary)\n"
+      << "  faces        " << s.faces << " (" << histogram_text(s.face_sizes, "of size")
+      << "; " << s.holes << " holes)\n"
+      << "  edges        " << s.edges << " (" << s.boundary_edges << " on the boundary)\n"
+      << "  valences     " << histogram_text(s.valences, "of valence") << "\n"
+      << "  boundary     "
+      << (s.closed ? std::string("closed")
+                   : std::to_string(s.boundary_loops) + " loops, " +
+                         std::to_string(s.boundary_vertices) + " vertices, " +
+                         std::to_string(s.topological_corners) + " corners")
+      << "\n"
+      << "  creases      " << s.infinite_crease_edges << " infinitely sharp edges, "
+      << s.semi_sharp_crease_edges << " semi-sharp edges, " << s.corner_vertices
+      << " corner vertices\n"
+      << "  topology     " << s.components << (s.components == 1 ? " component" : " components")
+      << ", Euler characteristic " << s.euler_characteristic << "\n"
+      << "  bounds       [" << number(b.min[0]) << ", " << number(b.min[1]) << ", "
+      << number(b.min[2]) << "] .. [" << number(b.max[0]) << ", " << number(b.max[1]) << ", "
+      << number(b.max[2]) << "], diagonal " << number(b.diagonal) << "\n"
+      << "  options      boundary " << boundary_name(o.boundary) << ", creases "
+      << crease_method_name(o.crease_method) << ", triangles " << triangle_rule_name(o.triangles)
+      << "\n";
+  out << "  warnings     " << (loaded.warnings.empty() ? "none" : std::to_string(loaded.warnings.size()))
+      << "\n";
+  for (const std::string& w : loaded.warnings) out << "    " << w << "\n";
+}
+
+// --- info as JSON ----------------------------------------------------------------------------
+
+std::string json_string(const std::string& s) {
+  std::string r = "\"";
+  for (const unsigned char c : s) {
+    switch (c) {
+      case '"': r += "\\\""; break;
+      case '\\': r += "\\\\"; break;
+      case '\n': r += "\\n"; break;
+      case '\r': r += "\\r"; break;
+      case '\t': r += "\\t"; break;
+      default:
+        if (c < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
+          r += buffer;
+        } else {
+          r += static_cast<char>(c);
+        }
+    }
+  }
+  return r + "\"";
+}
+
+std::string json_number(double x) {
+  if (!std::isfinite(x)) return "null";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", x);
+  return buffer;
+}
+
+std::string json_histogram(const std::map<int, int>& histogram) {
+  std::string s = "{";
+  for (const auto& [key, count] : histogram)
+    s += (s.size() > 1 ? ", " : "") + json_string(std::to_string(key)) + ": " + std::to_string(count);
+  return s + "}";
+}
+
+std::string json_point(const Point3& p) {
+  return "[" + json_number(p[0]) + ", " + json_number(p[1]) + ", " + json_number(p[2]) + "]";
+}
+
+void print_json(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
+  const SubdivOptions& o = loaded.level.options;
+  auto flag = [](bool b) { return b ? "true" : "false"; };
+  out << "{\n"
+      << "  \"file\": " << json_string(loaded.cage.path) << ",\n"
+      << "  \"vertices\": " << s.vertices << ",\n"
+      << "  \"faces\": " << s.faces << ",\n"
+      << "  \"edges\": " << s.edges << ",\n"
+      << "  \"corners\": " << s.corners << ",\n"
+      << "  \"face_sizes\": " << json_histogram(s.face_sizes) << ",\n"
+      << "  \"valences\": " << json_histogram(s.valences) << ",\n"
+      << "  \"boundary\": {\"edges\": " << s.boundary_edges << ", \"vertices\": "
+      << s.boundary_vertices << ", \"loops\": " << s.boundary_loops
+      << ", \"topological_corners\": " << s.topological_corners << "},\n"
+      << "  \"creases\": {\"infinite_edges\": " << s.infinite_crease_edges
+      << ", \"semi_sharp_edges\": " << s.semi_sharp_crease_edges
+      << ", \"corner_vertices\": " << s.corner_vertices << "},\n"
+      << "  \"holes\": " << s.holes << ",\n"
+      << "  \"extraordinary_vertices\": " << s.extraordinary_vertices << ",\n"
+      << "  \"unused_vertices\": " << s.unused_vertices << ",\n"
+      << "  \"components\": " << s.components << ",\n"
+      << "  \"euler_characteristic\": " << s.euler_characteristic << ",\n"
+      << "  \"closed\": " << flag(s.closed) << ",\n"
+      << "  \"bounds\": {\"min\": " << json_point(s.bounds.min) << ", \"max\": "
+      << json_point(s.bounds.max) << ", \"diagonal\": " << json_number(s.bounds.diagonal)
+      << "},\n"
+      << "  \"options\": {\"boundary\": " << json_string(boundary_name(o.boundary))
+      << ", \"crease_method\": " << json_string(crease_method_name(o.crease_method))
+      << ", \"triangles\": " << json_string(triangle_rule_name(o.triangles)) << "},\n"
+      << "  \"warnings\": [";
+  for (size_t i = 0; i < loaded.warnings.size(); ++i)
+    out << (i ? ",\n    " : "\n    ") << json_string(loaded.warnings[i]);
+  out << (loaded.warnings.empty() ? "]\n" : "\n  ]\n") << "}\n";
+}
+
+}  // namespace
+
+// --- subcommands ---------------------------------------------------------------------------
+
+void run_info(const InfoOptions& options, std::ostream& out) {
+  const Loaded loaded = load(options.mesh);
+  const MeshStats stats = compute_stats(loaded.level, base_positions(loaded.cage));
+  if (options.json)
+    print_json(out, loaded, stats);
+  else
+    print_text(out, loaded, stats);
+}
+
+void run_refine(const RefineOptions& options, std::ostream& err) {
+  if (options.levels < 0) throw UsageError("the number of levels must be >= 0");
+  const Loaded loaded = load(options.mesh);
+  for (const std::string& w : loaded.warnings) err << w << "\n";
+
+  // After the first level every face is a quad: corners * 4^(levels-1) faces.
+  const PolyMesh& base = loaded.level.mesh;
+  const double faces = options.levels == 0
+                           ? base.num_faces()
+                           : base.num_corners() * std::pow(4.0, options.levels - 1);
+  if (faces > kMaxOutputFaces)
+    throw UsageError("refining " + std::to_string(base.num_faces()) + " faces to level " +
+                     std::to_string(options.levels) + " would produce about " +
+                     number(faces) + " faces (limit " + number(kMaxOutputFaces) +
+                     "); use fewer levels");
+  const bool report = faces > kProgressFaces;
+
+  if (report)
+    err << "subd2nurbs: refining " << options.mesh << " to level " << options.levels
+        << " (" << number(faces) << " faces)\n";
+  const Refinement refinement = refine_uniform(loaded.level, options.levels);
+  const std::vector<std::vector<Point3>> positions =
+      refinement.positions(base_positions(loaded.cage));
+  if (report) err << "subd2nurbs: writing " << options.output << "\n";
+  write_obj(options.output, positions.back(), refinement.levels.back());
+}
+
+// --- command line --------------------------------------------------------------------------
+
+int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+  CLI::App app{"Catmull-Clark subdivision cages: inspection and uniform refinement.",
+               "subd2nurbs"};
+  app.set_version_flag("--version", std::string("subd2nurbs ") + SUBD2NURBS_VERSION);
+  app.footer(kExitCodeHelp);
+  app.require_subcommand(1);
+
+  InfoOptions info;
+  CLI::App* info_command =
+      app.add_subcommand("info", "Describe a cage: counts, boundary, creases, warnings");
+  info_command->add_option("MESH", info.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
+  info_command->add_flag("--json", info.json, "Print JSON on stdout instead of text");
+
+  RefineOptions refine;
+  CLI::App* refine_command =
+      app.add_subcommand("refine", "Refine a cage uniformly and write the result as OBJ");
+  refine_command->add_option("MESH", refine.mesh, "OBJ cage (with OpenSubdiv 't' tags)")
+      ->required();
+  refine_command->add_option("-l,--levels", refine.levels, "Number of refinement levels (>= 0)")
+      ->check(CLI::Range(0, kMaxLevels))
+      ->capture_default_str();
+  refine_command->add_option("-o,--output", refine.output, "Output OBJ file")->required();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // Help and version requests are successes; app.exit prints them or the error message.
+    return app.exit(e, out, err) == 0 ? kOk : kUsage;
+  }
+
+  try {
+    if (*info_command) run_info(info, out);
+    if (*refine_command) run_refine(refine, err);
+    return kOk;
+  } catch (const UsageError& e) {
+    err << "subd2nurbs: error: " << e.what() << "\n";
+    return kUsage;
+  } catch (const InputError& e) {
+    err << e.file() << (e.line() > 0 ? ":" + std::to_string(e.line()) : std::string())
+        << ": error: " << e.message() << "\n";
+    return kInvalidInput;
+  } catch (const WriteError& e) {
+    err << "subd2nurbs: cannot write " << e.what() << "\n";
+    return kWriteFailure;
+  } catch (const std::bad_alloc&) {
+    err << "subd2nurbs: out of memory\n";
+    return kInternalError;
+  } catch (const std::exception& e) {
+    err << "subd2nurbs: internal error: " << e.what() << "\n";
+    return kInternalError;
+  }
+}
+
+}  // namespace subd2nurbs::cli

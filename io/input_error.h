@@ -1,0 +1,59 @@
+// Errors of the file front end. Every message names the file and, where there is one, the
+// line, in the "FILE:LINE: message" form that editors and terminals recognise.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "core/mesh/errors.h"
+
+namespace subd2nurbs {
+
+/// An input file could not be read, or its content is not a valid cage.
+/// what() is "FILE:LINE: message", or "FILE: message" when no single line is at fault
+/// (an unreadable or empty file).
+class InputError : public std::runtime_error {
+ public:
+  InputError(std::string file, int line, std::string message,
+             std::optional<MeshErrorCode> code = std::nullopt)
+      : std::runtime_error(format(file, line, message)), file_(std::move(file)), line_(line),
+        message_(std::move(message)), code_(code) {}
+
+  const std::string& file() const { return file_; }
+  /// 1-based line number, or 0 when the error is not about one line.
+  int line() const { return line_; }
+  /// The message without the "FILE:LINE: " prefix.
+  const std::string& message() const { return message_; }
+  /// Why the cage is invalid, when it is a validation problem (malformed tags count as
+  /// MeshErrorCode::InvalidTag). Empty for I/O failures and OBJ syntax errors.
+  std::optional<MeshErrorCode> code() const { return code_; }
+
+ private:
+  static std::string format(const std::string& file, int line, const std::string& message) {
+    return line > 0 ? file + ":" + std::to_string(line) + ": " + message : file + ": " + message;
+  }
+
+  std::string file_;
+  int line_;
+  std::string message_;
+  std::optional<MeshErrorCode> code_;
+};
+
+/// An output file could not be written. what() is "FILE: message".
+class WriteError : public std::runtime_error {
+ public:
+  WriteError(std::string file, std::string message)
+      : std::runtime_error(file + ": " + message), file_(std::move(file)),
+        message_(std::move(message)) {}
+
+  const std::string& file() const { return file_; }
+  const std::string& message() const { return message_; }
+
+ private:
+  std::string file_;
+  std::string message_;
+};
+
+}  // namespace subd2nurbs

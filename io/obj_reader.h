@@ -1,0 +1,68 @@
+// Reading a subdivision cage from a Wavefront OBJ file with OpenSubdiv-style tags.
+//
+// Statements used: `v x y z` (vertex; extra values such as w or colours are ignored),
+// `f a b c ...` (face; a/t/n and a//n forms and negative relative indices are accepted; texture
+// and normal indices are ignored) and `t name nint/nfloat/nstring ints... floats... strings...`
+// (tags, indices in tags are 0-based as in OpenSubdiv's regression shapes):
+//
+//   t crease 2/1/0 a b s           edge a-b gets sharpness s; with k > 2 ints the tag is a
+//                                  chain a-b, b-c, ... and takes 1 sharpness or k-1 of them
+//                                  (as RenderMan's crease; OpenSubdiv's regression loader
+//                                  reads k > 2 ints as separate pairs instead)
+//   t corner k/1/0 v... s          vertices get sharpness s (1 shared value or k values)
+//   t interpolateboundary 1/0/0 i  0 none, 1 edge-and-corner (the default), 2 edge-only
+//   t creasemethod 0/0/1 m         normal | chaikin
+//   t smoothtriangles 0/0/1 r      catmark | smooth
+//   t hole k/0/0 f...              faces that produce no surface
+//
+// Other tags (vertexedit, edgeedit, faceedit, facevaryinginterpolateboundary, ...) are
+// ignored with a warning. Texture coordinates, normals, groups, materials and smoothing
+// groups are ignored silently; unknown statements and line / point elements with a warning.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/mesh/errors.h"
+#include "core/mesh/mesh_input.h"
+#include "core/refine/refiner.h"
+#include "io/input_error.h"
+
+namespace subd2nurbs {
+
+/// A cage as read from a file, with the source line (1-based) of every element so that
+/// later errors can point back into the file.
+struct LoadedCage {
+  MeshInput input;
+  std::string path;
+  std::vector<int> vertex_line;  ///< per vertex
+  std::vector<int> face_line;    ///< per face
+  std::vector<int> crease_line;  ///< per entry of input.creases (a chain gives several)
+  std::vector<int> corner_line;  ///< per entry of input.corners
+  std::vector<int> hole_line;    ///< per entry of input.holes
+  /// Warnings found while reading. They concern a line of the file rather than a mesh
+  /// element, so their `element` is ElementKind::None and their `index` is the line number.
+  Diagnostics diagnostics;
+};
+
+/// Reads an OBJ file. Topology is not validated yet (see load_and_validate).
+/// \throw InputError (naming the file and line) if the file cannot be read, a statement is
+/// malformed, a face has fewer than 3 vertices or uses vertex index 0, or a tag is malformed
+/// (code MeshErrorCode::InvalidTag).
+LoadedCage read_obj(const std::string& path);
+
+/// Validates the cage and applies the base-level tagging (SubdivLevel::from_input).
+/// Validation warnings (e.g. unused vertices) are appended to `diagnostics` if given; they
+/// name mesh elements, use source_line() or format_diagnostic() to locate them.
+/// \throw InputError with the MeshErrorCode of the problem and the line of the offending
+/// face, vertex or tag: for an edge, the face that made it non-manifold; for inconsistent
+/// orientation, the later of the two faces.
+SubdivLevel load_and_validate(const LoadedCage& cage, Diagnostics* diagnostics = nullptr);
+
+/// The source line a diagnostic refers to, or 0 if it cannot be located.
+int source_line(const LoadedCage& cage, const Diagnostic& diagnostic);
+
+/// "FILE:LINE: warning: message" (or "FILE: warning: message").
+std::string format_diagnostic(const LoadedCage& cage, const Diagnostic& diagnostic);
+
+}  // namespace subd2nurbs
