@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs the Debian packages subd2nurbs needs (skipping those already present),
+# then configures and builds into ./build. Idempotent; safe to run repeatedly.
+# Usage: scripts/bootstrap.sh            (run as root, or with sudo available)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PACKAGES=(
+  build-essential cmake pkg-config
+  libeigen3-dev libtinyobjloader-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libosd-dev                       # OpenSubdiv: the Catmull-Clark oracle in tests and benchmarks
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "bootstrap: installing ${missing[*]}" >&2
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
+
+BUILD_TYPE=${BUILD_TYPE:-Release}
+cmake -S . -B build -DCMAKE_BUILD_TYPE="$BUILD_TYPE" "$@" >&2
+cmake --build build -j"$(nproc)" >&2

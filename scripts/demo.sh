@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# The main job on a bundled sample: install, build, then refine and describe a cage.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/bootstrap.sh
+mkdir -p out
+build/subd2nurbs info samples/rounded_box.obj
+build/subd2nurbs refine samples/rounded_box.obj -l 2 -o out/rounded_box_l2.obj
+echo "wrote out/rounded_box_l2.obj"
