@@ -1,0 +1,81 @@
+// Uniform Catmull-Clark refinement of a generated 100k-quad torus, ours against OpenSubdiv's
+// TopologyRefiner + PrimvarRefiner, in the same run. Both start from plain arrays and end with
+// the positions of every level. scripts/bench.sh turns the output into docs/benchmarks.md.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include <opensubdiv/far/primvarRefiner.h>
+#include <opensubdiv/far/topologyDescriptor.h>
+
+#include "common/shapes.h"
+#include "core/refine/refiner.h"
+
+using namespace subd2nurbs;
+namespace Far = OpenSubdiv::Far;
+namespace Sdc = OpenSubdiv::Sdc;
+
+namespace {
+
+const MeshInput& torus_100k() {
+  static const MeshInput m = testing::torus(400, 250);  // 100 000 quads
+  return m;
+}
+
+struct Vertex3 {
+  double p[3];
+  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0; }
+  void AddWithWeight(const Vertex3& s, double w) {
+    p[0] += w * s.p[0];
+    p[1] += w * s.p[1];
+    p[2] += w * s.p[2];
+  }
+};
+
+void BM_Ours(benchmark::State& state) {
+  const int levels = static_cast<int>(state.range(0));
+  const MeshInput& in = torus_100k();
+  const std::vector<Point3> base(in.positions.begin(), in.positions.end());
+  for (auto _ : state) {
+    SubdivLevel level = SubdivLevel::from_input(in);
+    Refinement r = refine_uniform(level, levels);
+    auto pos = r.positions(base);
+    benchmark::DoNotOptimize(pos.back().data());
+  }
+  state.counters["faces"] = static_cast<double>(in.num_faces());
+}
+
+void BM_OpenSubdiv(benchmark::State& state) {
+  const int levels = static_cast<int>(state.range(0));
+  const MeshInput& in = torus_100k();
+  Far::TopologyDescriptor desc;
+  desc.numVertices = in.num_vertices();
+  desc.numFaces = in.num_faces();
+  desc.numVertsPerFace = in.face_sizes.data();
+  desc.vertIndicesPerFace = in.face_indices.data();
+  Sdc::Options opt;
+  opt.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
+  for (auto _ : state) {
+    std::unique_ptr<Far::TopologyRefiner> refiner(
+        Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, opt)));
+    refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(levels));
+    std::vector<std::vector<Vertex3>> buf(levels + 1);
+    buf[0].resize(in.num_vertices());
+    for (int v = 0; v < in.num_vertices(); ++v)
+      for (int k = 0; k < 3; ++k) buf[0][v].p[k] = in.positions[v][k];
+    Far::PrimvarRefinerReal<double> primvar(*refiner);
+    for (int l = 1; l <= levels; ++l) {
+      buf[l].resize(refiner->GetLevel(l).GetNumVertices());
+      primvar.Interpolate(l, buf[l - 1], buf[l]);
+    }
+    benchmark::DoNotOptimize(buf.back().data());
+  }
+  state.counters["faces"] = static_cast<double>(in.num_faces());
+}
+
+}  // namespace
+
+BENCHMARK(BM_Ours)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OpenSubdiv)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK_MAIN();
