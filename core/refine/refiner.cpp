@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <thread>
 
 #include "core/mesh/validate.h"
 
@@ -14,6 +16,12 @@ namespace subd2nurbs {
 namespace {
 
 constexpr float kInf = static_cast<float>(kInfiniteSharpness);
+
+/// Meshes with at least this many corners build child topology and stencils concurrently.
+constexpr int kConcurrentCorners = 1 << 16;
+
+/// Index of the child half of parent edge e that touches parent vertex v (see refiner.h).
+int half_at(const PolyMesh& pm, int e, int v) { return 2 * e + (pm.edge_vertex(e, 0) == v ? 0 : 1); }
 
 bool is_sharp(float s) { return s > 0.0f; }
 bool is_infinite(float s) { return s >= kInf; }
@@ -218,32 +226,12 @@ double SubdivLevel::max_semi_sharpness() const {
   return s;
 }
 
-RefinementStep refine_once(const SubdivLevel& parent) {
-  const PolyMesh& pm = parent.mesh;
+namespace {
+
+/// Builds the child connectivity of one Catmull-Clark step directly from the parent's
+/// (layout in refiner.h): no searching for twins, every array filled in one pass.
+void build_child_topology(const PolyMesh& pm, PolyMesh& cm) {
   const int V = pm.num_vertices(), F = pm.num_faces(), E = pm.num_edges(), H = pm.num_corners();
-  RefinementStep step;
-  SubdivLevel& child = step.child;
-  child.options = parent.options;
-
-  // ---- child sharpness ------------------------------------------------------------------
-  // Child edges: 2e + k is the half of parent edge e at its end vertex k; 2E + h is the
-  // interior edge from the centre of corner_face(h) to the midpoint of corner_edge(h).
-  child.edge_sharpness.assign(2 * E + H, 0.0f);
-  for (int e = 0; e < E; ++e) {
-    const float s = parent.edge_sharpness[e];
-    if (!is_sharp(s)) continue;
-    child.edge_sharpness[2 * e] = child_edge_sharpness(parent, e, pm.edge_vertex(e, 0));
-    child.edge_sharpness[2 * e + 1] = child_edge_sharpness(parent, e, pm.edge_vertex(e, 1));
-  }
-  child.vertex_sharpness.assign(V + F + E, 0.0f);
-  for (int v = 0; v < V; ++v) {
-    child.vertex_sharpness[v] = decrement_sharpness(parent.vertex_sharpness[v]);
-  }
-  child.face_hole.resize(H);
-  for (int h = 0; h < H; ++h) child.face_hole[h] = parent.face_hole[pm.corner_face(h)];
-
-  // ---- child topology, built directly from the parent's ---------------------------------
-  PolyMesh& cm = child.mesh;
   PolyMeshAssembler::num_vertices(cm) = V + F + E;
   auto& offsets = PolyMeshAssembler::face_offsets(cm);
   auto& cv = PolyMeshAssembler::corner_vertex(cm);
@@ -259,7 +247,6 @@ RefinementStep refine_once(const SubdivLevel& parent) {
   cv.resize(4 * H);
   ce.resize(4 * H);
   tw.resize(4 * H);
-  auto half_at = [&](int e, int vertex) { return 2 * e + (pm.edge_vertex(e, 0) == vertex ? 0 : 1); };
   for (int h = 0; h < H; ++h) {
     const int p = pm.prev(h), n = pm.next(h), f = pm.corner_face(h), v = pm.corner_vertex(h);
     const int eh = pm.corner_edge(h), ep = pm.corner_edge(p);
@@ -269,10 +256,10 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     cv[c + 1] = V + F + eh;
     cv[c + 2] = V + f;
     cv[c + 3] = V + F + ep;
-    ce[c + 0] = half_at(eh, v);
+    ce[c + 0] = 2 * eh + (pm.edge_corner(eh) == h ? 0 : 1);  // the half of eh at v
     ce[c + 1] = 2 * E + h;
     ce[c + 2] = 2 * E + p;
-    ce[c + 3] = half_at(ep, v);
+    ce[c + 3] = 2 * ep + (pm.edge_corner(ep) == p ? 1 : 0);  // the half of ep at v
     const int t = pm.twin(h), tp = pm.twin(p);
     tw[c + 0] = t < 0 ? -1 : 4 * pm.next(t) + 3;
     tw[c + 1] = 4 * n + 2;
@@ -309,6 +296,58 @@ RefinementStep refine_once(const SubdivLevel& parent) {
       vcor[k++] = 4 * t + 1;
     }
     voff[V + F + e + 1] = k;
+  }
+
+}
+
+}  // namespace
+
+RefinementStep refine_once(const SubdivLevel& parent) {
+  const PolyMesh& pm = parent.mesh;
+  const int V = pm.num_vertices(), F = pm.num_faces(), E = pm.num_edges(), H = pm.num_corners();
+  RefinementStep step;
+  SubdivLevel& child = step.child;
+  child.options = parent.options;
+
+  // ---- child sharpness ------------------------------------------------------------------
+  // Child edges: 2e + k is the half of parent edge e at its end vertex k; 2E + h is the
+  // interior edge from the centre of corner_face(h) to the midpoint of corner_edge(h).
+  child.edge_sharpness.assign(2 * E + H, 0.0f);
+  for (int e = 0; e < E; ++e) {
+    const float s = parent.edge_sharpness[e];
+    if (!is_sharp(s)) continue;
+    child.edge_sharpness[2 * e] = child_edge_sharpness(parent, e, pm.edge_vertex(e, 0));
+    child.edge_sharpness[2 * e + 1] = child_edge_sharpness(parent, e, pm.edge_vertex(e, 1));
+  }
+  child.vertex_sharpness.assign(V + F + E, 0.0f);
+  for (int v = 0; v < V; ++v) {
+    child.vertex_sharpness[v] = decrement_sharpness(parent.vertex_sharpness[v]);
+  }
+  child.face_hole.resize(H);
+  for (int h = 0; h < H; ++h) child.face_hole[h] = parent.face_hole[pm.corner_face(h)];
+
+  // ---- child topology and stencils --------------------------------------------------
+  // The two are independent given the child sharpness; on big meshes the topology is built
+  // on a second thread while this one writes the stencils.
+  const bool concurrent = H >= kConcurrentCorners;
+  std::thread topology;
+  std::exception_ptr topology_error;
+  struct JoinOnExit {  // never leave the thread running if the stencils throw
+    std::thread& t;
+    ~JoinOnExit() {
+      if (t.joinable()) t.join();
+    }
+  } join_on_exit{topology};
+  if (concurrent) {
+    topology = std::thread([&pm, &child, &topology_error] {
+      try {
+        build_child_topology(pm, child.mesh);
+      } catch (...) {
+        topology_error = std::current_exception();
+      }
+    });
+  } else {
+    build_child_topology(pm, child.mesh);
   }
 
   // ---- stencils: vertex points, face points, edge points --------------------------------
@@ -362,7 +401,7 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     int psharp = 0, csharp = 0;
     for_each_vertex_edge(pm, v, [&](int e, int other) {
       const float ps = parent.edge_sharpness[e];
-      const float cs = child.edge_sharpness[half_at(e, v)];
+      const float cs = child.edge_sharpness[half_at(pm, e, v)];
       pes.push_back(ps);
       ces.push_back(cs);
       nbr.push_back(other);
@@ -446,6 +485,8 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     row.add_face_centre(pm, f1, wf);
     row.emit(st);
   }
+  if (concurrent) topology.join();
+  if (topology_error) std::rethrow_exception(topology_error);
   return step;
 }
 
