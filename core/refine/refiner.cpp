@@ -385,11 +385,19 @@ RefinementStep refine_once(const SubdivLevel& parent) {
       if (quads) {
         // Smooth rule with the face centres expanded: each quad (v, e_r, d_r, e_r+1) adds
         // 1/(4n^2) to its four corners (MATH.md 1.1).
-        const double n = nf, fw = 0.25 / (n * n);
-        push(v, (n - 2.0) / n + n * fw);
+        const double n = nf, fw = 0.25 / (n * n), ew = 1.0 / (n * n) + 2.0 * fw;
+        const size_t k = st.indices.size();
+        st.indices.resize(k + 1 + 2 * nf);
+        st.weights.resize(k + 1 + 2 * nf);
+        int* idx = st.indices.data() + k;
+        double* w = st.weights.data() + k;
+        idx[0] = v;
+        w[0] = (n - 2.0) / n + n * fw;
         for (int i = 0; i < nf; ++i) {
-          push(pm.to_vertex(vc[i]), 1.0 / (n * n) + 2.0 * fw);
-          push(pm.corner_vertex(pm.next(pm.next(vc[i]))), fw);
+          idx[1 + 2 * i] = pm.to_vertex(vc[i]);
+          w[1 + 2 * i] = ew;
+          idx[2 + 2 * i] = pm.corner_vertex(pm.next(pm.next(vc[i])));
+          w[2 + 2 * i] = fw;
         }
         end_row();
         continue;
@@ -457,12 +465,19 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     const int f0 = pm.corner_face(h0), f1 = pm.corner_face(t);
     if (!is_sharp(s) && pm.face_size(f0) == 4 && pm.face_size(f1) == 4) {
       // (a + b)/4 + (centre f0 + centre f1)/4 with the centres expanded.
-      push(a, 0.375);
-      push(b, 0.375);
-      push(pm.corner_vertex(pm.next(pm.next(h0))), 0.0625);
-      push(pm.corner_vertex(pm.prev(h0)), 0.0625);
-      push(pm.corner_vertex(pm.next(pm.next(t))), 0.0625);
-      push(pm.corner_vertex(pm.prev(t)), 0.0625);
+      const size_t k = st.indices.size();
+      st.indices.resize(k + 6);
+      st.weights.resize(k + 6);
+      int* idx = st.indices.data() + k;
+      double* w = st.weights.data() + k;
+      idx[0] = a;
+      idx[1] = b;
+      idx[2] = pm.corner_vertex(pm.next(pm.next(h0)));
+      idx[3] = pm.corner_vertex(pm.prev(h0));
+      idx[4] = pm.corner_vertex(pm.next(pm.next(t)));
+      idx[5] = pm.corner_vertex(pm.prev(t));
+      w[0] = w[1] = 0.375;
+      w[2] = w[3] = w[4] = w[5] = 0.0625;
       end_row();
       continue;
     }

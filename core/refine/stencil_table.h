@@ -6,15 +6,17 @@
 #include <array>
 #include <vector>
 
+#include "core/util/default_init_vector.h"
+
 namespace subd2nurbs {
 
 using Point3 = std::array<double, 3>;
 
 struct StencilTable {
   int num_sources = 0;
-  std::vector<int> offsets{0};  ///< row r occupies [offsets[r], offsets[r+1])
-  std::vector<int> indices;     ///< source index of each entry
-  std::vector<double> weights;  ///< weight of each entry
+  DefaultInitVector<int> offsets{0};   ///< row r occupies [offsets[r], offsets[r+1])
+  DefaultInitVector<int> indices;      ///< source index of each entry
+  DefaultInitVector<double> weights;   ///< weight of each entry
 
   int num_rows() const { return static_cast<int>(offsets.size()) - 1; }
   int row_size(int r) const { return offsets[r + 1] - offsets[r]; }
