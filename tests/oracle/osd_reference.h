@@ -29,7 +29,7 @@ struct OsdMapping {
 };
 OsdMapping map_to_osd(const Refinement& ours, const OpenSubdiv::Far::TopologyRefiner& theirs);
 
-/// Largest |p - q| over all coordinates after mapping, and the bounding-box diagonal of base.
+/// Length of the diagonal of the points' axis-aligned bounding box (the scale of tolerances).
 double bbox_diagonal(const std::vector<Point3>& points);
 
 }  // namespace subd2nurbs::testing
