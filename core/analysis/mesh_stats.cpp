@@ -8,15 +8,9 @@
 
 namespace subd2nurbs {
 
-bool is_topological_corner(const PolyMesh& mesh, int v) {
-  return mesh.is_boundary_vertex(v) && mesh.vertex_face_count(v) == 1;
-}
-
 bool is_automatic_corner(const SubdivLevel& level, int v) {
-  if (level.vertex_sharpness[v] < kInfiniteSharpness) return false;
-  const bool corner_rule = level.options.boundary == BoundaryRule::EdgeAndCorner &&
-                           is_topological_corner(level.mesh, v);
-  return corner_rule || level.mesh.is_unused_vertex(v);
+  return level.vertex_sharpness[v] >= kInfiniteSharpness &&
+         is_sharpened_by_tagging(level.mesh, level.options.boundary, v);
 }
 
 namespace {
@@ -100,7 +94,7 @@ MeshStats compute_stats(const SubdivLevel& level, const std::vector<Point3>& pos
     const int valence = m.valence(v);
     ++s.valences[valence];
     const bool boundary = m.is_boundary_vertex(v);
-    const bool corner = is_topological_corner(m, v);
+    const bool corner = m.is_topological_corner(v);
     if (boundary) ++s.boundary_vertices;
     if (corner) ++s.topological_corners;
     if (level.vertex_sharpness[v] > 0 && !is_automatic_corner(level, v)) ++s.corner_vertices;

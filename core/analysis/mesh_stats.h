@@ -55,12 +55,8 @@ struct MeshStats {
 /// \throw std::invalid_argument if the sizes do not match.
 MeshStats compute_stats(const SubdivLevel& level, const std::vector<Point3>& positions);
 
-/// A boundary vertex with exactly one incident face (two boundary edges).
-bool is_topological_corner(const PolyMesh& mesh, int v);
-
-/// True if SubdivLevel::from_input makes the vertex infinitely sharp by itself, so that no
-/// corner tag is needed to reproduce its sharpness: a topological corner under
-/// BoundaryRule::EdgeAndCorner, or an unused vertex.
+/// True if the vertex is infinitely sharp only because base-level tagging made it so
+/// (is_sharpened_by_tagging), so that no corner tag is needed to reproduce its sharpness.
 bool is_automatic_corner(const SubdivLevel& level, int v);
 
 }  // namespace subd2nurbs

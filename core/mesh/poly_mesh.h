@@ -78,6 +78,8 @@ class PolyMesh {
   /// Number of incident edges.
   int valence(int v) const { return vertex_face_count(v) + (is_boundary_vertex(v) ? 1 : 0); }
   bool is_unused_vertex(int v) const { return vertex_face_count(v) == 0; }
+  /// A boundary vertex with exactly one incident face (two boundary edges).
+  bool is_topological_corner(int v) const { return is_boundary_vertex(v) && vertex_face_count(v) == 1; }
 
  private:
   friend class PolyMeshAssembler;

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <exception>
 #include <thread>
+#include <utility>
 
 #include "core/mesh/validate.h"
 
@@ -176,6 +177,11 @@ VertexRule vertex_rule(const SubdivLevel& level, int v) {
   return rule_from(level.vertex_sharpness[v], sharp);
 }
 
+bool is_sharpened_by_tagging(const PolyMesh& mesh, BoundaryRule rule, int v) {
+  return mesh.is_unused_vertex(v) ||
+         (rule == BoundaryRule::EdgeAndCorner && mesh.is_topological_corner(v));
+}
+
 SubdivLevel SubdivLevel::from_input(const MeshInput& input, Diagnostics* diagnostics) {
   SubdivLevel level;
   level.mesh = validate_and_build(input, diagnostics);
@@ -209,10 +215,7 @@ SubdivLevel SubdivLevel::from_input(const MeshInput& input, Diagnostics* diagnos
   for (int e = 0; e < m.num_edges(); ++e)
     if (m.is_boundary_edge(e)) level.edge_sharpness[e] = kInf;
   for (int v = 0; v < m.num_vertices(); ++v) {
-    if (m.is_unused_vertex(v)) level.vertex_sharpness[v] = kInf;
-    const bool topological_corner = m.is_boundary_vertex(v) && m.vertex_face_count(v) == 1;
-    if (topological_corner && input.options.boundary == BoundaryRule::EdgeAndCorner)
-      level.vertex_sharpness[v] = kInf;
+    if (is_sharpened_by_tagging(m, input.options.boundary, v)) level.vertex_sharpness[v] = kInf;
   }
   return level;
 }
@@ -362,9 +365,12 @@ RefinementStep refine_once(const SubdivLevel& parent) {
   std::vector<char> near_sharp(V, 0);
   for (int e = 0; e < E; ++e)
     if (is_sharp(parent.edge_sharpness[e])) near_sharp[pm.edge_vertex(e, 0)] = near_sharp[pm.edge_vertex(e, 1)] = 1;
-  auto push = [&st](int source, double weight) {
-    st.indices.push_back(source);
-    st.weights.push_back(weight);
+  // Appends a row of n entries and returns where to write its sources and weights.
+  auto append_row = [&st](int n) {
+    const size_t k = st.indices.size();
+    st.indices.resize(k + n);
+    st.weights.resize(k + n);
+    return std::make_pair(st.indices.data() + k, st.weights.data() + k);
   };
   auto end_row = [&st] { st.offsets.push_back(static_cast<int>(st.indices.size())); };
 
@@ -386,11 +392,7 @@ RefinementStep refine_once(const SubdivLevel& parent) {
         // Smooth rule with the face centres expanded: each quad (v, e_r, d_r, e_r+1) adds
         // 1/(4n^2) to its four corners (MATH.md 1.1).
         const double n = nf, fw = 0.25 / (n * n), ew = 1.0 / (n * n) + 2.0 * fw;
-        const size_t k = st.indices.size();
-        st.indices.resize(k + 1 + 2 * nf);
-        st.weights.resize(k + 1 + 2 * nf);
-        int* idx = st.indices.data() + k;
-        double* w = st.weights.data() + k;
+        auto [idx, w] = append_row(1 + 2 * nf);
         idx[0] = v;
         w[0] = (n - 2.0) / n + n * fw;
         for (int i = 0; i < nf; ++i) {
@@ -439,8 +441,12 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     row.emit(st);
   }
   for (int f = 0; f < F; ++f) {
-    const double w = 1.0 / pm.face_size(f);
-    for (int h = pm.face_begin(f); h < pm.face_end(f); ++h) push(pm.corner_vertex(h), w);
+    const int m = pm.face_size(f);
+    auto [idx, w] = append_row(m);
+    for (int i = 0; i < m; ++i) {
+      idx[i] = pm.face_vertices(f)[i];
+      w[i] = 1.0 / m;
+    }
     end_row();
   }
   const bool smooth_triangles = parent.options.triangles == TriangleRule::Smooth;
@@ -465,11 +471,7 @@ RefinementStep refine_once(const SubdivLevel& parent) {
     const int f0 = pm.corner_face(h0), f1 = pm.corner_face(t);
     if (!is_sharp(s) && pm.face_size(f0) == 4 && pm.face_size(f1) == 4) {
       // (a + b)/4 + (centre f0 + centre f1)/4 with the centres expanded.
-      const size_t k = st.indices.size();
-      st.indices.resize(k + 6);
-      st.weights.resize(k + 6);
-      int* idx = st.indices.data() + k;
-      double* w = st.weights.data() + k;
+      auto [idx, w] = append_row(6);
       idx[0] = a;
       idx[1] = b;
       idx[2] = pm.corner_vertex(pm.next(pm.next(h0)));

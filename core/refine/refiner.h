@@ -35,6 +35,11 @@ struct SubdivLevel {
   double max_semi_sharpness() const;
 };
 
+/// True if base-level tagging (SubdivLevel::from_input) makes v infinitely sharp by itself,
+/// whatever its tags: unused vertices, and topological corners under
+/// BoundaryRule::EdgeAndCorner. A written cage needs no corner tag for such a vertex.
+bool is_sharpened_by_tagging(const PolyMesh& mesh, BoundaryRule rule, int v);
+
 /// Subdivision rule of a vertex (OpenSubdiv `Sdc::Crease::Rule`): from its sharpness and the
 /// number of sharp incident edges (0 smooth, 1 dart, 2 crease, more corner; any vertex
 /// sharpness makes it a corner).
