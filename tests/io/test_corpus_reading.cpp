@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "common/corpus.h"
 #include "io/obj_reader.h"
 
 using namespace subd2nurbs;
@@ -45,23 +46,6 @@ LineCounts count_lines(const std::string& path) {
   return c;
 }
 
-/// The shapes our validation rejects, and why. OpenSubdiv accepts them (it handles
-/// non-manifold topology); subd2nurbs needs a 2-manifold cage.
-const std::map<std::string, MeshErrorCode>& rejected_shapes() {
-  static const std::map<std::string, MeshErrorCode> m = {
-      {"catmark_fan", MeshErrorCode::NonManifoldEdge},
-      {"catmark_gregory_test4", MeshErrorCode::NonManifoldVertex},
-      {"catmark_nonman_edge100", MeshErrorCode::NonManifoldEdge},
-      {"catmark_nonman_edges", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_quadpole8", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_quadpole64", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_quadpole360", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_verts", MeshErrorCode::NonManifoldVertex},
-      {"catmark_val2_nonman", MeshErrorCode::NonManifoldEdge},
-  };
-  return m;
-}
-
 class CorpusFile : public ::testing::TestWithParam<std::string> {};
 
 }  // namespace
@@ -83,13 +67,14 @@ TEST_P(CorpusFile, CountsMatchTheLines) {
 
 TEST_P(CorpusFile, ValidatesUnlessNonManifold) {
   const LoadedCage cage = read_obj(corpus(GetParam()));
-  const auto rejected = rejected_shapes().find(GetParam());
+  const auto& rejected_shapes = subd2nurbs::testing::non_manifold_corpus_shapes();
+  const auto rejected = rejected_shapes.find(GetParam());
   try {
     const SubdivLevel level = load_and_validate(cage);
-    EXPECT_EQ(rejected, rejected_shapes().end()) << "accepted, but expected to be rejected";
+    EXPECT_EQ(rejected, rejected_shapes.end()) << "accepted, but expected to be rejected";
     EXPECT_EQ(level.mesh.num_faces(), cage.input.num_faces());
   } catch (const InputError& e) {
-    ASSERT_NE(rejected, rejected_shapes().end()) << e.what();
+    ASSERT_NE(rejected, rejected_shapes.end()) << e.what();
     ASSERT_TRUE(e.code().has_value()) << e.what();
     EXPECT_EQ(to_string(*e.code()), std::string(to_string(rejected->second))) << e.what();
     EXPECT_GT(e.line(), 0) << e.what();

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 
+#include "common/corpus.h"
 #include "io/obj_reader.h"
 #include "osd_reference.h"
 
@@ -30,25 +31,7 @@ std::string path_of(const std::string& name) {
   return std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj";
 }
 
-/// Shapes our validation rejects because they are not 2-manifold, with the reason. Each was
-/// checked by hand: catmark_fan has an edge on 3 faces, catmark_gregory_test4 a vertex with two
-/// separate fans; the nonman_* shapes are OpenSubdiv's non-manifold tests (edges on many faces,
-/// pinched vertices, faces that use one vertex twice).
-const std::map<std::string, MeshErrorCode>& non_manifold_shapes() {
-  static const std::map<std::string, MeshErrorCode> s = {
-      {"catmark_fan", MeshErrorCode::NonManifoldEdge},
-      {"catmark_gregory_test4", MeshErrorCode::NonManifoldVertex},
-      {"catmark_nonman_edge100", MeshErrorCode::NonManifoldEdge},
-      {"catmark_nonman_edges", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_quadpole360", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_quadpole64", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_quadpole8", MeshErrorCode::RepeatedVertexInFace},
-      {"catmark_nonman_verts", MeshErrorCode::NonManifoldVertex},
-      {"catmark_val2_nonman", MeshErrorCode::NonManifoldEdge}};
-  return s;
-}
-
-bool is_manifold_shape(const std::string& n) { return !non_manifold_shapes().count(n); }
+bool is_manifold_shape(const std::string& n) { return !non_manifold_corpus_shapes().count(n); }
 
 std::vector<std::string> manifold_shapes() {
   std::vector<std::string> out;
@@ -85,7 +68,7 @@ class CorpusLimitShape : public ::testing::TestWithParam<std::string> {};
 TEST(Corpus, HasAllShapes) { EXPECT_GE(corpus_files().size(), 87u); }
 
 TEST(Corpus, NonManifoldShapesAreRejectedWithTheReason) {
-  for (const auto& [name, code] : non_manifold_shapes()) {
+  for (const auto& [name, code] : non_manifold_corpus_shapes()) {
     LoadedCage cage = read_obj(path_of(name));
     try {
       load_and_validate(cage);
