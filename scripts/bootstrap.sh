@@ -10,6 +10,11 @@ PACKAGES=(
   libeigen3-dev libtinyobjloader-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libosd-dev                       # OpenSubdiv: the Catmull-Clark oracle in tests and benchmarks
+  # OCCT 7.6 (target subd2nurbs::occt). data-exchange-dev pulls in ocaf-dev and
+  # visualization-dev, whose CMake targets OCCT's DataExchange config insists on;
+  # libtbb-dev because the OCCT targets link /usr/lib/x86_64-linux-gnu/libtbb.so by path.
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
+  libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev libtbb-dev
 )
 
 missing=()

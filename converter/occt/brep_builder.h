@@ -1,0 +1,48 @@
+// PatchSet -> OCCT B-rep, built topology-first: one vertex per PatchSet corner, one edge per
+// BoundaryCurve, one face per patch. Shared edges are made once and used by both faces, so no
+// sewing is needed (sewing 10k faces takes ~5 s, building them shared ~0.1 s).
+#pragma once
+
+#include <TopoDS_Shape.hxx>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "converter/occt/export_error.h"
+#include "core/patch/patch_set.h"
+
+namespace subd2nurbs::occt {
+
+struct BrepResult {
+  TopoDS_Shape shape;      ///< a TopoDS_Solid if is_solid, else a TopoDS_Shell
+  bool is_solid = false;   ///< PatchSet::closed: the shell bounds a solid, oriented outward
+  int num_faces = 0, num_edges = 0, num_vertices = 0;  ///< distinct sub-shapes of `shape`
+  bool valid = false;      ///< BRepCheck_Analyzer found no defect
+  std::string check_message;  ///< BRepCheck's findings, one per line (empty when valid)
+  /// The edge made for each PatchSet::curves entry (null for an unused curve), so that a caller
+  /// can measure chosen edges, e.g. only the smooth ones, with summarize(shape, edges).
+  std::vector<TopoDS_Shape> curve_edges;
+  double tolerance = 0;    ///< vertex / edge / face tolerance used (model units)
+};
+
+/// Builds the faces of `ps` with shared edges and vertices, then a shell, and a solid when
+/// ps.closed. Checks the result with BRepCheck_Analyzer (see BrepResult::valid).
+///
+/// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given), each
+/// BoundaryCurve a Geom_BSplineCurve parametrized by s from corner0 to corner1, and each use of
+/// a curve a straight pcurve on the patch's parameter-domain side whose parameter is s.
+/// A curve used twice by one patch is a seam; a side whose curve index is -1 and whose two
+/// corners are the same corner is a degenerate (collapsed) side, e.g. at a polar point.
+///
+/// \param progress  called with the fraction of patches done (0..1], about every 1 %.
+/// \throw ExportError naming the stage and the patch when the PatchSet is inconsistent or an
+///        OCCT call fails. A result that OCCT builds but BRepCheck rejects is not an error:
+///        it comes back with valid == false.
+BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress = {});
+
+/// The tolerance build_brep gives vertices, edges and faces for a model of this size:
+/// 1e-9 * model_size, but never below OCCT's Precision::Confusion() (1e-7).
+double brep_tolerance(double model_size);
+
+}  // namespace subd2nurbs::occt

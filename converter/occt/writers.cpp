@@ -1,0 +1,189 @@
+#include "converter/occt/writers.h"
+
+#include <BRepTools.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <IGESControl_Writer.hxx>
+#include <STEPControl_Controller.hxx>
+#include <STEPControl_Writer.hxx>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <stdexcept>
+
+#include "converter/occt/export_error.h"
+#include "converter/occt/occt_util.h"
+#include "io/input_error.h"
+
+namespace subd2nurbs::occt {
+
+using detail::guarded;
+
+const char* to_string(Format format) {
+  switch (format) {
+    case Format::Step: return "STEP";
+    case Format::Iges: return "IGES";
+    case Format::Brep: return "BREP";
+  }
+  return "?";
+}
+
+const char* to_string(StepSchema schema) {
+  switch (schema) {
+    case StepSchema::AP214: return "AP214";
+    case StepSchema::AP242: return "AP242";
+  }
+  return "?";
+}
+
+Format format_from_path(const std::string& path) {
+  const std::string::size_type slash = path.rfind('/');
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string::size_type dot = name.rfind('.');
+  std::string ext = dot == std::string::npos ? "" : name.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == "step" || ext == "stp") return Format::Step;
+  if (ext == "iges" || ext == "igs") return Format::Iges;
+  if (ext == "brep") return Format::Brep;
+  throw std::invalid_argument("'" + path +
+                              "': unknown output format (use .step, .stp, .iges, .igs or .brep)");
+}
+
+namespace {
+
+/// A new, empty, uniquely named file next to `path` (".NAME.XXXXXXXX.tmp", the same scheme as
+/// io/atomic_file.cpp), removed again on destruction unless commit() renamed it over `path`.
+/// OCCT's writers only take file names, so they write this file by name.
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(const std::string& path) : path_(path) {
+    static std::atomic<unsigned> counter{0};
+    std::random_device entropy;
+    const std::string::size_type slash = path.rfind('/');
+    const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+    const std::string file = slash == std::string::npos ? path : path.substr(slash + 1);
+    int err = 0;
+    for (int attempt = 0; attempt < 16; ++attempt) {
+      char suffix[32];
+      std::snprintf(suffix, sizeof suffix, "%08x", entropy() ^ (counter++ * 2654435761u));
+      const std::string candidate = dir + "." + file + "." + suffix + ".tmp";
+      const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+      if (fd >= 0) {
+        ::close(fd);
+        name_ = candidate;
+        break;
+      }
+      err = errno;
+      if (err != EEXIST) break;
+    }
+    if (name_.empty())
+      throw WriteError(path, "cannot create a temporary file in directory '" +
+                                 (dir.empty() ? std::string(".") : dir) +
+                                 "': " + std::strerror(err));
+    // Replacing an existing file keeps its permissions.
+    struct stat existing;
+    if (::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
+      ::chmod(name_.c_str(), existing.st_mode & 07777);
+  }
+  ~TemporaryFile() {
+    if (!name_.empty()) std::remove(name_.c_str());
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+
+  const std::string& name() const { return name_; }
+
+  /// Checks that something was written, forces it to disk, and renames it over the target.
+  void commit() {
+    struct stat written;
+    if (::stat(name_.c_str(), &written) != 0 || written.st_size == 0)
+      throw WriteError(path_, "the writer produced an empty file");
+    const int fd = ::open(name_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0 || ::fsync(fd) != 0) {
+      const int err = errno;
+      if (fd >= 0) ::close(fd);
+      throw WriteError(path_, std::string("cannot flush to disk: ") + std::strerror(err));
+    }
+    ::close(fd);
+    if (std::rename(name_.c_str(), path_.c_str()) != 0)
+      throw WriteError(path_, std::string("cannot replace the file: ") + std::strerror(errno));
+    name_.clear();
+  }
+
+ private:
+  std::string path_;
+  std::string name_;
+};
+
+void write_step(const TopoDS_Shape& shape, const std::string& file, const std::string& path,
+                StepSchema schema) {
+  detail::StaticSettings settings;
+  guarded("step-write", -1, [&] {
+    // Registers the write.step.* settings; they do not exist before the first Init().
+    STEPControl_Controller::Init();
+  });
+  // Flat output: with "Auto" (OCCT's default) a shell or compound may be written as an
+  // assembly of products, which FreeCAD 0.20 crashes on.
+  settings.set("step-write", "write.step.assembly", "Off");
+  // The schema must be set before the writer exists: the writer's model (and the header's
+  // FILE_SCHEMA) is created with the schema current at that moment.
+  settings.set("step-write", "write.step.schema",
+               schema == StepSchema::AP242 ? "AP242DIS" : "AP214IS");
+  guarded("step-write", -1, [&] {
+    STEPControl_Writer writer;
+    if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone)
+      throw ExportError("step-transfer", -1, "the STEP translator refused the shape");
+    if (writer.Write(file.c_str()) != IFSelect_RetDone)
+      throw WriteError(path, "the STEP writer could not write the file");
+  });
+}
+
+void write_iges(const TopoDS_Shape& shape, const std::string& file, const std::string& path) {
+  guarded("iges-write", -1, [&] {
+    // Mode 1 = B-rep (MSBO solids, shells, faces with shared edges); mode 0 would write every
+    // face as an independent trimmed surface. The unit goes into the global section.
+    IGESControl_Writer writer("MM", 1);
+    if (!writer.AddShape(shape))
+      throw ExportError("iges-transfer", -1, "the IGES translator refused the shape");
+    writer.ComputeModel();
+    if (!writer.Write(file.c_str()))
+      throw WriteError(path, "the IGES writer could not write the file");
+  });
+}
+
+void write_brep(const TopoDS_Shape& shape, const std::string& file, const std::string& path) {
+  guarded("brep-write", -1, [&] {
+    if (!BRepTools::Write(shape, file.c_str()))
+      throw WriteError(path, "the BREP writer could not write the file");
+  });
+}
+
+}  // namespace
+
+void write_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
+                 StepSchema schema) {
+  if (path.empty()) throw WriteError("(empty path)", "no output file name given");
+  if (shape.IsNull()) throw ExportError("write", -1, "nothing to write: the shape is null");
+  TemporaryFile temporary(path);
+  {
+    std::lock_guard<std::mutex> lock(detail::exchange_mutex());
+    detail::QuietMessages quiet;
+    switch (format) {
+      case Format::Step: write_step(shape, temporary.name(), path, schema); break;
+      case Format::Iges: write_iges(shape, temporary.name(), path); break;
+      case Format::Brep: write_brep(shape, temporary.name(), path); break;
+    }
+  }
+  temporary.commit();
+}
+
+}  // namespace subd2nurbs::occt

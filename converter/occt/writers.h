@@ -1,0 +1,38 @@
+// Writing an OCCT shape as STEP, IGES or BREP, atomically (a temporary file next to the
+// target, renamed over it when complete).
+#pragma once
+
+#include <TopoDS_Shape.hxx>
+
+#include <string>
+
+namespace subd2nurbs::occt {
+
+enum class Format { Step, Iges, Brep };
+
+/// STEP application protocol. AP214 (OCCT's "AP214IS", FILE_SCHEMA AUTOMOTIVE_DESIGN) is what
+/// most importers expect; AP242 (OCCT's "AP242DIS") is the newer one.
+enum class StepSchema { AP214, AP242 };
+
+/// The format a file name asks for: .step/.stp, .iges/.igs, .brep (case-insensitive).
+/// \throw std::invalid_argument for any other (or no) extension.
+Format format_from_path(const std::string& path);
+
+/// Writes `shape` to `path`. STEP is written flat (write.step.assembly Off: FreeCAD 0.20
+/// crashes on OCCT's assembly form), IGES in B-rep mode (faces, not trimmed surfaces) with
+/// millimetre units, BREP in OCCT's native text format.
+///
+/// OCCT's settings (Interface_Static) changed for the write are restored afterwards, also on
+/// failure. Writes are serialized by a process-wide lock, because those settings are global.
+///
+/// \throw WriteError (io/input_error.h) naming `path` if the file cannot be created, written or
+///        renamed: `path` is then left as it was and no temporary file remains.
+/// \throw ExportError when OCCT refuses the shape (transfer failure, OCCT exception).
+void write_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
+                 StepSchema schema = StepSchema::AP214);
+
+/// Human-readable names ("STEP", "IGES", "BREP"; "AP214", "AP242").
+const char* to_string(Format format);
+const char* to_string(StepSchema schema);
+
+}  // namespace subd2nurbs::occt
