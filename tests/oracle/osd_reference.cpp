@@ -41,8 +41,7 @@ Sdc::Options sdc_options(const SubdivOptions& o) {
 
 }  // namespace
 
-OsdRefinement osd_refine(const MeshInput& in, int levels, bool with_limit) {
-  OsdRefinement out;
+std::unique_ptr<Far::TopologyRefiner> osd_create_refiner(const MeshInput& in) {
   Far::TopologyDescriptor desc;
   desc.numVertices = in.num_vertices();
   desc.numFaces = in.num_faces();
@@ -72,7 +71,12 @@ OsdRefinement osd_refine(const MeshInput& in, int levels, bool with_limit) {
 
   using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
   Factory::Options fopt(Sdc::SCHEME_CATMARK, sdc_options(in.options));
-  out.refiner.reset(Factory::Create(desc, fopt));
+  return std::unique_ptr<Far::TopologyRefiner>(Factory::Create(desc, fopt));
+}
+
+OsdRefinement osd_refine(const MeshInput& in, int levels, bool with_limit) {
+  OsdRefinement out;
+  out.refiner = osd_create_refiner(in);
   if (!out.refiner) return out;
   Far::TopologyRefiner::UniformOptions uopt(levels);
   uopt.fullTopologyInLastLevel = true;

@@ -18,6 +18,11 @@ struct OsdRefinement {
   std::vector<Point3> limit;                   ///< limit positions of the last level's vertices
 };
 
+/// OpenSubdiv's unrefined TopologyRefiner for `input`: Catmark scheme, the input's boundary
+/// rule, crease method and triangle rule, its crease and corner tags (sharpness as float) and
+/// holes. nullptr if OpenSubdiv rejects the topology.
+std::unique_ptr<OpenSubdiv::Far::TopologyRefiner> osd_create_refiner(const MeshInput& input);
+
 /// Refines with OpenSubdiv; nullptr refiner if OpenSubdiv rejects the topology.
 OsdRefinement osd_refine(const MeshInput& input, int levels, bool with_limit = false);
 
