@@ -1,0 +1,95 @@
+#include "core/eval/continuity.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "core/eval/nurbs_eval.h"
+
+namespace subd2nurbs {
+namespace {
+
+using V3 = Eigen::Vector3d;
+V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
+
+// Derivatives of a patch at a side point, expressed along the side (counter-clockwise) and
+// into the patch: along = dX/dt, inward = dX/dn, inward2 = d2X/dn2.
+struct SideFrame {
+  V3 p, along, inward, inward2, normal;
+};
+SideFrame side_frame(const NurbsPatch& patch, int side, double t) {
+  double u, v;
+  side_parameters(side, t, u, v);
+  const SurfaceDerivs d = evaluate(patch, u, v);
+  SideFrame f;
+  f.p = v3(d.p);
+  const V3 du = v3(d.du), dv = v3(d.dv);
+  switch (side) {
+    case 0: f.along = du; f.inward = dv; f.inward2 = v3(d.dvv); break;
+    case 1: f.along = dv; f.inward = -du; f.inward2 = v3(d.duu); break;
+    case 2: f.along = -du; f.inward = -dv; f.inward2 = v3(d.dvv); break;
+    default: f.along = -dv; f.inward = du; f.inward2 = v3(d.duu); break;
+  }
+  f.normal = v3(unit_normal(d));
+  return f;
+}
+
+double angle_deg(const V3& a, const V3& b) {
+  if (a.norm() == 0 || b.norm() == 0) return 0;
+  // atan2 of |a x b| and a.b keeps precision for tiny angles (acos floors at ~1e-6 degrees).
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / 3.14159265358979323846;
+}
+
+}  // namespace
+
+CurveMeasure measure_curve(const PatchSet& ps, int ci, int samples) {
+  const BoundaryCurve& c = ps.curves[ci];
+  CurveMeasure m;
+  m.curve = ci;
+  m.claimed = c.continuity;
+  if (c.uses.size() < 2) return m;
+  const CurveUse& A = c.uses[0];
+  const CurveUse& B = c.uses[1];
+  for (int k = 0; k < samples; ++k) {
+    const double s = static_cast<double>(k) / (samples - 1);
+    const SideFrame fa = side_frame(ps.patches[A.patch], A.side, A.reversed ? 1 - s : s);
+    const SideFrame fb = side_frame(ps.patches[B.patch], B.side, B.reversed ? 1 - s : s);
+    m.gap = std::max(m.gap, (fa.p - fb.p).norm());
+    const double ang = angle_deg(fa.normal, fb.normal);
+    if (ang > m.normal_angle_deg) { m.normal_angle_deg = ang; m.worst_s = s; }
+    const V3& D = fa.inward;
+    const V3& E = fb.inward;
+    const V3 e = A.reversed ? V3(-fa.along) : fa.along;
+    const double den = D.norm() * E.norm() * e.norm();
+    if (den > 0) m.coplanarity = std::max(m.coplanarity, std::abs(D.cross(E).dot(e)) / den);
+    const double scale1 = std::max(D.norm(), E.norm());
+    if (scale1 > 0) m.c1_jump = std::max(m.c1_jump, (D + E).norm() / scale1);
+    const double scale2 = std::max({fa.inward2.norm(), fb.inward2.norm(), scale1});
+    if (scale2 > 0) m.c2_jump = std::max(m.c2_jump, (fa.inward2 - fb.inward2).norm() / scale2);
+  }
+  return m;
+}
+
+ContinuityReport measure_continuity(const PatchSet& ps, int samples) {
+  ContinuityReport r;
+  for (int ci = 0; ci < static_cast<int>(ps.curves.size()); ++ci) {
+    if (ps.curves[ci].uses.size() < 2) continue;
+    CurveMeasure m = measure_curve(ps, ci, samples);
+    r.max_gap = std::max(r.max_gap, m.gap);
+    const Continuity c = m.claimed;
+    if (c == Continuity::G1 || c == Continuity::C1 || c == Continuity::C2) {
+      r.max_normal_angle_deg = std::max(r.max_normal_angle_deg, m.normal_angle_deg);
+      r.max_coplanarity = std::max(r.max_coplanarity, m.coplanarity);
+    } else {
+      r.max_crease_normal_angle_deg = std::max(r.max_crease_normal_angle_deg, m.normal_angle_deg);
+    }
+    if (c == Continuity::C1 || c == Continuity::C2) r.max_c1_jump = std::max(r.max_c1_jump, m.c1_jump);
+    if (c == Continuity::C2) r.max_c2_jump = std::max(r.max_c2_jump, m.c2_jump);
+    r.curves.push_back(m);
+  }
+  return r;
+}
+
+}  // namespace subd2nurbs

@@ -1,0 +1,140 @@
+#include "core/eval/nurbs_eval.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace subd2nurbs {
+
+int basis_derivatives(const std::vector<double>& U, int p, double x, int nd, double ders[3][4]) {
+  if (p != 3) throw std::invalid_argument("basis_derivatives: degree 3 only");
+  const int n = static_cast<int>(U.size()) - p - 2;  // last pole index
+  // Span: U[span] <= x < U[span+1], with x == U.back() in the last non-empty span.
+  int span;
+  if (x >= U[n + 1]) span = n;
+  else if (x <= U[p]) span = p;
+  else span = static_cast<int>(std::upper_bound(U.begin() + p, U.begin() + n + 2, x) - U.begin()) - 1;
+  double ndu[4][4], left[4], right[4];
+  ndu[0][0] = 1.0;
+  for (int j = 1; j <= p; ++j) {
+    left[j] = x - U[span + 1 - j];
+    right[j] = U[span + j] - x;
+    double saved = 0.0;
+    for (int r = 0; r < j; ++r) {
+      ndu[j][r] = right[r + 1] + left[j - r];
+      const double temp = ndu[r][j - 1] / ndu[j][r];
+      ndu[r][j] = saved + right[r + 1] * temp;
+      saved = left[j - r] * temp;
+    }
+    ndu[j][j] = saved;
+  }
+  for (int j = 0; j <= p; ++j) ders[0][j] = ndu[j][p];
+  double a[2][4];
+  for (int r = 0; r <= p; ++r) {
+    int s1 = 0, s2 = 1;
+    a[0][0] = 1.0;
+    for (int k = 1; k <= nd; ++k) {
+      double d = 0.0;
+      const int rk = r - k, pk = p - k;
+      if (r >= k) {
+        a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+        d = a[s2][0] * ndu[rk][pk];
+      }
+      const int j1 = rk >= -1 ? 1 : -rk;
+      const int j2 = (r - 1 <= pk) ? k - 1 : p - r;
+      for (int j = j1; j <= j2; ++j) {
+        a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
+        d += a[s2][j] * ndu[rk + j][pk];
+      }
+      if (r <= pk) {
+        a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+        d += a[s2][k] * ndu[r][pk];
+      }
+      ders[k][r] = d;
+      std::swap(s1, s2);
+    }
+  }
+  double f = p;
+  for (int k = 1; k <= nd; ++k) {
+    for (int j = 0; j <= p; ++j) ders[k][j] *= f;
+    f *= (p - k);
+  }
+  return span;
+}
+
+SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v) {
+  const std::vector<double> U = patch.knots_u.flat(), V = patch.knots_v.flat();
+  double Nu[3][4], Nv[3][4];
+  const int su = basis_derivatives(U, 3, u, 2, Nu), sv = basis_derivatives(V, 3, v, 2, Nv);
+  // Homogeneous sums S[k][l] = sum Nu^(k) Nv^(l) w P  and  W[k][l] = sum Nu^(k) Nv^(l) w.
+  double S[3][3][3] = {}, W[3][3] = {};
+  const bool rational = !patch.weights.empty();
+  for (int a = 0; a <= 3; ++a)
+    for (int b = 0; b <= 3; ++b) {
+      const int i = su - 3 + a, j = sv - 3 + b;
+      const Point3& P = patch.pole(i, j);
+      const double w = rational ? patch.weights[static_cast<size_t>(i) * patch.num_poles_v + j] : 1.0;
+      for (int k = 0; k <= 2; ++k)
+        for (int l = 0; l + k <= 2; ++l) {
+          const double bw = Nu[k][a] * Nv[l][b] * w;
+          for (int c = 0; c < 3; ++c) S[k][l][c] += bw * P[c];
+          W[k][l] += bw;
+        }
+    }
+  // Quotient rule (Piegl & Tiller A4.4) up to second order.
+  Point3 D[3][3];
+  for (int k = 0; k <= 2; ++k)
+    for (int l = 0; l + k <= 2; ++l)
+      for (int c = 0; c < 3; ++c) {
+        double x = S[k][l][c];
+        if (rational) {
+          for (int j = 1; j <= l; ++j) x -= (l == 2 && j == 1 ? 2 : 1) * W[0][j] * D[k][l - j][c];
+          for (int i = 1; i <= k; ++i) {
+            const double bi = (k == 2 && i == 1) ? 2 : 1;
+            x -= bi * W[i][0] * D[k - i][l][c];
+            for (int j = 1; j <= l; ++j) x -= bi * W[i][j] * D[k - i][l - j][c];
+          }
+          x /= W[0][0];
+        }
+        D[k][l][c] = x;
+      }
+  SurfaceDerivs out;
+  out.p = D[0][0];
+  out.du = D[1][0];
+  out.dv = D[0][1];
+  out.duu = D[2][0];
+  out.duv = D[1][1];
+  out.dvv = D[0][2];
+  return out;
+}
+
+Point3 unit_normal(const SurfaceDerivs& d) {
+  const Point3& a = d.du;
+  const Point3& b = d.dv;
+  Point3 n{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (len == 0) return {0, 0, 0};
+  for (double& c : n) c /= len;
+  return n;
+}
+
+Point3 evaluate(const BoundaryCurve& curve, double s) {
+  const std::vector<double> U = curve.knots.flat();
+  double N[3][4];
+  const int span = basis_derivatives(U, 3, s, 0, N);
+  Point3 p{0, 0, 0};
+  for (int a = 0; a <= 3; ++a)
+    for (int c = 0; c < 3; ++c) p[c] += N[0][a] * curve.poles[span - 3 + a][c];
+  return p;
+}
+
+void side_parameters(int side, double t, double& u, double& v) {
+  switch (side) {
+    case 0: u = t; v = 0; break;
+    case 1: u = 1; v = t; break;
+    case 2: u = 1 - t; v = 1; break;
+    default: u = 0; v = 1 - t; break;
+  }
+}
+
+}  // namespace subd2nurbs

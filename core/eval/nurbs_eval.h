@@ -1,0 +1,31 @@
+// Evaluation of the PatchSet's B-spline patches and curves (de Boor / Cox recursion with
+// derivatives, Piegl & Tiller, The NURBS Book, A2.1-A2.3). Rational patches (weights) are
+// evaluated through homogeneous coordinates.
+#pragma once
+
+#include "core/patch/patch_set.h"
+
+namespace subd2nurbs {
+
+struct SurfaceDerivs {
+  Point3 p{}, du{}, dv{}, duu{}, duv{}, dvv{};
+};
+
+/// Position and derivatives up to second order at (u, v) in [0,1]^2.
+SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v);
+
+/// Unit normal Xu x Xv (zero vector where the parametrization is singular).
+Point3 unit_normal(const SurfaceDerivs& d);
+
+/// Point on a boundary curve at s in [0,1].
+Point3 evaluate(const BoundaryCurve& curve, double s);
+
+/// Parameters (u, v) of a patch side at side parameter t (counter-clockwise traversal,
+/// see patch_set.h): side 0 (t,0), side 1 (1,t), side 2 (1-t,1), side 3 (0,1-t).
+void side_parameters(int side, double t, double& u, double& v);
+
+/// Basis functions and their first `nd` derivatives at x for a flat knot vector U and
+/// degree p: ders[k][j] is the k-th derivative of N_{span-p+j}. Returns the span index.
+int basis_derivatives(const std::vector<double>& U, int p, double x, int nd, double ders[3][4]);
+
+}  // namespace subd2nurbs

@@ -1,0 +1,100 @@
+// Catmull-Clark cage -> PatchSet: one bicubic NURBS patch per quad of the coarsest all-quad
+// mesh (MATH.md sections 5.3, 5.4, 6).
+//
+// Pipeline:
+//   1. a := 0 if the cage is all quads (holes aside), else 1 (one CC step splits n-gons).
+//   2. Refine uniformly to level k = a + 2 + extra_levels, and further while any semi-sharp
+//      sharpness is still active, so that every level-k edge is smooth or infinitely sharp.
+//   3. Per level-k quad whose four corners are regular *for that quad* (smooth 4-valent,
+//      crease vertex with 2 faces on the quad's side, corner vertex with 1 face), the exact
+//      limit patch: the bicubic B-spline of its 4x4 neighbourhood, with phantom points across
+//      sharp edges (MATH.md 1.2), converted to a Bezier net (6.1).
+//   4. Per irregular vertex and per fan of faces between its sharp edges ("fan"), the quads
+//      touching the vertex get Construction Q (5.3) or its open-fan variant (5.6, made
+//      precise here and tested): exactly G1 across the smooth rays, with the level-k 2x2
+//      zone joined C1 to the regular surface.
+//   5. The level-k Bezier nets of each coarse quad are merged into one clamped B-spline
+//      (5.4): double knots at h and 2h next to a corner that had a fan construction, simple
+//      knots elsewhere. Poles are blossoms of one Bezier piece (exact when the pieces join
+//      with the claimed continuity, which the tests verify piece by piece).
+//   6. The shared boundary topology (corners, one curve per coarse edge, which patches use
+//      it, and the continuity the construction guarantees across it).
+#pragma once
+
+#include <vector>
+
+#include "core/patch/patch_set.h"
+#include "core/refine/refiner.h"
+
+namespace subd2nurbs {
+
+struct PatchOptions {
+  /// Levels beyond the minimum (coarse all-quad level + 2). More levels shrink the region
+  /// where Construction Q deviates from the limit (rates per valence in MATH.md 5.3).
+  int extra_levels = 0;
+  /// Semi-sharp creases are refined until they are smooth, but at most this many levels
+  /// above the coarse all-quad level (each level quadruples the work). Sharpness left at
+  /// that level is treated as infinite, and PatchBuildInfo says how many edges it touched.
+  int max_levels_above_coarse = 5;
+};
+
+/// How the quads around one irregular vertex (one fan between sharp edges) were built.
+enum class FanMode : unsigned char {
+  Smooth,       ///< interior extraordinary vertex: Construction Q, exactly G1 (MATH.md 5.3)
+  Dart,         ///< one sharp edge ends here: Construction Q cut open at the sharp ray
+  Crease,       ///< crease or smooth boundary vertex, k != 2 faces on this side: open fan
+  Corner,       ///< corner vertex, k >= 2 faces between its sharp edges: open fan
+  Approximate,  ///< no exact construction (cone point, valence 2): C0 rays, normal jump measured
+};
+const char* to_string(FanMode mode);
+
+struct IrregularFan {
+  int vertex = -1;       ///< level-k vertex (equal to its level-a index)
+  int base_vertex = -1;  ///< cage vertex, or -1
+  FanMode mode = FanMode::Smooth;
+  int valence = 0;
+  int sectors = 0;       ///< faces in the fan
+  double c = 0;          ///< G1 coefficient: D + E = 2c(1-t)^2 e' on the smooth rays
+};
+
+/// A coarse edge leaving an irregular vertex: where MATH.md section 9's exact residual applies.
+struct RayCurve {
+  int curve = -1;          ///< PatchSet curve index
+  bool vertex_at_start;    ///< the irregular vertex is the curve's corner0
+  int fan = -1;            ///< index into PatchBuildInfo::fans
+  Continuity continuity;   ///< G1 or C0 (sharp or approximate)
+  double c = 0;            ///< the fan's G1 coefficient (MATH.md 5.3: D + E = 2c(1-t)^2 e')
+};
+
+struct PatchBuildInfo {
+  int coarse_level = 0;  ///< a: 0 if the cage is all quads, else 1
+  int level = 0;         ///< k: the level the patches are built from
+  int regular_patches = 0;
+  int pccm_patches = 0;
+  /// Level-k edges and vertices whose semi-sharpness had not decayed at the level cap and
+  /// were made infinitely sharp (0 when every semi-sharp crease was refined to smoothness).
+  int sharpened_edges = 0, sharpened_vertices = 0;
+  std::vector<IrregularFan> fans;
+  std::vector<RayCurve> rays;
+  /// For each patch, its (2^(k-a))^2 level-k quads, row-major [y][x] with x along u, each as
+  /// the level-k corner at the quad's patch-frame origin (its x axis runs along u).
+  std::vector<std::vector<int>> sub_corners;
+};
+
+struct PatchBuild {
+  PatchSet set;
+  PatchBuildInfo info;
+  /// Level-k Bezier nets, 16 points per level-k face in the face's own frame
+  /// (index i * 4 + j, i along the face's first edge). Kept for tests and deviation checks.
+  std::vector<Point3> level_nets;
+  Refinement refinement;  ///< levels 0..k
+  std::vector<Point3> level_positions;  ///< control points of level k
+};
+
+/// Builds the patches of a validated cage. Positions are the cage's vertex positions.
+/// \throw std::invalid_argument if the topology is outside what the builder supports
+///        (non-manifold input is rejected earlier, by validation).
+PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& positions,
+                         const PatchOptions& options = {});
+
+}  // namespace subd2nurbs
