@@ -1,4 +1,5 @@
 #include "core/patch/patch_builder.h"
+#include "core/patch/quad_frames.h"
 
 #include <algorithm>
 #include <cmath>
@@ -29,33 +30,10 @@ constexpr double kPi = 3.14159265358979323846;
 V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
 Point3 pt(const V3& v) { return {v.x(), v.y(), v.z()}; }
 
-// ---- frames on a quad mesh --------------------------------------------------------------
-// A frame is a corner c of a quad: origin at corner_vertex(c), x axis along c's edge (toward
-// the next corner), y axis toward the previous corner. Faces are counter-clockwise, so x, y
-// and the face normal are right-handed.
-
-int rotation_in_face(const PolyMesh& m, int c) { return c - m.face_begin(m.corner_face(c)); }
-
-// Bezier index (i, j) in the frame of the face's corner r -> index in the face's own frame.
-int face_net_index(int r, int i, int j) {
-  switch (r) {
-    case 0: return i * 4 + j;
-    case 1: return (3 - j) * 4 + i;
-    case 2: return (3 - i) * 4 + (3 - j);
-    default: return j * 4 + (3 - i);
-  }
-}
-
-int step_x(const PolyMesh& m, int c) {
-  const int t = m.twin(m.next(c));
-  if (t < 0) throw std::logic_error("patch builder: walked off the mesh (x)");
-  return m.next(t);
-}
-int step_y(const PolyMesh& m, int c) {
-  const int t = m.twin(m.next(m.next(c)));
-  if (t < 0) throw std::logic_error("patch builder: walked off the mesh (y)");
-  return t;
-}
+using frames::face_net_index;
+using frames::rotation_in_face;
+using frames::step_x;
+using frames::step_y;
 
 // ---- the level-k mesh: sharp edges, vertex rules, fans ------------------------------------
 

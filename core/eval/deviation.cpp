@@ -1,0 +1,220 @@
+#include "core/eval/deviation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+#include <Eigen/Core>
+#include <Eigen/Dense>
+
+#include "core/patch/quad_frames.h"
+
+namespace subd2nurbs {
+namespace {
+
+using V3 = Eigen::Vector3d;
+V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
+constexpr double kPi = 3.14159265358979323846;
+
+// Cubic Bernstein values and first derivatives.
+void bernstein(double t, double b[4], double db[4]) {
+  const double s = 1 - t;
+  b[0] = s * s * s; b[1] = 3 * t * s * s; b[2] = 3 * t * t * s; b[3] = t * t * t;
+  db[0] = -3 * s * s; db[1] = 3 * s * s - 6 * t * s; db[2] = 6 * t * s - 3 * t * t; db[3] = 3 * t * t;
+}
+
+struct NetPoint { V3 p, du, dv; };
+NetPoint eval_net(const Point3* net, double u, double v) {
+  double bu[4], dbu[4], bv[4], dbv[4];
+  bernstein(u, bu, dbu);
+  bernstein(v, bv, dbv);
+  NetPoint r{V3::Zero(), V3::Zero(), V3::Zero()};
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      const V3 P = v3(net[i * 4 + j]);
+      r.p += bu[i] * bv[j] * P;
+      r.du += dbu[i] * bv[j] * P;
+      r.dv += bu[i] * dbv[j] * P;
+    }
+  return r;
+}
+
+// Distance from q to a Bezier patch: best of a 3x3 seed grid, then clamped Gauss-Newton.
+double distance_to_net(const Point3* net, const V3& q) {
+  double best = 1e300, bu = 0.5, bv = 0.5;
+  for (int a = 0; a <= 2; ++a)
+    for (int b = 0; b <= 2; ++b) {
+      const double d = (eval_net(net, a / 2.0, b / 2.0).p - q).squaredNorm();
+      if (d < best) { best = d; bu = a / 2.0; bv = b / 2.0; }
+    }
+  double u = bu, v = bv;
+  for (int it = 0; it < 20; ++it) {
+    const NetPoint e = eval_net(net, u, v);
+    const V3 r = e.p - q;
+    Eigen::Matrix2d J;
+    J << e.du.dot(e.du), e.du.dot(e.dv), e.du.dot(e.dv), e.dv.dot(e.dv);
+    const Eigen::Vector2d g(e.du.dot(r), e.dv.dot(r));
+    if (std::abs(J.determinant()) < 1e-300) break;
+    const Eigen::Vector2d step = J.ldlt().solve(g);
+    const double nu = std::clamp(u - step.x(), 0.0, 1.0), nv = std::clamp(v - step.y(), 0.0, 1.0);
+    const bool small = std::abs(nu - u) + std::abs(nv - v) < 1e-15;
+    u = nu;
+    v = nv;
+    if (small) break;
+  }
+  return std::min(std::sqrt(best), (eval_net(net, u, v).p - q).norm());
+}
+
+// Level-k faces within `rings` face rings of vertex v (ring 1 = faces touching v).
+std::vector<int> face_rings(const PolyMesh& m, int v, int rings) {
+  std::vector<int> faces;
+  std::unordered_map<int, int> seen_face;
+  std::vector<int> frontier_vertices{v};
+  std::unordered_map<int, int> seen_vertex{{v, 0}};
+  for (int r = 0; r < rings; ++r) {
+    std::vector<int> next_vertices;
+    for (int x : frontier_vertices) {
+      const int* cs = m.vertex_corners(x);
+      for (int i = 0; i < m.vertex_face_count(x); ++i) {
+        const int f = m.corner_face(cs[i]);
+        if (seen_face.count(f)) continue;
+        seen_face[f] = r;
+        faces.push_back(f);
+        for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
+          const int w = m.corner_vertex(h);
+          if (seen_vertex.emplace(w, r + 1).second) next_vertices.push_back(w);
+        }
+      }
+    }
+    frontier_vertices.swap(next_vertices);
+  }
+  return faces;
+}
+
+}  // namespace
+
+double deviation_rate(int n) {
+  if (n < 3) return 1.0;
+  const double c1 = std::cos(2 * kPi / n), h1 = std::cos(kPi / n);
+  const double lambda = (5 + c1 + h1 * std::sqrt(2 * (9 + c1))) / 16;
+  const double c2 = std::cos(4 * kPi / n), h2 = std::cos(2 * kPi / n);
+  const double mu = (5 + c2 + h2 * std::sqrt(2 * (9 + c2))) / 16;
+  return 1.0 / std::max(lambda * lambda, mu);
+}
+
+DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
+  DeviationReport out;
+  out.sample_levels = sample_levels;
+  const SubdivLevel& lk = build.refinement.levels[build.info.level];
+  const PolyMesh& mk = lk.mesh;
+  double sum = 0;
+  for (size_t fi = 0; fi < build.info.fans.size(); ++fi) {
+    const IrregularFan& fan = build.info.fans[fi];
+    // The zone (2 face rings) and a margin of 3 more rings, as a stand-alone cage.
+    const std::vector<int> zone = face_rings(mk, fan.vertex, 2);
+    const std::vector<int> local = face_rings(mk, fan.vertex, 5);
+    std::unordered_map<int, int> local_vertex;
+    MeshInput sub;
+    sub.options = lk.options;
+    auto local_index = [&](int v) {
+      auto [it, inserted] = local_vertex.emplace(v, static_cast<int>(sub.positions.size()));
+      if (inserted) {
+        sub.positions.push_back(build.level_positions[v]);
+        if (lk.vertex_sharpness[v] > 0) sub.corners.push_back({it->second, lk.vertex_sharpness[v]});
+      }
+      return it->second;
+    };
+    std::unordered_map<int, int> local_face;
+    for (int f : local) {
+      if (lk.face_hole[f]) sub.holes.push_back(static_cast<int>(sub.face_sizes.size()));
+      local_face[f] = static_cast<int>(sub.face_sizes.size());
+      sub.face_sizes.push_back(mk.face_size(f));
+      for (int h = mk.face_begin(f); h < mk.face_end(f); ++h) sub.face_indices.push_back(local_index(mk.corner_vertex(h)));
+    }
+    // Interior sharp edges keep their sharpness (boundary edges of the real mesh stay boundary).
+    for (int f : local)
+      for (int h = mk.face_begin(f); h < mk.face_end(f); ++h) {
+        const int e = mk.corner_edge(h);
+        if (lk.edge_sharpness[e] > 0 && !mk.is_boundary_edge(e) && mk.edge_corner(e) == h)
+          sub.creases.push_back({local_vertex[mk.edge_vertex(e, 0)], local_vertex[mk.edge_vertex(e, 1)], lk.edge_sharpness[e]});
+      }
+    // Refine the local cage, following the zone faces' descendants.
+    SubdivLevel level = SubdivLevel::from_input(sub);
+    std::vector<Point3> x = sub.positions;
+    std::vector<int> faces;  // descendants, with their root level-k face
+    std::vector<int> roots;
+    for (int f : zone)
+      if (!lk.face_hole[f]) { faces.push_back(local_face[f]); roots.push_back(f); }
+    for (int s = 0; s < sample_levels; ++s) {
+      RefinementStep step = refine_once(level);
+      std::vector<Point3> y;
+      step.stencils.apply(x, y);
+      std::vector<int> child_faces, child_roots;
+      for (size_t i = 0; i < faces.size(); ++i)
+        for (int h = level.mesh.face_begin(faces[i]); h < level.mesh.face_end(faces[i]); ++h) {
+          child_faces.push_back(h);  // child face index = parent corner
+          child_roots.push_back(roots[i]);
+        }
+      level = std::move(step.child);
+      x.swap(y);
+      faces.swap(child_faces);
+      roots.swap(child_roots);
+    }
+    std::vector<Point3> limit;
+    limit_stencils(level).apply(x, limit);
+    // Samples: the vertices of the descendant faces, each measured against its root face's
+    // net and the nets of the faces sharing an edge with it.
+    FanDeviation fd;
+    fd.fan = static_cast<int>(fi);
+    std::map<int, bool> done;
+    for (size_t i = 0; i < faces.size(); ++i) {
+      const int root = roots[i];
+      std::vector<int> candidates{root};
+      for (int h = mk.face_begin(root); h < mk.face_end(root); ++h)
+        if (const int t = mk.twin(h); t >= 0) candidates.push_back(mk.corner_face(t));
+      for (int h = level.mesh.face_begin(faces[i]); h < level.mesh.face_end(faces[i]); ++h) {
+        const int v = level.mesh.corner_vertex(h);
+        if (done.count(v)) continue;
+        done[v] = true;
+        const V3 q = v3(limit[v]);
+        double d = 1e300;
+        for (int c : candidates) d = std::min(d, distance_to_net(&build.level_nets[static_cast<size_t>(c) * 16], q));
+        fd.max = std::max(fd.max, d);
+        ++fd.samples;
+        sum += d;
+        if (d > out.max) {
+          out.max = d;
+          out.where = limit[v];
+          out.worst_fan = static_cast<int>(fi);
+        }
+      }
+    }
+    out.samples += fd.samples;
+    out.fans.push_back(fd);
+  }
+  out.mean = out.samples ? sum / out.samples : 0;
+  return out;
+}
+
+int extra_levels_for_tolerance(const PatchBuild& build, const DeviationReport& measured, double tolerance) {
+  int extra = 0;
+  for (const FanDeviation& fd : measured.fans) {
+    if (fd.max <= tolerance) continue;
+    const IrregularFan& fan = build.info.fans[fd.fan];
+    double rate = 2.0;
+    switch (fan.mode) {
+      case FanMode::Smooth:
+      case FanMode::Dart: rate = deviation_rate(fan.valence); break;
+      case FanMode::Crease: rate = deviation_rate(2 * fan.sectors); break;
+      case FanMode::Corner: rate = deviation_rate(4 * fan.sectors); break;
+      case FanMode::Approximate: rate = 2.0; break;
+    }
+    rate = std::max(rate, 1.2);
+    const int j = static_cast<int>(std::ceil(std::log(fd.max / tolerance) / std::log(rate) - 1e-9));
+    extra = std::max(extra, j);
+  }
+  return extra;
+}
+
+}  // namespace subd2nurbs

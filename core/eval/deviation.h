@@ -1,0 +1,46 @@
+// Deviation of the patches from the Catmull-Clark limit surface.
+//
+// Regular patches are the limit exactly (an identity the tests check against OpenSubdiv), so
+// only the zones around irregular vertices are measured. Construction Q reparametrizes the
+// surface there (MATH.md 5.3), so the measure is the closest-point distance: the zone is
+// refined `sample_levels` more levels, the limit positions of the refined vertices are the
+// samples, and each sample's distance to the nearest zone Bezier piece is found by Newton
+// iteration.
+#pragma once
+
+#include <vector>
+
+#include "core/patch/patch_builder.h"
+
+namespace subd2nurbs {
+
+struct FanDeviation {
+  int fan = -1;        ///< index into PatchBuildInfo::fans
+  double max = 0;      ///< model units
+  int samples = 0;
+};
+
+struct DeviationReport {
+  double max = 0;     ///< model units; 0 when there is no irregular vertex
+  double mean = 0;    ///< over all samples
+  Point3 where{};     ///< the limit sample with the largest distance
+  int worst_fan = -1; ///< index into PatchBuildInfo::fans, -1 if none
+  int samples = 0;
+  int sample_levels = 0;
+  std::vector<FanDeviation> fans;
+};
+
+/// Closest-point deviation in the zones of every irregular-vertex fan.
+DeviationReport measure_deviation(const PatchBuild& build, int sample_levels = 2);
+
+/// Asymptotic factor by which Construction Q's deviation falls per extra level at an
+/// interior vertex of valence n: 1 / max(lambda_n^2, mu_n) (MATH.md 5.3). 4 for n = 4.
+double deviation_rate(int valence);
+
+/// Extra levels (beyond the build's) after which every fan's deviation, extrapolated with
+/// its valence's rate, is at most `tolerance` (model units). Fans of the open and
+/// approximate kinds use the rate of the smallest valence > 4 that bounds them (2, a
+/// conservative guess) since MATH.md derives no rate for them.
+int extra_levels_for_tolerance(const PatchBuild& build, const DeviationReport& measured, double tolerance);
+
+}  // namespace subd2nurbs
