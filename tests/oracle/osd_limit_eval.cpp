@@ -19,15 +19,6 @@ namespace Far = OpenSubdiv::Far;
 
 namespace {
 
-struct Vertex3 {
-  double p[3] = {0, 0, 0};
-  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0; }
-  void AddWithWeight(const Vertex3& s, double w) {
-    p[0] += w * s.p[0];
-    p[1] += w * s.p[1];
-    p[2] += w * s.p[2];
-  }
-};
 
 }  // namespace
 

@@ -12,6 +12,17 @@
 
 namespace subd2nurbs::testing {
 
+/// A point for OpenSubdiv's primvar interpolation (Clear / AddWithWeight), in double.
+struct Vertex3 {
+  double p[3] = {0, 0, 0};
+  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0; }
+  void AddWithWeight(const Vertex3& s, double w) {
+    p[0] += w * s.p[0];
+    p[1] += w * s.p[1];
+    p[2] += w * s.p[2];
+  }
+};
+
 struct OsdRefinement {
   std::unique_ptr<OpenSubdiv::Far::TopologyRefiner> refiner;
   std::vector<std::vector<Point3>> positions;  ///< per level
