@@ -2,11 +2,16 @@
 
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <new>
 #include <vector>
 
+#include "converter/cli/convert.h"
+#include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/refine/refiner.h"
 #include "io/input_error.h"
@@ -35,7 +40,8 @@ const char* kExitCodeHelp =
     "  2  invalid input (unreadable file, malformed OBJ, invalid cage); the message names\n"
     "     FILE:LINE of the offending vertex, face or tag\n"
     "  3  the output file could not be written (an existing file is left untouched)\n"
-    "  4  internal error";
+    "  4  internal error, or the export failed (OCCT refused the shape or the B-rep is not\n"
+    "     valid; nothing is written)";
 
 // --- loading -----------------------------------------------------------------------------
 
@@ -123,35 +129,6 @@ void print_text(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
 }
 
 // --- info as JSON ----------------------------------------------------------------------------
-
-std::string json_string(const std::string& s) {
-  std::string r = "\"";
-  for (const unsigned char c : s) {
-    switch (c) {
-      case '"': r += "\\\""; break;
-      case '\\': r += "\\\\"; break;
-      case '\n': r += "\\n"; break;
-      case '\r': r += "\\r"; break;
-      case '\t': r += "\\t"; break;
-      default:
-        if (c < 0x20) {
-          char buffer[8];
-          std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
-          r += buffer;
-        } else {
-          r += static_cast<char>(c);
-        }
-    }
-  }
-  return r + "\"";
-}
-
-std::string json_number(double x) {
-  if (!std::isfinite(x)) return "null";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", x);
-  return buffer;
-}
 
 std::string json_histogram(const std::map<int, int>& histogram) {
   std::string s = "{";
@@ -242,7 +219,8 @@ void run_refine(const RefineOptions& options, std::ostream& err) {
 // --- command line --------------------------------------------------------------------------
 
 int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
-  CLI::App app{"Catmull-Clark subdivision cages: inspection and uniform refinement.",
+  CLI::App app{"Catmull-Clark subdivision cages to bicubic NURBS: STEP / IGES / BREP export, "
+               "inspection and uniform refinement.",
                "subd2nurbs"};
   app.set_version_flag("--version", std::string("subd2nurbs ") + SUBD2NURBS_VERSION);
   app.footer(kExitCodeHelp);
@@ -264,6 +242,39 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       ->capture_default_str();
   refine_command->add_option("-o,--output", refine.output, "Output OBJ file")->required();
 
+  ConvertOptions convert;
+  CLI::App* convert_command = app.add_subcommand(
+      "convert",
+      "Convert a cage to bicubic NURBS patches, written as STEP, IGES, BREP or patch JSON "
+      "(by the output's extension), with continuity and deviation measures");
+  convert_command->add_option("MESH", convert.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
+  convert_command
+      ->add_option("-o,--output", convert.output,
+                   "Output file: .step/.stp, .iges/.igs, .brep, or .json (the patches as JSON)")
+      ->required();
+  CLI::Option* level_option =
+      convert_command
+          ->add_option("--level", convert.level,
+                       "Refinement levels beyond the minimum (default 0): each level shrinks the "
+                       "deviation near extraordinary vertices")
+          ->check(CLI::Range(0, 12));
+  CLI::Option* tolerance_option =
+      convert_command
+          ->add_option("--tolerance", convert.tolerance,
+                       "Choose the level for this deviation from the limit surface, relative to "
+                       "the bounding-box diagonal (see --absolute); at most " +
+                           std::to_string(kMaxToleranceExtraLevels) + " extra levels")
+          ->check(CLI::PositiveNumber)
+          ->excludes(level_option);
+  convert_command->add_flag("--absolute", convert.absolute, "--tolerance is in model units")
+      ->needs(tolerance_option);
+  convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242")
+      ->check(CLI::IsMember({"ap214", "ap242"}));
+  convert_command->add_option("--report", convert.report,
+                              "Also write a JSON report (counts, continuity, deviation, timings)");
+  convert_command->add_flag("-q,--quiet", convert.quiet,
+                            "No progress and no summary on stderr (warnings are still printed)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -274,6 +285,12 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   try {
     if (*info_command) run_info(info, out);
     if (*refine_command) run_refine(refine, err);
+    if (*convert_command) {
+      convert.level_given = level_option->count() > 0;
+      convert.tolerance_given = tolerance_option->count() > 0;
+      convert.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
+      run_convert(convert, err);
+    }
     return kOk;
   } catch (const UsageError& e) {
     err << "subd2nurbs: error: " << e.what() << "\n";
@@ -285,6 +302,9 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   } catch (const WriteError& e) {
     err << "subd2nurbs: cannot write " << e.what() << "\n";
     return kWriteFailure;
+  } catch (const occt::ExportError& e) {
+    err << "subd2nurbs: export failed: " << e.what() << "\n";
+    return kInternalError;
   } catch (const std::bad_alloc&) {
     err << "subd2nurbs: out of memory\n";
     return kInternalError;

@@ -14,7 +14,7 @@ enum ExitCode : int {
   kUsage = 1,          ///< bad command line: unknown option, missing argument, bad value
   kInvalidInput = 2,   ///< the input file is unreadable, malformed or not a valid cage
   kWriteFailure = 3,   ///< an output file could not be written
-  kInternalError = 4,  ///< a bug or an unexpected failure (e.g. out of memory)
+  kInternalError = 4,  ///< a bug, an unexpected failure (e.g. out of memory), a failed export
 };
 
 struct InfoOptions {

@@ -1,0 +1,39 @@
+// `subd2nurbs convert`: cage -> bicubic NURBS patches -> STEP / IGES / BREP (or patch JSON),
+// with measurements (continuity, deviation from the limit surface, the B-rep's counts) on
+// stderr and optionally as a JSON report (documented in docs/formats.md).
+#pragma once
+
+#include <ostream>
+#include <string>
+
+namespace subd2nurbs::cli {
+
+struct ConvertOptions {
+  std::string mesh;
+  std::string output;         ///< .step/.stp, .iges/.igs, .brep or .json
+  int level = 0;              ///< extra levels beyond the minimum (PatchOptions::extra_levels)
+  bool level_given = false;
+  double tolerance = 0;       ///< deviation tolerance, > 0 when given
+  bool tolerance_given = false;
+  bool absolute = false;      ///< tolerance in model units, else relative to the bbox diagonal
+  std::string schema = "ap214";  ///< STEP schema: ap214 or ap242
+  std::string report;         ///< JSON report path, empty for none
+  bool quiet = false;         ///< no progress and no summary (warnings are still printed)
+  bool progress_tty = false;  ///< stderr is a terminal: show the B-rep percentage in place
+};
+
+/// Most extra levels --tolerance adds; a tolerance needing more is reported as capped.
+constexpr int kMaxToleranceExtraLevels = 4;
+
+/// Converts a cage. Progress, warnings and the summary go to `err`.
+/// \throw UsageError (bad options, unknown output extension, a level too deep),
+///        InputError (the cage), WriteError (the output or report file),
+///        occt::ExportError (OCCT failed, or the B-rep is not valid: nothing is written)
+void run_convert(const ConvertOptions& options, std::ostream& err);
+
+/// JSON text helpers shared by the subcommands: a quoted, escaped string, and a number
+/// with "%.17g" (null when not finite).
+std::string json_string(const std::string& s);
+std::string json_number(double x);
+
+}  // namespace subd2nurbs::cli
