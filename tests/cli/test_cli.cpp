@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <regex>
 #include <string>
@@ -43,6 +44,19 @@ Result run(const std::string& args) {
 std::string sample() { return std::string(SUBD2NURBS_SAMPLES_DIR) + "/rounded_box.obj"; }
 std::string data(const std::string& name) {
   return std::string(SUBD2NURBS_TEST_DATA_DIR) + "/" + name;
+}
+
+/// Python's verdict on a JSON file: 0 if json.load reads it and `condition` (a Python
+/// expression over the parsed value `r`) holds, else non-zero.
+int python_json_check(const std::string& file, const std::string& condition = "True") {
+  const std::string script = "import json,sys; r=json.load(open(sys.argv[1])); sys.exit(0 if (" +
+                             condition + ") else 1)";
+  const int status = std::system(("/usr/bin/python3 -c " + quote(script) + " " + quote(file)).c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool starts_with_file(const std::string& file, const std::string& prefix) {
+  return read_text(file).rfind(prefix, 0) == 0;
 }
 
 /// Minimal JSON check: brackets balance outside strings, and strings are terminated.
@@ -195,7 +209,227 @@ TEST(Cli, HelpListsExitCodesAndVersionPrints) {
   EXPECT_NE(help.out.find("3  the output file could not be written"), std::string::npos);
   EXPECT_NE(help.out.find("info"), std::string::npos);
   EXPECT_NE(help.out.find("refine"), std::string::npos);
+  EXPECT_NE(help.out.find("convert"), std::string::npos);
+  const Result convert_help = run("convert --help");
+  EXPECT_EQ(convert_help.exit_code, 0);
+  for (const char* option : {"--output", "--level", "--tolerance", "--absolute", "--schema", "--report", "--quiet"})
+    EXPECT_NE(convert_help.out.find(option), std::string::npos) << option << "\n" << convert_help.out;
   const Result version = run("--version");
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_EQ(version.out.rfind("subd2nurbs ", 0), 0u) << version.out;
+}
+
+// --- convert ---------------------------------------------------------------------------------
+
+TEST(CliConvert, WritesEveryFormatAndAReportThatParses) {
+  struct Case {
+    const char* name;
+    const char* prefix;  // what the file starts with (IGES: checked by its column layout)
+  };
+  for (const Case& c : {Case{"box.step", "ISO-10303-21;"}, Case{"box.stp", "ISO-10303-21;"},
+                        Case{"box.brep", "DBRep_DrawableShape\n\nCASCADE Topology V"}, Case{"box.iges", ""},
+                        Case{"box.igs", ""}, Case{"box.json", "{\"format\":\"subd2nurbs-patches\""}}) {
+    TempDir dir;
+    const std::string out = dir.file(c.name), report = dir.file("report.json");
+    const Result r = run("convert " + quote(sample()) + " -o " + quote(out) + " --report " + quote(report));
+    ASSERT_EQ(r.exit_code, 0) << c.name << "\n" << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    ASSERT_TRUE(std::filesystem::exists(out)) << c.name;
+    EXPECT_GT(std::filesystem::file_size(out), 1000u) << c.name;
+    EXPECT_TRUE(starts_with_file(out, c.prefix)) << c.name << ": " << read_text(out).substr(0, 80);
+    if (std::string(c.name).find(".ig") != std::string::npos) {  // IGES: 80-column start section
+      const std::string text = read_text(out);
+      ASSERT_GT(text.size(), 80u);
+      EXPECT_EQ(text[72], 'S') << text.substr(0, 81);
+      EXPECT_EQ(text[80], '\n') << text.substr(0, 81);
+    }
+    EXPECT_EQ(dir.entries().size(), 2u) << c.name;  // no temporary file left
+    EXPECT_EQ(python_json_check(report), 0) << read_text(report);
+    // Stage lines and the summary, since --quiet is not given.
+    EXPECT_NE(r.err.find("subd2nurbs: building patches..."), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("subd2nurbs: wrote " + out), std::string::npos) << r.err;
+  }
+}
+
+TEST(CliConvert, ReportDescribesTheSample) {
+  TempDir dir;
+  const std::string out = dir.file("box.step"), report = dir.file("r.json");
+  const Result r = run("convert " + quote(sample()) + " -o " + quote(out) + " --report " + quote(report) + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;  // --quiet, and the sample gives no warning
+  // rounded_box: 24 quads, 26 vertices (8 of valence 3), closed.
+  const char* conditions[] = {
+      "r['format'] == 'subd2nurbs-report' and r['version'] == 1",
+      "r['input'].endswith('rounded_box.obj') and r['output_format'] == 'STEP' and r['step_schema'] == 'AP214'",
+      "r['coarse_level'] == 0 and r['level'] == 2 and r['extra_levels'] == 0",
+      "r['patches'] == {'total': 24, 'regular': 0, 'pccm': 24}",
+      "r['fans']['smooth'] == 8 and r['fans']['approximate'] == 0 and r['fans']['approximate_fans'] == []",
+      "r['brep'] == {'faces': 24, 'edges': 48, 'vertices': 26, 'type': 'solid', 'valid': True, 'tolerance': r['brep']['tolerance']}",
+      "r['continuity']['max_gap'] < 1e-12 and r['continuity']['max_normal_angle_deg'] < 1e-6",
+      "abs(r['continuity']['max_gap_relative'] * r['model_size'] - r['continuity']['max_gap']) <= 1e-15 * r['model_size']",
+      "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",
+      "r['deviation']['worst_fan']['valence'] == 3 and r['deviation']['samples'] > 0",
+      "r['deviation']['sample_levels'] == 2 and r['deviation']['tolerance'] is None",
+      "sorted(r['timings_ms']) == sorted(['load', 'patches', 'continuity', 'deviation', 'brep', 'write'])",
+      "r['sharpened_edges'] == 0 and r['sharpened_vertices'] == 0 and r['warnings'] == []",
+  };
+  for (const char* condition : conditions)
+    EXPECT_EQ(python_json_check(report, condition), 0) << condition << "\n" << read_text(report);
+  EXPECT_NE(python_json_check(report, "r['level'] == 3"), 0);  // the check can fail
+}
+
+TEST(CliConvert, ReportIsDeterministicApartFromTimings) {
+  TempDir dir;
+  std::string reports[2];
+  for (int i = 0; i < 2; ++i) {
+    const std::string report = dir.file("r" + std::to_string(i) + ".json");
+    ASSERT_EQ(run("convert " + quote(sample()) + " -o " + quote(dir.file("b.json")) + " -q --report " +
+                  quote(report)).exit_code, 0);
+    reports[i] = std::regex_replace(read_text(report), std::regex("\"timings_ms\": \\{[^}]*\\}"), "");
+  }
+  EXPECT_EQ(reports[0], reports[1]);
+  EXPECT_NE(reports[0].find("\"deviation\""), std::string::npos);
+}
+
+TEST(CliConvert, LevelAndToleranceChooseTheLevel) {
+  TempDir dir;
+  const std::string out = dir.file("b.brep"), report = dir.file("r.json");
+  ASSERT_EQ(run("convert " + quote(sample()) + " -o " + quote(out) + " --level 1 -q --report " + quote(report)).exit_code, 0);
+  EXPECT_EQ(python_json_check(report, "r['level'] == 3 and r['extra_levels'] == 1"), 0) << read_text(report);
+
+  // A relative tolerance that two extra levels reach (the deviation falls ~4x per level at the
+  // valence-3 vertices, from 1.7e-3 of the model size).
+  const Result met = run("convert " + quote(sample()) + " -o " + quote(out) + " --tolerance 2e-4 -q --report " + quote(report));
+  ASSERT_EQ(met.exit_code, 0) << met.err;
+  EXPECT_TRUE(met.err.empty()) << met.err;
+  EXPECT_EQ(python_json_check(report,
+                              "(lambda t: t['met'] and not t['capped'] and t['units'] == 'relative' "
+                              "and t['extra_levels_used'] == r['extra_levels'] > 0 and t['achieved'] == r['deviation']['max'] "
+                              "<= t['requested_model_units'] and abs(t['requested_model_units'] - 2e-4 * r['model_size']) < 1e-18 "
+                              "and t['initial_max'] > t['requested_model_units'])(r['deviation']['tolerance'])"),
+            0)
+      << read_text(report);
+
+  // An absolute tolerance out of reach: capped, not met, still exit 0, with a warning.
+  const Result missed = run("convert " + quote(sample()) + " -o " + quote(out) +
+                            " --tolerance 1e-12 --absolute -q --report " + quote(report));
+  ASSERT_EQ(missed.exit_code, 0) << missed.err;
+  EXPECT_NE(missed.err.find("tolerance NOT met"), std::string::npos) << missed.err;
+  EXPECT_NE(missed.err.find("using 4"), std::string::npos) << missed.err;
+  EXPECT_EQ(python_json_check(report,
+                              "(lambda t: (not t['met']) and t['capped'] and t['units'] == 'model' "
+                              "and t['extra_levels_used'] == 4 and t['extra_levels_needed'] > 4 and r['level'] == 6 "
+                              "and len(r['warnings']) == 2)(r['deviation']['tolerance'])"),
+            0)
+      << read_text(report);
+}
+
+TEST(CliConvert, InvalidInputExitsWith2NamingFileAndLine) {
+  TempDir dir;
+  const std::string bad = data("invalid/nonmanifold_edge.obj");
+  const Result r = run("convert " + quote(bad) + " -o " + quote(dir.file("o.step")) + " --report " +
+                       quote(dir.file("r.json")));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(bad + ":12: error: non-manifold edge"), std::string::npos) << r.err;
+  EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(CliConvert, UnwritableOutputExitsWith3AndWritesNothing) {
+  TempDir dir;
+  const std::string out = dir.file("no/such/dir/o.step");
+  const Result r = run("convert " + quote(sample()) + " -o " + quote(out) + " --report " + quote(dir.file("r.json")));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
+  EXPECT_TRUE(dir.entries().empty());
+  // The same when only the report cannot be written: nothing, not even the output.
+  const std::string report = dir.file("missing/r.json");
+  const Result r2 = run("convert " + quote(sample()) + " -o " + quote(dir.file("o.step")) + " --report " + quote(report));
+  EXPECT_EQ(r2.exit_code, 3) << r2.err;
+  EXPECT_NE(r2.err.find(report), std::string::npos) << r2.err;
+  EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(CliConvert, UsageErrorsExitWith1AndWriteNothing) {
+  TempDir dir;
+  const std::string in = quote(sample()), out = quote(dir.file("o.step"));
+  const Result both = run("convert " + in + " -o " + out + " --level 1 --tolerance 1e-3");
+  EXPECT_EQ(both.exit_code, 1);
+  EXPECT_NE(both.err.find("--tolerance"), std::string::npos) << both.err;
+  const Result ext = run("convert " + in + " -o " + quote(dir.file("o.obj")));
+  EXPECT_EQ(ext.exit_code, 1);
+  EXPECT_NE(ext.err.find("o.obj"), std::string::npos) << ext.err;
+  EXPECT_EQ(run("convert " + in + " -o " + quote(dir.file("o"))).exit_code, 1);  // no extension
+  EXPECT_EQ(run("convert " + in).exit_code, 1);                                    // no -o
+  EXPECT_EQ(run("convert " + in + " -o " + out + " --level -1").exit_code, 1);
+  EXPECT_EQ(run("convert " + in + " -o " + out + " --tolerance 0").exit_code, 1);
+  EXPECT_EQ(run("convert " + in + " -o " + out + " --absolute").exit_code, 1);  // needs --tolerance
+  EXPECT_EQ(run("convert " + in + " -o " + out + " --schema ap203").exit_code, 1);
+  const Result deep = run("convert " + in + " -o " + out + " --level 12");
+  EXPECT_EQ(deep.exit_code, 1);
+  EXPECT_NE(deep.err.find("lower --level"), std::string::npos) << deep.err;
+  EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(CliConvert, Ap242SchemaReachesTheStepHeader) {
+  TempDir dir;
+  const std::string out = dir.file("b.step");
+  ASSERT_EQ(run("convert " + quote(sample()) + " -o " + quote(out) + " --schema ap242 -q").exit_code, 0);
+  EXPECT_NE(read_text(out).find("AP242_MANAGED_MODEL_BASED_3D_ENGINEERING"), std::string::npos);
+  ASSERT_EQ(run("convert " + quote(sample()) + " -o " + quote(out) + " -q").exit_code, 0);
+  EXPECT_NE(read_text(out).find("AUTOMOTIVE_DESIGN"), std::string::npos);
+}
+
+TEST(CliConvert, SemiSharpCreasesMadeSharpAreAWarning) {
+  // A cube whose edges are all semi-sharp with sharpness 8: still sharp at the level cap
+  // (5 levels above the cage), so they become infinitely sharp, with a warning.
+  TempDir dir;
+  std::string obj =
+      "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+      "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  const int edges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                            {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  for (const auto& e : edges)
+    obj += "t crease 2/1/0 " + std::to_string(e[0]) + " " + std::to_string(e[1]) + " 8\n";
+  const std::string cube = dir.write("cube.obj", obj);
+  const std::string report = dir.file("r.json");
+  const Result r = run("convert " + quote(cube) + " -o " + quote(dir.file("c.step")) + " -q --report " + quote(report));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("made infinitely sharp"), std::string::npos) << r.err;
+  EXPECT_EQ(python_json_check(report, "r['sharpened_edges'] > 0 and r['level'] == 5 and len(r['warnings']) == 1"), 0)
+      << read_text(report);
+}
+
+TEST(CliConvert, ApproximateFansReportTheirNormalJump) {
+  // catmark_val2_interior: its interior valence-2 vertices without a sharp edge have no exact
+  // construction (approximate fans, C0 rays), and the report lists each with its normal jump.
+  const std::string file = data("corpus/catmark_val2_interior.obj");
+  const SubdivLevel level = load_and_validate(read_obj(file));
+  const PolyMesh& m = level.mesh;
+  std::string expected;
+  int count = 0;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    if (m.is_boundary_vertex(v) || m.valence(v) != 2 || level.vertex_sharpness[v] > 0) continue;
+    bool sharp = false;
+    for (int e = 0; e < m.num_edges(); ++e)
+      sharp = sharp || ((m.edge_vertex(e, 0) == v || m.edge_vertex(e, 1) == v) &&
+                        level.edge_sharpness[e] >= kInfiniteSharpness);
+    if (sharp) continue;
+    expected += (expected.empty() ? "" : ", ") + std::to_string(v);
+    ++count;
+  }
+  ASSERT_GT(count, 0);
+
+  TempDir dir;
+  const std::string report = dir.file("r.json");
+  const Result r = run("convert " + quote(file) + " -o " + quote(dir.file("p.json")) + " -q --report " + quote(report));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string fans = "r['fans']['approximate_fans']";
+  EXPECT_EQ(python_json_check(report, "r['brep'] is None and r['output_format'] == 'JSON' and r['step_schema'] is None"), 0);
+  EXPECT_EQ(python_json_check(report, "sorted(a['base_vertex'] for a in " + fans + ") == [" + expected + "]"), 0)
+      << expected << "\n" << read_text(report);
+  EXPECT_EQ(python_json_check(report, "r['fans']['approximate'] == " + std::to_string(count)), 0);
+  EXPECT_EQ(python_json_check(report, "all(a['valence'] == 2 and a['rays'] == 2 and a['normal_angle_deg'] is not None "
+                                      "for a in " + fans + ")"), 0) << read_text(report);
+  // C0 rays: the normals do jump across them (by how much is what the report is for).
+  EXPECT_EQ(python_json_check(report, "max(a['normal_angle_deg'] for a in " + fans + ") > 0.1"), 0);
 }
