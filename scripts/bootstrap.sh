@@ -2,6 +2,7 @@
 # Installs the Debian packages subd2nurbs needs (skipping those already present),
 # then configures and builds into ./build. Idempotent; safe to run repeatedly.
 # Usage: scripts/bootstrap.sh            (run as root, or with sudo available)
+#        WITH_FREECAD=1 scripts/bootstrap.sh   also installs FreeCAD (for the tests)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,6 +17,9 @@ PACKAGES=(
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-ocaf-dev libocct-visualization-dev libtbb-dev
 )
+# The tests also import our STEP files in FreeCAD (label freecad): scripts/test.sh sets
+# WITH_FREECAD=1. About 1.4 GB and 2 minutes; the demo does not need it.
+if [ "${WITH_FREECAD:-0}" = 1 ]; then PACKAGES+=(freecad); fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
