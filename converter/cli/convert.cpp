@@ -283,7 +283,8 @@ std::string report_json(const Conversion& c) {
     const occt::BrepResult& b = c.brep;
     line("  \"brep\": {\"faces\": " + std::to_string(b.num_faces) + ", \"edges\": " + std::to_string(b.num_edges) +
          ", \"vertices\": " + std::to_string(b.num_vertices) + ", \"type\": " +
-         json_string(b.is_solid ? "solid" : "shell") + ", \"valid\": " + json_bool(b.valid) +
+         json_string(b.is_solid ? "solid" : "shell") + ", \"solids\": " + std::to_string(b.num_solids) +
+         ", \"shells\": " + std::to_string(b.num_shells) + ", \"valid\": " + json_bool(b.valid) +
          ", \"tolerance\": " + json_number(b.tolerance) + "},");
   } else {
     line("  \"brep\": null,");

@@ -19,6 +19,7 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Solid.hxx>
 #include <TopoDS_Vertex.hxx>
@@ -351,33 +352,78 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     });
   }
 
-  // --- shell, solid -----------------------------------------------------------------------
-  TopoDS_Shell shell;
-  guarded("shell", -1, [&] {
-    builder.MakeShell(shell);
-    for (const TopoDS_Face& face : faces) builder.Add(shell, face);
-    shell.Closed(BRep_Tool::IsClosed(shell));
-  });
-  if (ps.closed) {
-    guarded("solid", -1, [&] {
+  // --- shells and solids, one per connected component ------------------------------------
+  // A cage may have several components (catmark_cubes_infsharp is four cubes). BRepCheck
+  // rejects a shell whose faces are not connected, so each component gets its own shell, and
+  // a component without open boundary curves becomes a solid. Several components are returned
+  // as a compound.
+  std::vector<int> parent(num_patches);
+  for (int p = 0; p < num_patches; ++p) parent[p] = p;
+  auto find = [&](int p) {
+    while (parent[p] != p) p = parent[p] = parent[parent[p]];
+    return p;
+  };
+  std::vector<char> open_component(num_patches, 0);
+  for (const BoundaryCurve& c : ps.curves) {
+    if (c.uses.size() == 2) parent[find(c.uses[0].patch)] = find(c.uses[1].patch);
+  }
+  for (const BoundaryCurve& c : ps.curves)
+    if (c.uses.size() == 1) open_component[find(c.uses[0].patch)] = 1;
+  std::vector<int> roots;
+  std::vector<std::vector<int>> members(num_patches);
+  for (int p = 0; p < num_patches; ++p) {
+    const int r = find(p);
+    if (members[r].empty()) roots.push_back(r);
+    members[r].push_back(p);
+  }
+  std::vector<TopoDS_Shape> parts;
+  result.is_solid = !roots.empty();
+  for (int r : roots) {
+    TopoDS_Shell shell;
+    guarded("shell", members[r].front(), [&] {
+      builder.MakeShell(shell);
+      for (int p : members[r]) builder.Add(shell, faces[p]);
+      shell.Closed(BRep_Tool::IsClosed(shell));
+    });
+    if (open_component[r]) {
+      result.is_solid = false;
+      ++result.num_shells;
+      parts.push_back(shell);
+      continue;
+    }
+    guarded("solid", members[r].front(), [&] {
       TopoDS_Solid solid;
       builder.MakeSolid(solid);
       builder.Add(solid, shell);
       // The faces' normals follow the cage, which may be oriented inward. The volume
       // integral is signed by the normals: negative means inside out, and reversing the
       // shell turns every face around. Centred on the corners' mean to limit round-off.
+      std::vector<Handle(Geom_BSplineSurface)> component_surfaces;
       gp_XYZ centre(0, 0, 0);
-      for (const PatchCorner& corner : ps.corners) centre += to_pnt(corner.position).XYZ();
-      centre /= std::max<size_t>(1, ps.corners.size());
-      if (signed_volume(surfaces, centre) < 0) {
+      int n_corners = 0;
+      for (int p : members[r]) {
+        component_surfaces.push_back(surfaces[p]);
+        for (int c : ps.patches[p].corners) { centre += to_pnt(ps.corners[c].position).XYZ(); ++n_corners; }
+      }
+      centre /= std::max(1, n_corners);
+      if (signed_volume(component_surfaces, centre) < 0) {
         builder.MakeSolid(solid);
         builder.Add(solid, shell.Reversed());
       }
-      result.shape = solid;
+      ++result.num_solids;
+      ++result.num_shells;
+      parts.push_back(solid);
     });
-    result.is_solid = true;
+  }
+  if (parts.size() == 1) {
+    result.shape = parts.front();
   } else {
-    result.shape = shell;
+    guarded("compound", -1, [&] {
+      TopoDS_Compound compound;
+      builder.MakeCompound(compound);
+      for (const TopoDS_Shape& part : parts) builder.Add(compound, part);
+      result.shape = compound;
+    });
   }
 
   // --- counts, check ----------------------------------------------------------------------

@@ -15,8 +15,11 @@
 namespace subd2nurbs::occt {
 
 struct BrepResult {
-  TopoDS_Shape shape;      ///< a TopoDS_Solid if is_solid, else a TopoDS_Shell
-  bool is_solid = false;   ///< PatchSet::closed: the shell bounds a solid, oriented outward
+  /// A TopoDS_Solid or TopoDS_Shell for a connected cage; for several connected components a
+  /// TopoDS_Compound of one solid (closed component, oriented outward) or shell (open) each.
+  TopoDS_Shape shape;
+  bool is_solid = false;   ///< every component is closed and became a solid
+  int num_solids = 0, num_shells = 0;  ///< per component: a solid counts as one of each
   int num_faces = 0, num_edges = 0, num_vertices = 0;  ///< distinct sub-shapes of `shape`
   bool valid = false;      ///< BRepCheck_Analyzer found no defect
   std::string check_message;  ///< BRepCheck's findings, one per line (empty when valid)

@@ -140,7 +140,7 @@ double angle_deg(const gp_Vec& a, const gp_Vec& b) {
 }
 
 ShapeSummary summarize_impl(const TopoDS_Shape& shape, const std::vector<TopoDS_Shape>* only,
-                            int samples) {
+                            int samples, bool mass_properties) {
   samples = std::max(samples, 2);
   ShapeSummary s;
   if (shape.IsNull()) return s;
@@ -203,10 +203,12 @@ ShapeSummary summarize_impl(const TopoDS_Shape& shape, const std::vector<TopoDS_
     // The adaptive integrators, with a relative error bound: the fixed-order ones use the
     // same number of Gauss points per face whatever its number of knot spans, so a face of
     // many spans comes out visibly wrong (5e-5 relative for the 1-face B-spline torus).
+    if (mass_properties) {
     GProp_GProps area;
     BRepGProp::SurfaceProperties(shape, area, kIntegrationEps);
     s.area = area.Mass();
-    if (s.solids > 0) {
+    }
+    if (mass_properties && s.solids > 0) {
       GProp_GProps volume;
       BRepGProp::VolumeProperties(shape, volume, kIntegrationEps);
       s.volume = volume.Mass();
@@ -218,13 +220,13 @@ ShapeSummary summarize_impl(const TopoDS_Shape& shape, const std::vector<TopoDS_
 
 }  // namespace
 
-ShapeSummary summarize(const TopoDS_Shape& shape, int samples_per_edge) {
-  return summarize_impl(shape, nullptr, samples_per_edge);
+ShapeSummary summarize(const TopoDS_Shape& shape, int samples_per_edge, bool mass_properties) {
+  return summarize_impl(shape, nullptr, samples_per_edge, mass_properties);
 }
 
 ShapeSummary summarize(const TopoDS_Shape& shape, const std::vector<TopoDS_Shape>& edges,
-                       int samples_per_edge) {
-  return summarize_impl(shape, &edges, samples_per_edge);
+                       int samples_per_edge, bool mass_properties) {
+  return summarize_impl(shape, &edges, samples_per_edge, mass_properties);
 }
 
 }  // namespace subd2nurbs::occt

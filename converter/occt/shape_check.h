@@ -34,12 +34,14 @@ struct ShapeSummary {
 
 /// Summarizes `shape`, measuring every edge that bounds exactly two faces (or one face twice,
 /// as a seam) at `samples_per_edge` (>= 2) parameters including the ends.
-ShapeSummary summarize(const TopoDS_Shape& shape, int samples_per_edge = 16);
+/// `mass_properties` = false skips the area and volume integration (left 0), which is most
+/// of the cost on many-span faces.
+ShapeSummary summarize(const TopoDS_Shape& shape, int samples_per_edge = 16, bool mass_properties = true);
 
 /// The same, but measures only the given edges of `shape` (e.g. BrepResult::curve_edges of
 /// the smooth curves); counts, validity, area and volume are still of the whole shape.
 /// Null entries and edges not shared by two faces are skipped.
 ShapeSummary summarize(const TopoDS_Shape& shape, const std::vector<TopoDS_Shape>& edges,
-                       int samples_per_edge = 16);
+                       int samples_per_edge = 16, bool mass_properties = true);
 
 }  // namespace subd2nurbs::occt

@@ -264,7 +264,7 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "r['coarse_level'] == 0 and r['level'] == 2 and r['extra_levels'] == 0",
       "r['patches'] == {'total': 24, 'regular': 0, 'pccm': 24}",
       "r['fans']['smooth'] == 8 and r['fans']['approximate'] == 0 and r['fans']['approximate_fans'] == []",
-      "r['brep'] == {'faces': 24, 'edges': 48, 'vertices': 26, 'type': 'solid', 'valid': True, 'tolerance': r['brep']['tolerance']}",
+      "r['brep'] == {'faces': 24, 'edges': 48, 'vertices': 26, 'type': 'solid', 'solids': 1, 'shells': 1, 'valid': True, 'tolerance': r['brep']['tolerance']}",
       "r['continuity']['max_gap'] < 1e-12 and r['continuity']['max_normal_angle_deg'] < 1e-6",
       "abs(r['continuity']['max_gap_relative'] * r['model_size'] - r['continuity']['max_gap']) <= 1e-15 * r['model_size']",
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",

@@ -50,6 +50,7 @@ struct ExpectedBrep {
   int free_edges = 0;  ///< edges of that mesh with exactly one non-hole face
   bool closed = false; ///< no boundary edge and no hole: one solid per component
   int components = 0;  ///< of the non-hole faces, connected across edges
+  int closed_components = 0;  ///< components none of whose edges has a single non-hole face
   double diagonal = 0; ///< bounding-box diagonal of the cage's vertices
 };
 
@@ -89,6 +90,17 @@ inline ExpectedBrep expected_brep(const MeshInput& in, const std::vector<char>& 
     }
   }
   for (int f = 0; f < in.num_faces(); ++f) e.components += !face_hole[f] && find(f) == f;
+  {  // A component is closed when none of its faces has an edge with one non-hole face.
+    std::set<int> open_roots;
+    for (int f = 0, begin = 0; f < in.num_faces(); begin += in.face_sizes[f], ++f) {
+      if (face_hole[f]) continue;
+      for (int i = 0, n = in.face_sizes[f]; i < n; ++i) {
+        const int a = in.face_indices[begin + i], b = in.face_indices[begin + (i + 1) % n];
+        if (live_faces_on_edge[{std::min(a, b), std::max(a, b)}] == 1) open_roots.insert(find(f));
+      }
+    }
+    e.closed_components = e.components - static_cast<int>(open_roots.size());
+  }
 
   bool any_boundary = false;
   for (const auto& [edge, count] : live_faces_on_edge) {
@@ -181,8 +193,8 @@ inline CorpusBrep corpus_brep(const std::string& shape, int samples_per_edge = 1
   const std::vector<TopoDS_Shape> sharp = shared_edges(r.build.set, r.brep, false);
   r.smooth_edge_count = static_cast<int>(smooth.size());
   r.sharp_edge_count = static_cast<int>(sharp.size());
-  r.smooth = occt::summarize(r.brep.shape, smooth, samples_per_edge);
-  if (!sharp.empty()) r.sharp = occt::summarize(faces_along(r.brep.shape, sharp), sharp, samples_per_edge);
+  r.smooth = occt::summarize(r.brep.shape, smooth, samples_per_edge, /*mass_properties=*/false);
+  if (!sharp.empty()) r.sharp = occt::summarize(faces_along(r.brep.shape, sharp), sharp, samples_per_edge, /*mass_properties=*/false);
   r.summary_seconds = since(t);
   r.seconds = since(start);
   return r;

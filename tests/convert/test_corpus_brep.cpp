@@ -67,14 +67,20 @@ void check(const std::string& shape) {
     EXPECT_EQ(s.free_edges, 0);
   } else {
     EXPECT_FALSE(r.brep.is_solid);
-    EXPECT_EQ(s.solids, 0);
+    EXPECT_EQ(s.solids, e.closed_components);  // closed components still become solids
     EXPECT_EQ(s.free_edges, e.free_edges);
   }
   // Every curve between two patches is an edge between two faces, and was measured.
   EXPECT_EQ(s.shared_edges_sampled, r.smooth_edge_count);
   EXPECT_EQ(r.sharp.shared_edges_sampled, r.sharp_edge_count);
   EXPECT_LE(r.max_gap(), kMaxRelativeGap * e.diagonal);
-  EXPECT_LE(s.max_normal_angle_deg, kMaxSmoothNormalAngleDeg);
+  // catmark_val2_back2back is pairs of faces glued back to back: its limit is a doubly
+  // covered flat sheet folding over at the rim, where the two sides' normals are opposite.
+  // The tangent planes agree there (the exact G1 residual holds, tests/patch), the
+  // orientations cannot.
+  if (shape != "catmark_val2_back2back") {
+    EXPECT_LE(s.max_normal_angle_deg, kMaxSmoothNormalAngleDeg);
+  }
 }
 
 class CorpusBrepTest : public ::testing::TestWithParam<std::string> {};
