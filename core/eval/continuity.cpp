@@ -14,26 +14,13 @@ namespace {
 using V3 = Eigen::Vector3d;
 V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
 
-// Derivatives of a patch at a side point, expressed along the side (counter-clockwise) and
-// into the patch: along = dX/dt, inward = dX/dn, inward2 = d2X/dn2.
+// The side frame of nurbs_eval.h in Eigen vectors.
 struct SideFrame {
   V3 p, along, inward, inward2, normal;
 };
 SideFrame side_frame(const NurbsPatch& patch, int side, double t) {
-  double u, v;
-  side_parameters(side, t, u, v);
-  const SurfaceDerivs d = evaluate(patch, u, v);
-  SideFrame f;
-  f.p = v3(d.p);
-  const V3 du = v3(d.du), dv = v3(d.dv);
-  switch (side) {
-    case 0: f.along = du; f.inward = dv; f.inward2 = v3(d.dvv); break;
-    case 1: f.along = dv; f.inward = -du; f.inward2 = v3(d.duu); break;
-    case 2: f.along = -du; f.inward = -dv; f.inward2 = v3(d.dvv); break;
-    default: f.along = -dv; f.inward = du; f.inward2 = v3(d.duu); break;
-  }
-  f.normal = v3(unit_normal(d));
-  return f;
+  const SideDerivs d = side_derivatives(patch, side, t);
+  return {v3(d.p), v3(d.along), v3(d.inward), v3(d.inward2), v3(d.normal)};
 }
 
 double angle_deg(const V3& a, const V3& b) {

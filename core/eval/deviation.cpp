@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <unordered_map>
+#include <unordered_set>
+#include <utility>
 
 #include <Eigen/Core>
 #include <Eigen/Dense>
@@ -66,28 +67,25 @@ double distance_to_net(const Point3* net, const V3& q) {
   return std::min(std::sqrt(best), (eval_net(net, u, v).p - q).norm());
 }
 
-// Level-k faces within `rings` face rings of vertex v (ring 1 = faces touching v).
-std::vector<int> face_rings(const PolyMesh& m, int v, int rings) {
-  std::vector<int> faces;
-  std::unordered_map<int, int> seen_face;
-  std::vector<int> frontier_vertices{v};
-  std::unordered_map<int, int> seen_vertex{{v, 0}};
+// Level-k faces within `rings` face rings of vertex v, in breadth-first order, with the ring
+// each lies in (0 = faces touching v).
+std::vector<std::pair<int, int>> face_rings(const PolyMesh& m, int v, int rings) {
+  std::vector<std::pair<int, int>> faces;
+  std::unordered_set<int> seen_face, seen_vertex{v};
+  std::vector<int> frontier{v};
   for (int r = 0; r < rings; ++r) {
-    std::vector<int> next_vertices;
-    for (int x : frontier_vertices) {
+    std::vector<int> next;
+    for (int x : frontier) {
       const int* cs = m.vertex_corners(x);
       for (int i = 0; i < m.vertex_face_count(x); ++i) {
         const int f = m.corner_face(cs[i]);
-        if (seen_face.count(f)) continue;
-        seen_face[f] = r;
-        faces.push_back(f);
-        for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
-          const int w = m.corner_vertex(h);
-          if (seen_vertex.emplace(w, r + 1).second) next_vertices.push_back(w);
-        }
+        if (!seen_face.insert(f).second) continue;
+        faces.emplace_back(f, r);
+        for (int h = m.face_begin(f); h < m.face_end(f); ++h)
+          if (seen_vertex.insert(m.corner_vertex(h)).second) next.push_back(m.corner_vertex(h));
       }
     }
-    frontier_vertices.swap(next_vertices);
+    frontier.swap(next);
   }
   return faces;
 }
@@ -112,8 +110,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
   for (size_t fi = 0; fi < build.info.fans.size(); ++fi) {
     const IrregularFan& fan = build.info.fans[fi];
     // The zone (2 face rings) and a margin of 3 more rings, as a stand-alone cage.
-    const std::vector<int> zone = face_rings(mk, fan.vertex, 2);
-    const std::vector<int> local = face_rings(mk, fan.vertex, 5);
+    const std::vector<std::pair<int, int>> local = face_rings(mk, fan.vertex, 5);  // zone: rings 0, 1
     std::unordered_map<int, int> local_vertex;
     MeshInput sub;
     sub.options = lk.options;
@@ -126,14 +123,14 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
       return it->second;
     };
     std::unordered_map<int, int> local_face;
-    for (int f : local) {
+    for (const auto& [f, ring] : local) {
       if (lk.face_hole[f]) sub.holes.push_back(static_cast<int>(sub.face_sizes.size()));
       local_face[f] = static_cast<int>(sub.face_sizes.size());
       sub.face_sizes.push_back(mk.face_size(f));
       for (int h = mk.face_begin(f); h < mk.face_end(f); ++h) sub.face_indices.push_back(local_index(mk.corner_vertex(h)));
     }
     // Interior sharp edges keep their sharpness (boundary edges of the real mesh stay boundary).
-    for (int f : local)
+    for (const auto& [f, ring] : local)
       for (int h = mk.face_begin(f); h < mk.face_end(f); ++h) {
         const int e = mk.corner_edge(h);
         if (lk.edge_sharpness[e] > 0 && !mk.is_boundary_edge(e) && mk.edge_corner(e) == h)
@@ -144,8 +141,8 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
     std::vector<Point3> x = sub.positions;
     std::vector<int> faces;  // descendants, with their root level-k face
     std::vector<int> roots;
-    for (int f : zone)
-      if (!lk.face_hole[f]) { faces.push_back(local_face[f]); roots.push_back(f); }
+    for (const auto& [f, ring] : local)
+      if (ring < 2 && !lk.face_hole[f]) { faces.push_back(local_face[f]); roots.push_back(f); }
     for (int s = 0; s < sample_levels; ++s) {
       RefinementStep step = refine_once(level);
       std::vector<Point3> y;
@@ -167,7 +164,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
     // net and the nets of the faces sharing an edge with it.
     FanDeviation fd;
     fd.fan = static_cast<int>(fi);
-    std::map<int, bool> done;
+    std::vector<char> done(level.mesh.num_vertices(), 0);
     for (size_t i = 0; i < faces.size(); ++i) {
       const int root = roots[i];
       std::vector<int> candidates{root};
@@ -175,8 +172,8 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
         if (const int t = mk.twin(h); t >= 0) candidates.push_back(mk.corner_face(t));
       for (int h = level.mesh.face_begin(faces[i]); h < level.mesh.face_end(faces[i]); ++h) {
         const int v = level.mesh.corner_vertex(h);
-        if (done.count(v)) continue;
-        done[v] = true;
+        if (done[v]) continue;
+        done[v] = 1;
         const V3 q = v3(limit[v]);
         double d = 1e300;
         for (int c : candidates) d = std::min(d, distance_to_net(&build.level_nets[static_cast<size_t>(c) * 16], q));

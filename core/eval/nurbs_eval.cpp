@@ -137,4 +137,21 @@ void side_parameters(int side, double t, double& u, double& v) {
   }
 }
 
+SideDerivs side_derivatives(const NurbsPatch& patch, int side, double t) {
+  double u, v;
+  side_parameters(side, t, u, v);
+  const SurfaceDerivs d = evaluate(patch, u, v);
+  auto neg = [](const Point3& a) { return Point3{-a[0], -a[1], -a[2]}; };
+  SideDerivs f;
+  f.p = d.p;
+  switch (side) {
+    case 0: f.along = d.du; f.inward = d.dv; f.inward2 = d.dvv; break;
+    case 1: f.along = d.dv; f.inward = neg(d.du); f.inward2 = d.duu; break;
+    case 2: f.along = neg(d.du); f.inward = neg(d.dv); f.inward2 = d.dvv; break;
+    default: f.along = neg(d.dv); f.inward = d.du; f.inward2 = d.duu; break;
+  }
+  f.normal = unit_normal(d);
+  return f;
+}
+
 }  // namespace subd2nurbs

@@ -24,6 +24,15 @@ Point3 evaluate(const BoundaryCurve& curve, double s);
 /// see patch_set.h): side 0 (t,0), side 1 (1,t), side 2 (1-t,1), side 3 (0,1-t).
 void side_parameters(int side, double t, double& u, double& v);
 
+/// A patch at a side point, with derivatives taken along the side (counter-clockwise
+/// traversal, d/dt) and into the patch (d/dn): the frame in which two patches sharing a
+/// curve are compared (MATH.md 9).
+struct SideDerivs {
+  Point3 p{}, along{}, inward{}, inward2{};  ///< X, dX/dt, dX/dn, d2X/dn2
+  Point3 normal{};                            ///< unit normal Xu x Xv
+};
+SideDerivs side_derivatives(const NurbsPatch& patch, int side, double t);
+
 /// Basis functions and their first `nd` derivatives at x for a flat knot vector U and
 /// degree p: ders[k][j] is the k-th derivative of N_{span-p+j}. Returns the span index.
 int basis_derivatives(const std::vector<double>& U, int p, double x, int nd, double ders[3][4]);

@@ -616,8 +616,14 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     else zone[f] = 1;
   }
   // Fans at irregular vertices (all are children of level-a vertices, 4 apart at level k).
-  std::vector<signed char> ray_continuity(mk.num_edges(), -1);
-  std::vector<double> ray_c(mk.num_edges(), 0.0);
+  // What each fan says of its rays, per level-k edge. A sharp ray between two fans of one
+  // vertex is recorded twice (C0 both times); every other ray belongs to one fan.
+  struct RayRecord {
+    int fan = -1;
+    Continuity continuity = Continuity::C2;
+    double c = 0;
+  };
+  std::vector<RayRecord> ray_of_edge(mk.num_edges());
   std::vector<char> covered(mk.num_faces(), 0);
   FanBuilder fb(L, limit, nets);
   const int va = out.refinement.levels[a].mesh.num_vertices();
@@ -634,12 +640,9 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       rec.c = fb.build(fan, kinds, ray_edges);
       info.fans.push_back(rec);
       for (int c : fan.sectors) covered[mk.corner_face(c)] = 1;
-      for (size_t r = 0; r < kinds.size(); ++r) {
-        const Continuity cont = kinds[r] == RayKind::G1 ? Continuity::G1 : Continuity::C0;
-        ray_c[ray_edges[r]] = rec.c;
-        signed char& slot = ray_continuity[ray_edges[r]];
-        slot = static_cast<signed char>(slot < 0 ? static_cast<int>(cont) : std::min<int>(slot, static_cast<int>(cont)));
-      }
+      for (size_t r = 0; r < kinds.size(); ++r)
+        ray_of_edge[ray_edges[r]] = {static_cast<int>(info.fans.size()) - 1,
+                                     kinds[r] == RayKind::G1 ? Continuity::G1 : Continuity::C0, rec.c};
     }
   }
   for (int f = 0; f < mk.num_faces(); ++f)
@@ -709,9 +712,8 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
         corner_of_vertex[va_i] = static_cast<int>(ps.corners.size());
         PatchCorner pc;
         pc.base_vertex = va_i < base.mesh.num_vertices() ? va_i : -1;
-        const int ci = i == 0 ? 0 : i == 1 ? 1 : i == 2 ? 2 : 3;
-        const int ui = (ci == 1 || ci == 2) ? patch.num_poles_u - 1 : 0;
-        const int vi = (ci == 2 || ci == 3) ? patch.num_poles_v - 1 : 0;
+        const int ui = (i == 1 || i == 2) ? patch.num_poles_u - 1 : 0;  // corner i of the domain
+        const int vi = (i == 2 || i == 3) ? patch.num_poles_v - 1 : 0;
         pc.position = patch.pole(ui, vi);
         ps.corners.push_back(pc);
       }
@@ -744,8 +746,6 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   }
 
   // Continuity claims per coarse edge, and the rays of irregular vertices.
-  std::vector<int> fan_of_vertex(ma.num_vertices(), -1);
-  for (size_t i = 0; i < info.fans.size(); ++i) fan_of_vertex[info.fans[i].vertex] = static_cast<int>(i);
   ps.closed = true;
   for (int e = 0; e < ma.num_edges(); ++e) {
     const int ci = curve_of_edge[e];
@@ -767,24 +767,22 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     bc.continuity = Continuity::C2;
     // The level-k edge of this coarse edge at each end vertex.
     for (int end = 0; end < 2; ++end) {
-      const int v = ma.edge_vertex(e, end), w = ma.edge_vertex(e, 1 - end);
-      (void)w;
+      const int v = ma.edge_vertex(e, end);
       // Walk down the levels: the half of the edge at v.
       int ek = e;
       for (int t = a; t < k; ++t) {
         const PolyMesh& mp = out.refinement.levels[t].mesh;
         ek = 2 * ek + (mp.edge_vertex(ek, 0) == v ? 0 : 1);
       }
-      const int rc = ray_continuity[ek];
-      if (rc < 0) continue;
-      const Continuity cont = static_cast<Continuity>(rc);
-      if (static_cast<int>(cont) < static_cast<int>(bc.continuity)) bc.continuity = cont;
+      const RayRecord& rr = ray_of_edge[ek];
+      if (rr.fan < 0) continue;
+      if (static_cast<int>(rr.continuity) < static_cast<int>(bc.continuity)) bc.continuity = rr.continuity;
       RayCurve ray;
       ray.curve = ci;
       ray.vertex_at_start = corner_of_vertex[v] == bc.corner0;
-      ray.fan = fan_of_vertex[v];
-      ray.continuity = cont;
-      ray.c = ray_c[ek];
+      ray.fan = rr.fan;
+      ray.continuity = rr.continuity;
+      ray.c = rr.c;
       info.rays.push_back(ray);
     }
   }

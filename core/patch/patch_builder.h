@@ -61,7 +61,7 @@ struct IrregularFan {
 struct RayCurve {
   int curve = -1;          ///< PatchSet curve index
   bool vertex_at_start;    ///< the irregular vertex is the curve's corner0
-  int fan = -1;            ///< index into PatchBuildInfo::fans
+  int fan = -1;            ///< index into PatchBuildInfo::fans: the fan this ray belongs to
   Continuity continuity;   ///< G1 or C0 (sharp or approximate)
   double c = 0;            ///< the fan's G1 coefficient (MATH.md 5.3: D + E = 2c(1-t)^2 e')
 };

@@ -120,17 +120,8 @@ inline double max_g1_residual(const PatchBuild& b, int samples = 17) {
       for (int w = 0; w < 2; ++w) {
         const CurveUse& u = bc.uses[w];
         const double side_t = u.reversed ? 1 - s : s;
-        double pu, pv;
-        side_parameters(u.side, side_t, pu, pv);
-        const SurfaceDerivs d = evaluate(b.set.patches[u.patch], pu, pv);
-        const Eigen::Vector3d du = ev(d.du), dv = ev(d.dv);
-        Eigen::Vector3d a, in;
-        switch (u.side) {
-          case 0: a = du; in = dv; break;
-          case 1: a = dv; in = -du; break;
-          case 2: a = -du; in = -dv; break;
-          default: a = -dv; in = du; break;
-        }
+        const SideDerivs d = side_derivatives(b.set.patches[u.patch], u.side, side_t);
+        const Eigen::Vector3d a = ev(d.along), in = ev(d.inward);
         inward[w] = in;
         if (w == 0) {
           // a is d/d(side_t); convert to d/ds, then to "away from the vertex".
