@@ -64,6 +64,7 @@
 #include "converter/occt/writers.h"
 #include "core/mesh/validate.h"
 #include "core/patch/patch_builder.h"
+#include "osd_bench.h"
 
 using namespace subd2nurbs;
 namespace Far = OpenSubdiv::Far;
@@ -151,28 +152,9 @@ void cage_counters(benchmark::State& state, const Cage& cage) {
 
 // --- OpenSubdiv ------------------------------------------------------------------------------
 
-struct Vertex3 {
-  double p[3];
-  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0; }
-  void AddWithWeight(const Vertex3& s, double w) {
-    p[0] += w * s.p[0];
-    p[1] += w * s.p[1];
-    p[2] += w * s.p[2];
-  }
-};
+using bench::Vertex3;
+using bench::osd_refiner;
 
-std::unique_ptr<Far::TopologyRefiner> osd_refiner(const MeshInput& in) {
-  Far::TopologyDescriptor desc;
-  desc.numVertices = in.num_vertices();
-  desc.numFaces = in.num_faces();
-  desc.numVertsPerFace = in.face_sizes.data();
-  desc.vertIndicesPerFace = in.face_indices.data();
-  Sdc::Options opt;
-  opt.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
-  return std::unique_ptr<Far::TopologyRefiner>(
-      Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, opt)));
-}
 
 /// Positions of every level of `refiner` in one array (the numbering patch tables use), with
 /// `extra` more slots at the end.

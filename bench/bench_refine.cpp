@@ -10,6 +10,7 @@
 
 #include "common/shapes.h"
 #include "core/refine/refiner.h"
+#include "osd_bench.h"
 
 using namespace subd2nurbs;
 namespace Far = OpenSubdiv::Far;
@@ -22,15 +23,7 @@ const MeshInput& torus_100k() {
   return m;
 }
 
-struct Vertex3 {
-  double p[3];
-  void Clear(void* = nullptr) { p[0] = p[1] = p[2] = 0; }
-  void AddWithWeight(const Vertex3& s, double w) {
-    p[0] += w * s.p[0];
-    p[1] += w * s.p[1];
-    p[2] += w * s.p[2];
-  }
-};
+using bench::Vertex3;
 
 void BM_Ours(benchmark::State& state) {
   const int levels = static_cast<int>(state.range(0));
@@ -48,17 +41,8 @@ void BM_Ours(benchmark::State& state) {
 void BM_OpenSubdiv(benchmark::State& state) {
   const int levels = static_cast<int>(state.range(0));
   const MeshInput& in = torus_100k();
-  Far::TopologyDescriptor desc;
-  desc.numVertices = in.num_vertices();
-  desc.numFaces = in.num_faces();
-  desc.numVertsPerFace = in.face_sizes.data();
-  desc.vertIndicesPerFace = in.face_indices.data();
-  Sdc::Options opt;
-  opt.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-  using Factory = Far::TopologyRefinerFactory<Far::TopologyDescriptor>;
   for (auto _ : state) {
-    std::unique_ptr<Far::TopologyRefiner> refiner(
-        Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, opt)));
+    std::unique_ptr<Far::TopologyRefiner> refiner = bench::osd_refiner(in);
     refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(levels));
     std::vector<std::vector<Vertex3>> buf(levels + 1);
     buf[0].resize(in.num_vertices());
