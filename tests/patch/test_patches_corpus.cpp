@@ -8,6 +8,7 @@
 //   patch table, isolation 10) to 1e-12 x diagonal.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -38,6 +39,13 @@ std::vector<std::string> corpus_shapes(bool slow) {
   }
   std::sort(names.begin(), names.end());
   return names;
+}
+
+// A measured value for the test report (gtest --gtest_output=xml), in %.3g.
+std::string sci(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
 }
 
 int expected_patch_count(const SubdivLevel& base) {
@@ -72,7 +80,9 @@ void check_shape(const std::string& name) {
   const PatchBuild b = build_patches(base, cage.input.positions);
   const double diag = b.set.model_size;
   EXPECT_EQ(static_cast<int>(b.set.patches.size()), expected_patch_count(base));
-  EXPECT_LT(max_piece_error(b), 1e-12 * diag);
+  const double piece_error = max_piece_error(b);
+  ::testing::Test::RecordProperty("piece_relative_error", sci(piece_error / diag));
+  EXPECT_LT(piece_error, 1e-12 * diag);
   const ContinuityReport r = measure_continuity(b.set, 17);
   EXPECT_LT(r.max_gap, 1e-10 * diag);
   // catmark_val2_back2back is pairs of faces glued back to back: its limit is a doubly
@@ -83,7 +93,9 @@ void check_shape(const std::string& name) {
     EXPECT_LT(r.max_coplanarity, 1e-8);
   }
   EXPECT_LT(r.max_c1_jump, 1e-8);
-  EXPECT_LT(max_g1_residual(b, 9), 1e-8);
+  const double g1_residual = max_g1_residual(b, 9);
+  ::testing::Test::RecordProperty("g1_residual", sci(g1_residual));
+  EXPECT_LT(g1_residual, 1e-8);
 
   // OpenSubdiv oracle on the exact part (all-quad cages, no creases sharpened at the cap).
   if (b.info.coarse_level != 0 || b.info.sharpened_edges || b.info.sharpened_vertices) return;
@@ -112,7 +124,7 @@ void check_shape(const std::string& name) {
       }
   }
   ::testing::Test::RecordProperty("osd_points", compared);
-  ::testing::Test::RecordProperty("osd_max_relative_error", std::to_string(worst / diag));
+  ::testing::Test::RecordProperty("osd_max_relative_error", sci(worst / diag));
   EXPECT_LT(worst, 1e-12 * diag) << compared << " points compared";
 }
 
