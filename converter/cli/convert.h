@@ -6,6 +6,8 @@
 #include <ostream>
 #include <string>
 
+#include "converter/pipeline/conversion.h"
+
 namespace subd2nurbs::cli {
 
 struct ConvertOptions {
@@ -23,7 +25,7 @@ struct ConvertOptions {
 };
 
 /// Most extra levels --tolerance adds; a tolerance needing more is reported as capped.
-constexpr int kMaxToleranceExtraLevels = 4;
+constexpr int kMaxToleranceExtraLevels = pipeline::kMaxToleranceExtraLevels;
 
 /// Converts a cage. Progress, warnings and the summary go to `err`.
 /// \throw UsageError (bad options, unknown output extension, a level too deep),
@@ -33,7 +35,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err);
 
 /// JSON text helpers shared by the subcommands: a quoted, escaped string, and a number
 /// with "%.17g" (null when not finite).
-std::string json_string(const std::string& s);
-std::string json_number(double x);
+using pipeline::json_number;
+using pipeline::json_string;
 
 }  // namespace subd2nurbs::cli

@@ -10,6 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <BRep_Builder.hxx>
+
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -17,6 +19,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 
 #include "converter/occt/export_error.h"
@@ -184,6 +187,27 @@ void write_shape(const TopoDS_Shape& shape, const std::string& path, Format form
     }
   }
   temporary.commit();
+}
+
+std::string brep_text(const TopoDS_Shape& shape) {
+  if (shape.IsNull()) throw ExportError("brep-text", -1, "nothing to write: the shape is null");
+  return guarded("brep-text", -1, [&] {
+    std::ostringstream out;
+    BRepTools::Write(shape, out);
+    if (!out) throw ExportError("brep-text", -1, "the BREP writer failed");
+    return out.str();
+  });
+}
+
+TopoDS_Shape read_brep_text(const std::string& text) {
+  return guarded("brep-read", -1, [&] {
+    std::istringstream in(text);
+    TopoDS_Shape shape;
+    BRep_Builder builder;
+    BRepTools::Read(shape, in, builder);
+    if (shape.IsNull()) throw ExportError("brep-read", -1, "the text holds no BREP shape");
+    return shape;
+  });
 }
 
 }  // namespace subd2nurbs::occt

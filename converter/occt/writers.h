@@ -31,6 +31,15 @@ Format format_from_path(const std::string& path);
 void write_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
                  StepSchema schema = StepSchema::AP214);
 
+/// The shape in OCCT's native BREP text format (what BRepTools::Write puts in a .brep file and
+/// FreeCAD's Part.Shape().importBrepFromString reads).
+/// \throw ExportError when the shape is null or OCCT fails
+std::string brep_text(const TopoDS_Shape& shape);
+
+/// Reads BREP text (as written by brep_text) back into a shape.
+/// \throw ExportError when OCCT cannot read it or it holds no shape
+TopoDS_Shape read_brep_text(const std::string& text);
+
 /// Human-readable names ("STEP", "IGES", "BREP"; "AP214", "AP242").
 const char* to_string(Format format);
 const char* to_string(StepSchema schema);

@@ -122,6 +122,31 @@ TEST_F(Exchange, SeamedTorusSurvivesBrepAndStep) {
   }
 }
 
+// BREP text (what the Python module hands FreeCAD) is the .brep file's content without the
+// file's "DBRep_DrawableShape" header line, and reads back to the same shape: the unit cube's
+// area is 6 and its volume 1.
+TEST_F(Exchange, BrepTextIsTheBrepFileAndReadsBack) {
+  const BrepResult built = build_brep(testing::bspline_torus(2, 1));
+  ASSERT_TRUE(built.valid) << built.check_message;
+  const std::string text = brep_text(built.shape);
+  write_shape(built.shape, path("torus.brep"), Format::Brep);
+  EXPECT_EQ("DBRep_DrawableShape\n" + text, slurp(path("torus.brep")));
+  const ShapeSummary before = summarize(built.shape);
+  const ShapeSummary after = summarize(read_brep_text(text));
+  EXPECT_TRUE(after.valid) << after.check_message;
+  EXPECT_EQ(after.faces, 2);
+  EXPECT_EQ(after.free_edges, 0);
+  EXPECT_NEAR(after.area, before.area, 1e-12 * before.area);
+
+  const ShapeSummary cube = summarize(read_brep_text(brep_text(build_brep(testing::unit_cube()).shape)));
+  EXPECT_EQ(cube.faces, 6);
+  EXPECT_NEAR(cube.area, 6.0, 1e-9);
+  EXPECT_NEAR(cube.volume, 1.0, 1e-9);
+
+  EXPECT_THROW(read_brep_text("not a brep"), ExportError);
+  EXPECT_THROW(brep_text(TopoDS_Shape()), ExportError);
+}
+
 TEST_F(Exchange, StepWriteRestoresOcctSettings) {
   STEPControl_Controller::Init();  // registers the write.step.* settings
   const std::string assembly = Interface_Static::CVal("write.step.assembly");

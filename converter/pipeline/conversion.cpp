@@ -1,0 +1,288 @@
+#include "converter/pipeline/conversion.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+namespace subd2nurbs::pipeline {
+
+std::string json_string(const std::string& s) {
+  std::string r = "\"";
+  for (const unsigned char c : s) {
+    switch (c) {
+      case '"': r += "\\\""; break;
+      case '\\': r += "\\\\"; break;
+      case '\n': r += "\\n"; break;
+      case '\r': r += "\\r"; break;
+      case '\t': r += "\\t"; break;
+      default:
+        if (c < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
+          r += buffer;
+        } else {
+          r += static_cast<char>(c);
+        }
+    }
+  }
+  return r + "\"";
+}
+
+std::string json_number(double x) {
+  if (!std::isfinite(x)) return "null";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", x);
+  return buffer;
+}
+
+std::string short_number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", x);
+  return buffer;
+}
+
+double level_faces(const SubdivLevel& base, int extra) {
+  const PolyMesh& m = base.mesh;
+  const double coarse_quads = m.all_quads() ? m.num_faces() : m.num_corners();
+  return coarse_quads * std::pow(4.0, 2 + extra);
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+std::string json_bool(bool b) { return b ? "true" : "false"; }
+
+std::string optional_string(const std::string& s) { return s.empty() ? std::string("null") : json_string(s); }
+
+std::string json_point(const Point3& p) {
+  return "[" + json_number(p[0]) + ", " + json_number(p[1]) + ", " + json_number(p[2]) + "]";
+}
+
+void collect_fans(ConversionResult& c) {
+  const PatchBuildInfo& info = c.build.info;
+  std::vector<int> measure_of_curve(c.build.set.curves.size(), -1);
+  for (size_t i = 0; i < c.continuity.curves.size(); ++i)
+    measure_of_curve[c.continuity.curves[i].curve] = static_cast<int>(i);
+  std::vector<int> approximate_of_fan(info.fans.size(), -1);
+  for (size_t f = 0; f < info.fans.size(); ++f) {
+    const IrregularFan& fan = info.fans[f];
+    ++c.fans_by_mode[static_cast<int>(fan.mode)];
+    if (fan.mode != FanMode::Approximate) continue;
+    approximate_of_fan[f] = static_cast<int>(c.approximate.size());
+    c.approximate.push_back({fan.base_vertex, fan.valence, fan.sectors, 0, -1});
+  }
+  for (const RayCurve& ray : info.rays) {
+    if (ray.fan < 0 || approximate_of_fan[ray.fan] < 0 || ray.continuity != Continuity::C0) continue;
+    ApproximateFan& a = c.approximate[approximate_of_fan[ray.fan]];
+    ++a.rays;
+    const int m = measure_of_curve[ray.curve];
+    if (m >= 0) a.normal_angle_deg = std::max(a.normal_angle_deg, c.continuity.curves[m].normal_angle_deg);
+  }
+  for (const BoundaryCurve& bc : c.build.set.curves) ++c.curves_by_continuity[static_cast<int>(bc.continuity)];
+}
+
+}  // namespace
+
+void check_settings(const ConversionSettings& settings) {
+  if (settings.level < 0) throw SettingsError("the level must be >= 0");
+  if (settings.tolerance_given && !(settings.tolerance > 0 && std::isfinite(settings.tolerance)))
+    throw SettingsError("the tolerance must be a positive number");
+}
+
+ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
+                         const ConversionSettings& settings, const ConversionProgress& progress,
+                         std::vector<std::string> warnings) {
+  check_settings(settings);
+  ConversionResult c;
+  c.warnings = std::move(warnings);
+  c.tolerance_given = settings.tolerance_given;
+  c.tolerance_absolute = settings.absolute;
+  auto stage = [&](const std::string& what) {
+    if (progress.stage) progress.stage(what);
+  };
+  auto warn = [&](const std::string& w) {
+    if (progress.warning) progress.warning(w);
+    c.warnings.push_back(w);
+  };
+  const int level = settings.tolerance_given ? 0 : settings.level;
+  if (level > 0 && level_faces(base, level) > kMaxLevelFaces)
+    throw SettingsError("level " + std::to_string(level) + " would refine the cage to about " +
+                        short_number(level_faces(base, level)) + " faces (limit " +
+                        short_number(kMaxLevelFaces) + "); use a lower level");
+
+  // Patches, at the level asked for or at the minimum level first for a tolerance.
+  auto build = [&](int extra) {
+    const auto t0 = Clock::now();
+    stage(extra == 0 ? std::string("building patches")
+                     : "building patches (" + std::to_string(extra) + " extra levels)");
+    PatchOptions po = settings.patch;
+    po.extra_levels = extra;
+    c.build = build_patches(base, positions, po);
+    c.extra_levels = extra;
+    c.ms.patches += ms_since(t0);
+  };
+  auto measure_deviation_now = [&] {
+    const auto t0 = Clock::now();
+    stage("measuring the deviation from the limit surface");
+    c.deviation = measure_deviation(c.build, kDeviationSampleLevels);
+    c.ms.deviation += ms_since(t0);
+  };
+  build(level);
+
+  if (settings.tolerance_given) {
+    ToleranceResult& tr = c.tolerance;
+    tr.requested = settings.tolerance;
+    tr.absolute = settings.absolute ? settings.tolerance : settings.tolerance * c.build.set.model_size;
+    measure_deviation_now();
+    tr.first_max = c.deviation.max;
+    tr.needed = std::max(0, extra_levels_for_tolerance(c.build, c.deviation, tr.absolute));
+    tr.used = std::min(tr.needed, kMaxToleranceExtraLevels);
+    if (tr.used < tr.needed) {
+      tr.capped = true;
+      tr.cap_reason = "at most " + std::to_string(kMaxToleranceExtraLevels) + " extra levels";
+    }
+    while (tr.used > 0 && level_faces(base, tr.used) > kMaxLevelFaces) {
+      --tr.used;
+      tr.capped = true;
+      tr.cap_reason = "at most " + short_number(kMaxLevelFaces) + " refined faces";
+    }
+    if (tr.capped)
+      warn("subd2nurbs: warning: the tolerance needs " + std::to_string(tr.needed) +
+           " extra levels; using " + std::to_string(tr.used) + " (" + tr.cap_reason + ")");
+    if (tr.used > 0) {
+      build(tr.used);
+      measure_deviation_now();
+    }
+    tr.met = c.deviation.max <= tr.absolute;
+    if (!tr.met)
+      warn("subd2nurbs: warning: tolerance NOT met: deviation " + short_number(c.deviation.max) +
+           " > tolerance " + short_number(tr.absolute) + " (model units) at level " +
+           std::to_string(c.build.info.level));
+  }
+  const PatchBuildInfo& info = c.build.info;
+  if (info.sharpened_edges > 0 || info.sharpened_vertices > 0)
+    warn("subd2nurbs: warning: " + std::to_string(info.sharpened_edges) + " edges and " +
+         std::to_string(info.sharpened_vertices) +
+         " vertices were still semi-sharp at the level cap (level " + std::to_string(info.level) +
+         ") and were made infinitely sharp");
+
+  // Measures.
+  auto t = Clock::now();
+  stage("measuring continuity");
+  c.continuity = measure_continuity(c.build.set, kContinuitySamples);
+  c.ms.continuity = ms_since(t);
+  if (!settings.tolerance_given) measure_deviation_now();
+  collect_fans(c);
+
+  if (settings.build_brep) {
+    t = Clock::now();
+    stage("building the B-rep");
+    c.brep = occt::build_brep(c.build.set, progress.brep_fraction);
+    c.has_brep = true;
+    c.ms.brep = ms_since(t);
+  }
+  return c;
+}
+
+// --- the report ------------------------------------------------------------------------------
+
+std::string report_json(const ConversionResult& c) {
+  const PatchBuildInfo& info = c.build.info;
+  const PatchSet& ps = c.build.set;
+  const double size = ps.model_size;
+  auto relative = [size](double x) { return size > 0 ? json_number(x / size) : std::string("null"); };
+  std::string j;
+  auto line = [&j](const std::string& s) { j += s + "\n"; };
+
+  line("{");
+  line("  \"format\": \"subd2nurbs-report\",");
+  line("  \"version\": 1,");
+  line("  \"input\": " + json_string(c.input) + ",");
+  line("  \"output\": " + optional_string(c.output.path) + ",");
+  line("  \"output_format\": " + optional_string(c.output.format) + ",");
+  line("  \"step_schema\": " + optional_string(c.output.step_schema) + ",");
+  std::string warnings = "  \"warnings\": [";
+  for (size_t i = 0; i < c.warnings.size(); ++i) warnings += (i ? ", " : "") + json_string(c.warnings[i]);
+  line(warnings + "],");
+  line("  \"model_size\": " + json_number(size) + ",");
+  line("  \"coarse_level\": " + std::to_string(info.coarse_level) + ",");
+  line("  \"level\": " + std::to_string(info.level) + ",");
+  line("  \"extra_levels\": " + std::to_string(c.extra_levels) + ",");
+  line("  \"patches\": {\"total\": " + std::to_string(ps.patches.size()) + ", \"regular\": " +
+       std::to_string(info.regular_patches) + ", \"pccm\": " + std::to_string(info.pccm_patches) + "},");
+  const auto& cc = c.curves_by_continuity;
+  line("  \"curves\": {\"total\": " + std::to_string(ps.curves.size()) + ", \"boundary\": " +
+       std::to_string(cc[0]) + ", \"c0\": " + std::to_string(cc[1]) + ", \"g1\": " +
+       std::to_string(cc[2]) + ", \"c1\": " + std::to_string(cc[3]) + ", \"c2\": " + std::to_string(cc[4]) + "},");
+  const auto& fm = c.fans_by_mode;
+  line("  \"fans\": {\"smooth\": " + std::to_string(fm[0]) + ", \"dart\": " + std::to_string(fm[1]) +
+       ", \"crease\": " + std::to_string(fm[2]) + ", \"corner\": " + std::to_string(fm[3]) +
+       ", \"approximate\": " + std::to_string(fm[4]) + ",");
+  std::string approx = "    \"approximate_fans\": [";
+  for (size_t i = 0; i < c.approximate.size(); ++i) {
+    const ApproximateFan& a = c.approximate[i];
+    approx += std::string(i ? ",\n      " : "\n      ") + "{\"base_vertex\": " + std::to_string(a.base_vertex) +
+              ", \"valence\": " + std::to_string(a.valence) + ", \"sectors\": " + std::to_string(a.sectors) +
+              ", \"rays\": " + std::to_string(a.rays) + ", \"normal_angle_deg\": " +
+              (a.normal_angle_deg < 0 ? std::string("null") : json_number(a.normal_angle_deg)) + "}";
+  }
+  line(approx + (c.approximate.empty() ? "]" : "\n    ]") + "},");
+  line("  \"sharpened_edges\": " + std::to_string(info.sharpened_edges) + ",");
+  line("  \"sharpened_vertices\": " + std::to_string(info.sharpened_vertices) + ",");
+  if (c.has_brep) {
+    const occt::BrepResult& b = c.brep;
+    line("  \"brep\": {\"faces\": " + std::to_string(b.num_faces) + ", \"edges\": " + std::to_string(b.num_edges) +
+         ", \"vertices\": " + std::to_string(b.num_vertices) + ", \"type\": " +
+         json_string(b.is_solid ? "solid" : "shell") + ", \"solids\": " + std::to_string(b.num_solids) +
+         ", \"shells\": " + std::to_string(b.num_shells) + ", \"valid\": " + json_bool(b.valid) +
+         ", \"tolerance\": " + json_number(b.tolerance) + "},");
+  } else {
+    line("  \"brep\": null,");
+  }
+  const ContinuityReport& k = c.continuity;
+  line("  \"continuity\": {\"samples_per_curve\": " + std::to_string(kContinuitySamples) +
+       ", \"shared_curves\": " + std::to_string(k.curves.size()) + ",");
+  line("    \"max_gap\": " + json_number(k.max_gap) + ", \"max_gap_relative\": " + relative(k.max_gap) + ",");
+  line("    \"max_normal_angle_deg\": " + json_number(k.max_normal_angle_deg) +
+       ", \"max_coplanarity\": " + json_number(k.max_coplanarity) + ",");
+  line("    \"max_c1_jump\": " + json_number(k.max_c1_jump) + ", \"max_c2_jump\": " + json_number(k.max_c2_jump) +
+       ", \"max_crease_normal_angle_deg\": " + json_number(k.max_crease_normal_angle_deg) + "},");
+  const DeviationReport& d = c.deviation;
+  line("  \"deviation\": {\"max\": " + json_number(d.max) + ", \"mean\": " + json_number(d.mean) +
+       ", \"relative\": " + relative(d.max) + ",");
+  std::string worst = "null";
+  if (d.worst_fan >= 0 && d.worst_fan < static_cast<int>(info.fans.size())) {
+    const IrregularFan& f = info.fans[d.worst_fan];
+    worst = "{\"base_vertex\": " + std::to_string(f.base_vertex) + ", \"valence\": " + std::to_string(f.valence) +
+            ", \"mode\": " + json_string(to_string(f.mode)) + "}";
+  }
+  line("    \"where\": " + (d.samples > 0 ? json_point(d.where) : std::string("null")) + ", \"worst_fan\": " + worst + ",");
+  line("    \"samples\": " + std::to_string(d.samples) + ", \"sample_levels\": " + std::to_string(d.sample_levels) + ",");
+  if (c.tolerance_given) {
+    const ToleranceResult& t = c.tolerance;
+    line("    \"tolerance\": {\"requested\": " + json_number(t.requested) + ", \"units\": " +
+         json_string(c.tolerance_absolute ? "model" : "relative") + ", \"requested_model_units\": " +
+         json_number(t.absolute) + ",");
+    line("      \"initial_max\": " + json_number(t.first_max) + ", \"extra_levels_needed\": " +
+         std::to_string(t.needed) + ", \"extra_levels_used\": " + std::to_string(t.used) +
+         ", \"capped\": " + json_bool(t.capped) + ",");
+    line("      \"achieved\": " + json_number(d.max) + ", \"achieved_relative\": " + relative(d.max) +
+         ", \"met\": " + json_bool(t.met) + "}},");
+  } else {
+    line("    \"tolerance\": null},");
+  }
+  const Timings& ms = c.ms;
+  line("  \"timings_ms\": {\"load\": " + json_number(ms.load) + ", \"patches\": " + json_number(ms.patches) +
+       ", \"continuity\": " + json_number(ms.continuity) + ", \"deviation\": " + json_number(ms.deviation) +
+       ", \"brep\": " + json_number(ms.brep) + ", \"write\": " + json_number(ms.write) + "}");
+  line("}");
+  return j;
+}
+
+}  // namespace subd2nurbs::pipeline

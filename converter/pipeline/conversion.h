@@ -1,0 +1,130 @@
+// The conversion pipeline shared by the CLI (`subd2nurbs convert`), the Python module and the
+// FreeCAD workbench: validated cage -> patches -> continuity and deviation measured -> B-rep
+// checked by OCCT, with the quality report (subd2nurbs-report v1, docs/formats.md) as JSON.
+// No files are read or written here and nothing is printed: progress and warnings go to
+// callbacks, everything else comes back in a ConversionResult.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "converter/occt/brep_builder.h"
+#include "core/eval/continuity.h"
+#include "core/eval/deviation.h"
+#include "core/patch/patch_builder.h"
+#include "core/refine/refiner.h"
+
+namespace subd2nurbs::pipeline {
+
+/// Level-k faces above which a conversion is refused (level) or its levels capped
+/// (tolerance): the level-k Bezier nets alone take 384 bytes per face.
+constexpr double kMaxLevelFaces = 4e6;
+/// Most extra levels a tolerance adds; a tolerance needing more is reported as capped.
+constexpr int kMaxToleranceExtraLevels = 4;
+/// Samples per shared curve for the continuity measures.
+constexpr int kContinuitySamples = 24;
+/// Extra levels of refinement for the deviation samples.
+constexpr int kDeviationSampleLevels = 2;
+
+/// What to convert with. `patch` is handed to build_patches untouched, except that its
+/// extra_levels is set from `level` or chosen by `tolerance`.
+struct ConversionSettings {
+  PatchOptions patch;
+  int level = 0;                ///< extra levels beyond the minimum, >= 0 (ignored with a tolerance)
+  bool tolerance_given = false;  ///< choose the level so that the deviation is <= tolerance
+  double tolerance = 0;         ///< > 0 when given
+  bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
+  bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
+};
+
+/// A setting that cannot be used (negative level, bad tolerance, a level too deep for the cage).
+class SettingsError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+/// Progress reporting; every member may be empty.
+struct ConversionProgress {
+  /// A stage starts: "building patches", "measuring continuity", "building the B-rep", ...
+  std::function<void(const std::string& stage)> stage;
+  /// Fraction (0..1] of the B-rep stage done, about every 1 %.
+  std::function<void(double fraction)> brep_fraction;
+  /// A warning, as it is found (it is also kept in ConversionResult::warnings).
+  std::function<void(const std::string& warning)> warning;
+};
+
+struct Timings {
+  double load = 0, patches = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
+};
+
+struct ToleranceResult {
+  double requested = 0;  ///< as given
+  double absolute = 0;   ///< in model units
+  double first_max = 0;  ///< deviation at the minimum level
+  int needed = 0;        ///< extra levels extra_levels_for_tolerance asked for
+  int used = 0;          ///< after the cap
+  bool capped = false;
+  std::string cap_reason;
+  bool met = false;
+};
+
+struct ApproximateFan {
+  int base_vertex = -1, valence = 0, sectors = 0, rays = 0;
+  double normal_angle_deg = -1;  ///< max over its measured C0 rays, -1 if none was measured
+};
+
+/// Where the result went, for the report; filled by the caller (empty strings give null).
+struct OutputInfo {
+  std::string path;
+  std::string format;       ///< "STEP", "IGES", "BREP", "JSON"
+  std::string step_schema;  ///< "AP214" / "AP242" for STEP, else empty
+};
+
+struct ConversionResult {
+  std::string input;  ///< the cage's name for the report (set by the caller)
+  OutputInfo output;  ///< set by the caller
+  std::vector<std::string> warnings;  ///< the caller's load warnings first, then the pipeline's
+  PatchBuild build;
+  int extra_levels = 0;
+  ContinuityReport continuity;
+  DeviationReport deviation;
+  bool tolerance_given = false, tolerance_absolute = false;
+  ToleranceResult tolerance;
+  std::array<int, 5> fans_by_mode{};  ///< indexed by FanMode
+  std::vector<ApproximateFan> approximate;
+  std::array<int, 5> curves_by_continuity{};  ///< indexed by Continuity
+  bool has_brep = false;
+  occt::BrepResult brep;  ///< check brep.valid: an invalid B-rep is returned, not thrown
+  Timings ms;             ///< load and write are the caller's to fill
+};
+
+/// Level-k faces of a build with `extra` levels: one coarse quad becomes 4^(2 + extra).
+double level_faces(const SubdivLevel& base, int extra);
+
+/// Checks `settings` on their own (level >= 0, a positive finite tolerance).
+/// \throw SettingsError
+void check_settings(const ConversionSettings& settings);
+
+/// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
+/// result's warning list.
+/// \throw SettingsError (see check_settings; a level refining past kMaxLevelFaces),
+///        std::invalid_argument (topology the patch builder does not support),
+///        occt::ExportError (OCCT failed while building the B-rep)
+ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
+                         const ConversionSettings& settings, const ConversionProgress& progress = {},
+                         std::vector<std::string> warnings = {});
+
+/// The quality report (subd2nurbs-report v1, docs/formats.md) as JSON text.
+std::string report_json(const ConversionResult& result);
+
+/// A short number for messages ("%.3g").
+std::string short_number(double x);
+
+/// JSON text helpers: a quoted, escaped string, and a number with "%.17g" (null when not finite).
+std::string json_string(const std::string& s);
+std::string json_number(double x);
+
+}  // namespace subd2nurbs::pipeline
