@@ -11,6 +11,7 @@ PACKAGES=(
   libeigen3-dev libtinyobjloader-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libosd-dev                       # OpenSubdiv: the Catmull-Clark oracle in tests and benchmarks
+  pybind11-dev python3-dev python3-numpy   # the Python module (built for /usr/bin/python3)
   # OCCT 7.6 (target subd2nurbs::occt). data-exchange-dev pulls in ocaf-dev and
   # visualization-dev, whose CMake targets OCCT's DataExchange config insists on;
   # libtbb-dev because the OCCT targets link /usr/lib/x86_64-linux-gnu/libtbb.so by path.

@@ -1,0 +1,414 @@
+// _subd2nurbs: the compiled part of the Python package `subd2nurbs` (python/subd2nurbs/).
+// Thin: it turns plain arrays into a MeshInput, runs the same code as the CLI (io/obj_reader,
+// core, converter/pipeline) and hands back plain Python data (dicts, lists, numpy arrays).
+// The package validates arguments before calling in here; errors raised here are the
+// package's exception classes (subd2nurbs.errors), created by the translator below.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <Standard_Version.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+
+#include <cmath>
+#include <new>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "converter/occt/export_error.h"
+#include "converter/occt/shape_check.h"
+#include "converter/occt/writers.h"
+#include "converter/pipeline/conversion.h"
+#include "core/analysis/mesh_stats.h"
+#include "core/mesh/errors.h"
+#include "core/refine/refiner.h"
+#include "io/input_error.h"
+#include "io/obj_reader.h"
+
+namespace py = pybind11;
+using namespace subd2nurbs;
+
+namespace {
+
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
+
+// --- errors ---------------------------------------------------------------------------------
+
+const char* element_name(ElementKind k) {
+  switch (k) {
+    case ElementKind::None: return "";
+    case ElementKind::Vertex: return "vertex";
+    case ElementKind::Face: return "face";
+    case ElementKind::Edge: return "edge";
+    case ElementKind::Tag: return "tag";
+  }
+  return "";
+}
+
+/// Raises subd2nurbs.errors.<name>(message, **attributes).
+void raise(const char* name, const std::string& message, const py::dict& attributes = py::dict()) {
+  py::object cls = py::module_::import("subd2nurbs.errors").attr(name);
+  py::object error = cls(message, **attributes);
+  PyErr_SetObject(cls.ptr(), error.ptr());
+}
+
+void translate(std::exception_ptr p) {
+  try {
+    if (p) std::rethrow_exception(p);
+  } catch (const InvalidMeshError& e) {
+    py::dict a;
+    a["code"] = to_string(e.code());
+    a["element"] = element_name(e.element());
+    a["index"] = e.index();
+    a["index2"] = e.index2();
+    raise("CageError", e.what(), a);
+  } catch (const InputError& e) {
+    py::dict a;
+    a["file"] = e.file();
+    a["line"] = e.line();
+    if (e.code()) a["code"] = to_string(*e.code());
+    raise("CageError", e.what(), a);
+  } catch (const WriteError& e) {
+    py::dict a;
+    a["file"] = e.file();
+    raise("WriteError", e.what(), a);
+  } catch (const pipeline::SettingsError& e) {
+    raise("SettingsError", e.what());
+  } catch (const occt::ExportError& e) {
+    py::dict a;
+    a["stage"] = e.stage;
+    a["patch"] = e.patch;
+    raise("ConversionError", e.what(), a);
+  } catch (const std::bad_alloc&) {
+    PyErr_SetString(PyExc_MemoryError, "out of memory");
+  } catch (const std::invalid_argument& e) {
+    // The patch builder's "topology outside what it supports".
+    raise("ConversionError", e.what());
+  }
+}
+
+// --- cages ----------------------------------------------------------------------------------
+
+BoundaryRule boundary_rule(const std::string& s) {
+  if (s == "none") return BoundaryRule::None;
+  if (s == "edge-only") return BoundaryRule::EdgeOnly;
+  if (s == "edge-and-corner") return BoundaryRule::EdgeAndCorner;
+  throw pipeline::SettingsError("boundary must be none, edge-only or edge-and-corner, not '" + s + "'");
+}
+const char* boundary_name(BoundaryRule r) {
+  switch (r) {
+    case BoundaryRule::None: return "none";
+    case BoundaryRule::EdgeOnly: return "edge-only";
+    case BoundaryRule::EdgeAndCorner: return "edge-and-corner";
+  }
+  return "?";
+}
+
+/// A cage as the package passes it: (positions Nx3, face_sizes, face_indices,
+/// creases [(a, b, s)], corners [(v, s)], holes [f], options {boundary, crease_method, triangles}).
+MeshInput make_input(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                     const std::vector<std::tuple<int, int, double>>& creases,
+                     const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                     const py::dict& options) {
+  if (positions.ndim() != 2 || positions.shape(1) != 3)
+    throw pipeline::SettingsError("vertices must be an array of shape (n, 3)");
+  MeshInput in;
+  const double* p = positions.data();
+  in.positions.resize(static_cast<size_t>(positions.shape(0)));
+  for (size_t i = 0; i < in.positions.size(); ++i) in.positions[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+  in.face_sizes.assign(face_sizes.data(), face_sizes.data() + face_sizes.size());
+  in.face_indices.assign(face_indices.data(), face_indices.data() + face_indices.size());
+  for (const auto& [a, b, s] : creases) in.creases.push_back({a, b, s});
+  for (const auto& [v, s] : corners) in.corners.push_back({v, s});
+  in.holes = holes;
+  if (options.contains("boundary")) in.options.boundary = boundary_rule(py::str(options["boundary"]));
+  if (options.contains("crease_method"))
+    in.options.crease_method = std::string(py::str(options["crease_method"])) == "chaikin" ? CreaseMethod::Chaikin
+                                                                                          : CreaseMethod::Uniform;
+  if (options.contains("triangles"))
+    in.options.triangles = std::string(py::str(options["triangles"])) == "smooth" ? TriangleRule::Smooth
+                                                                                 : TriangleRule::Catmark;
+  return in;
+}
+
+py::array_t<double> points_array(const std::vector<Point3>& points) {
+  py::array_t<double> a({static_cast<py::ssize_t>(points.size()), py::ssize_t{3}});
+  auto m = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int k = 0; k < 3; ++k) m(static_cast<py::ssize_t>(i), k) = points[i][k];
+  return a;
+}
+
+py::array_t<int> int_array(const std::vector<int>& v) {
+  py::array_t<int> a(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), a.mutable_data());
+  return a;
+}
+
+py::dict cage_dict(const MeshInput& in) {
+  py::dict d;
+  d["vertices"] = points_array(std::vector<Point3>(in.positions.begin(), in.positions.end()));
+  d["face_sizes"] = int_array(in.face_sizes);
+  d["face_indices"] = int_array(in.face_indices);
+  py::list creases, corners;
+  for (const CreaseTag& c : in.creases) creases.append(py::make_tuple(c.v0, c.v1, c.sharpness));
+  for (const CornerTag& c : in.corners) corners.append(py::make_tuple(c.vertex, c.sharpness));
+  d["creases"] = creases;
+  d["corners"] = corners;
+  d["holes"] = in.holes;
+  py::dict o;
+  o["boundary"] = boundary_name(in.options.boundary);
+  o["crease_method"] = in.options.crease_method == CreaseMethod::Chaikin ? "chaikin" : "uniform";
+  o["triangles"] = in.options.triangles == TriangleRule::Smooth ? "smooth" : "catmark";
+  d["options"] = o;
+  return d;
+}
+
+std::vector<std::string> diagnostics_text(const Diagnostics& diagnostics) {
+  std::vector<std::string> out;
+  for (const Diagnostic& d : diagnostics) {
+    std::string where = element_name(d.element);
+    out.push_back((where.empty() ? std::string() : where + " " + std::to_string(d.index) + ": ") + d.message);
+  }
+  return out;
+}
+
+/// Reads and validates an OBJ cage (errors name the file and line).
+py::dict read_obj_cage(const std::string& path) {
+  const LoadedCage cage = read_obj(path);
+  Diagnostics validation;
+  load_and_validate(cage, &validation);
+  py::dict d = cage_dict(cage.input);
+  std::vector<std::string> warnings;
+  for (const Diagnostic& diag : cage.diagnostics) warnings.push_back(format_diagnostic(cage, diag));
+  for (const Diagnostic& diag : validation) warnings.push_back(format_diagnostic(cage, diag));
+  d["warnings"] = warnings;
+  d["path"] = path;
+  return d;
+}
+
+/// Validates a cage given as arrays: the warnings (unused vertices, ...) as text.
+std::vector<std::string> validate(const DoubleArray& positions, const IntArray& face_sizes,
+                                  const IntArray& face_indices,
+                                  const std::vector<std::tuple<int, int, double>>& creases,
+                                  const std::vector<std::pair<int, double>>& corners,
+                                  const std::vector<int>& holes, const py::dict& options) {
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  Diagnostics diagnostics;
+  SubdivLevel::from_input(in, &diagnostics);
+  return diagnostics_text(diagnostics);
+}
+
+py::dict info(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+              const std::vector<std::tuple<int, int, double>>& creases,
+              const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+              const py::dict& options) {
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  Diagnostics diagnostics;
+  const SubdivLevel level = SubdivLevel::from_input(in, &diagnostics);
+  const MeshStats s = compute_stats(level, std::vector<Point3>(in.positions.begin(), in.positions.end()));
+  py::dict d;
+  d["vertices"] = s.vertices;
+  d["faces"] = s.faces;
+  d["edges"] = s.edges;
+  d["corners"] = s.corners;
+  d["face_sizes"] = s.face_sizes;
+  d["valences"] = s.valences;
+  d["boundary_edges"] = s.boundary_edges;
+  d["boundary_vertices"] = s.boundary_vertices;
+  d["boundary_loops"] = s.boundary_loops;
+  d["infinite_crease_edges"] = s.infinite_crease_edges;
+  d["semi_sharp_crease_edges"] = s.semi_sharp_crease_edges;
+  d["corner_vertices"] = s.corner_vertices;
+  d["topological_corners"] = s.topological_corners;
+  d["holes"] = s.holes;
+  d["extraordinary_vertices"] = s.extraordinary_vertices;
+  d["unused_vertices"] = s.unused_vertices;
+  d["components"] = s.components;
+  d["euler_characteristic"] = s.euler_characteristic;
+  d["closed"] = s.closed;
+  py::dict b;
+  b["min"] = std::vector<double>(s.bounds.min.begin(), s.bounds.min.end());
+  b["max"] = std::vector<double>(s.bounds.max.begin(), s.bounds.max.end());
+  b["diagonal"] = s.bounds.diagonal;
+  d["bounds"] = b;
+  d["warnings"] = diagnostics_text(diagnostics);
+  return d;
+}
+
+py::tuple refine(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                 const std::vector<std::tuple<int, int, double>>& creases,
+                 const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                 const py::dict& options, int levels) {
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  const SubdivLevel base = SubdivLevel::from_input(in);
+  const Refinement r = refine_uniform(base, levels);
+  const std::vector<Point3> last = r.positions(std::vector<Point3>(in.positions.begin(), in.positions.end())).back();
+  const PolyMesh& m = r.levels.back().mesh;
+  std::vector<int> sizes(static_cast<size_t>(m.num_faces())), indices;
+  indices.reserve(static_cast<size_t>(m.num_corners()));
+  for (int f = 0; f < m.num_faces(); ++f) {
+    sizes[static_cast<size_t>(f)] = m.face_size(f);
+    indices.insert(indices.end(), m.face_vertices(f), m.face_vertices(f) + m.face_size(f));
+  }
+  return py::make_tuple(points_array(last), int_array(sizes), int_array(indices));
+}
+
+// --- conversion -----------------------------------------------------------------------------
+
+py::dict knots_dict(const KnotVector& k) {
+  py::dict d;
+  d["knots"] = py::array_t<double>(static_cast<py::ssize_t>(k.knots.size()), k.knots.data());
+  d["mults"] = int_array(k.mults);
+  return d;
+}
+
+py::dict patch_dict(const NurbsPatch& p) {
+  py::dict d;
+  d["degree_u"] = p.degree_u;
+  d["degree_v"] = p.degree_v;
+  const py::dict ku = knots_dict(p.knots_u), kv = knots_dict(p.knots_v);
+  d["knots_u"] = ku["knots"];
+  d["mults_u"] = ku["mults"];
+  d["knots_v"] = kv["knots"];
+  d["mults_v"] = kv["mults"];
+  py::array_t<double> poles({static_cast<py::ssize_t>(p.num_poles_u), static_cast<py::ssize_t>(p.num_poles_v),
+                             py::ssize_t{3}});
+  auto m = poles.mutable_unchecked<3>();
+  for (int i = 0; i < p.num_poles_u; ++i)
+    for (int j = 0; j < p.num_poles_v; ++j)
+      for (int k = 0; k < 3; ++k) m(i, j, k) = p.pole(i, j)[k];
+  d["poles"] = poles;
+  if (p.weights.empty()) {
+    d["weights"] = py::none();
+  } else {
+    py::array_t<double> w({static_cast<py::ssize_t>(p.num_poles_u), static_cast<py::ssize_t>(p.num_poles_v)});
+    std::copy(p.weights.begin(), p.weights.end(), w.mutable_data());
+    d["weights"] = w;
+  }
+  d["base_faces"] = p.base_faces;
+  return d;
+}
+
+py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                 const std::vector<std::tuple<int, int, double>>& creases,
+                 const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                 const py::dict& options, int level, double tolerance, bool absolute, bool build_brep,
+                 const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
+                 const std::function<void(const std::string&, double)>& progress) {
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  Diagnostics diagnostics;
+  const SubdivLevel base = SubdivLevel::from_input(in, &diagnostics);
+  const std::vector<Point3> points(in.positions.begin(), in.positions.end());
+
+  pipeline::ConversionSettings settings;
+  settings.level = level;
+  settings.tolerance_given = tolerance != 0.0;  // 0: none (the package passes None as 0)
+  settings.tolerance = tolerance;
+  settings.absolute = absolute;
+  settings.build_brep = build_brep;
+  pipeline::ConversionProgress callbacks;
+  std::string current;
+  if (progress) {
+    callbacks.stage = [&](const std::string& s) {
+      current = s;
+      progress(s, 0.0);
+    };
+    callbacks.brep_fraction = [&](double f) { progress(current, f); };
+  }
+  pipeline::ConversionResult c =
+      pipeline::convert(base, points, settings, callbacks, load_warnings ? *load_warnings : diagnostics_text(diagnostics));
+  c.input = input_name;
+  if (c.has_brep) c.output.format = "BREP";
+
+  py::dict d;
+  d["report"] = pipeline::report_json(c);
+  py::list patches;
+  for (const NurbsPatch& p : c.build.set.patches) patches.append(patch_dict(p));
+  d["patches"] = patches;
+  d["warnings"] = c.warnings;
+  d["model_size"] = c.build.set.model_size;
+  d["closed"] = c.build.set.closed;
+
+  // Per shared curve: its measures, and the B-rep edge it became (1-based index in
+  // TopExp::MapShapes order, which is FreeCAD's Shape.Edges order; 0 when none).
+  const auto& curves = c.continuity.curves;
+  std::vector<int> curve(curves.size()), claimed(curves.size()), edge(curves.size(), 0);
+  std::vector<double> gap(curves.size()), angle(curves.size());
+  TopTools_IndexedMapOfShape edge_map;
+  if (c.has_brep && !c.brep.shape.IsNull()) TopExp::MapShapes(c.brep.shape, TopAbs_EDGE, edge_map);
+  for (size_t i = 0; i < curves.size(); ++i) {
+    curve[i] = curves[i].curve;
+    claimed[i] = static_cast<int>(curves[i].claimed);
+    gap[i] = curves[i].gap;
+    angle[i] = curves[i].normal_angle_deg;
+    if (c.has_brep && curve[i] >= 0 && static_cast<size_t>(curve[i]) < c.brep.curve_edges.size() &&
+        !c.brep.curve_edges[curve[i]].IsNull())
+      edge[i] = edge_map.FindIndex(c.brep.curve_edges[curve[i]]);
+  }
+  py::dict m;
+  m["curve"] = int_array(curve);
+  m["claimed"] = int_array(claimed);
+  m["gap"] = py::array_t<double>(static_cast<py::ssize_t>(gap.size()), gap.data());
+  m["normal_angle_deg"] = py::array_t<double>(static_cast<py::ssize_t>(angle.size()), angle.data());
+  m["edge"] = int_array(edge);
+  d["curve_measures"] = m;
+
+  if (c.has_brep) {
+    py::dict b;
+    b["valid"] = c.brep.valid;
+    b["is_solid"] = c.brep.is_solid;
+    b["faces"] = c.brep.num_faces;
+    b["edges"] = c.brep.num_edges;
+    b["vertices"] = c.brep.num_vertices;
+    b["solids"] = c.brep.num_solids;
+    b["shells"] = c.brep.num_shells;
+    b["check_message"] = c.brep.check_message;
+    b["tolerance"] = c.brep.tolerance;
+    d["brep"] = b;
+    d["brep_text"] = occt::brep_text(c.brep.shape);
+  } else {
+    d["brep"] = py::none();
+    d["brep_text"] = py::none();
+  }
+  return d;
+}
+
+/// OCCT's own measurement of BREP text: counts, validity, area, volume.
+py::dict brep_summary(const std::string& text) {
+  const occt::ShapeSummary s = occt::summarize(occt::read_brep_text(text));
+  py::dict d;
+  d["solids"] = s.solids;
+  d["shells"] = s.shells;
+  d["faces"] = s.faces;
+  d["edges"] = s.edges;
+  d["free_edges"] = s.free_edges;
+  d["valid"] = s.valid;
+  d["check_message"] = s.check_message;
+  d["area"] = s.area;
+  d["volume"] = s.volume;
+  d["max_gap"] = s.max_gap;
+  d["max_normal_angle_deg"] = s.max_normal_angle_deg;
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_subd2nurbs, m) {
+  m.doc() = "Compiled part of subd2nurbs; use the subd2nurbs package, which validates arguments.";
+  py::register_exception_translator(&translate);
+  m.attr("__version__") = SUBD2NURBS_VERSION;
+  m.attr("OCC_VERSION") = OCC_VERSION_COMPLETE;
+  m.def("read_obj", &read_obj_cage, py::arg("path"));
+  m.def("validate", &validate);
+  m.def("info", &info);
+  m.def("refine", &refine);
+  m.def("convert", &convert);
+  m.def("brep_summary", &brep_summary, py::arg("text"));
+}

@@ -1,0 +1,352 @@
+"""subd2nurbs: Catmull-Clark subdivision cages to bicubic NURBS patches and OCCT B-reps.
+
+The same code as the ``subd2nurbs`` command line, from Python::
+
+    import subd2nurbs
+    cage = subd2nurbs.read_obj("part.obj")            # OBJ with OpenSubdiv 't' tags
+    cage = subd2nurbs.Cage(vertices, faces,            # or from arrays / lists
+                           creases=[(0, 1, 10.0)], corners=[(3, 10.0)])
+    subd2nurbs.info(cage)                              # counts, as `subd2nurbs info --json`
+    fine = subd2nurbs.refine(cage, 2)                  # uniform Catmull-Clark refinement
+    result = subd2nurbs.convert(cage, level=0)         # or tolerance=1e-3 [, absolute=True]
+    result.patches[0]["poles"]                         # numpy (nu, nv, 3)
+    result.brep_text                                   # OCCT BREP text of the checked B-rep
+    result.report                                      # the quality report as a dict
+
+Arguments are checked here, in Python, before the compiled part (``_subd2nurbs``) sees them;
+errors are :class:`CageError` / :class:`SettingsError` (both ``ValueError``) and
+:class:`ConversionError` (a ``RuntimeError``), naming the element at fault.
+"""
+
+import json
+import math
+import numbers
+
+import numpy as np
+
+from .errors import CageError, ConversionError, SettingsError, Subd2NurbsError, WriteError
+from . import _subd2nurbs
+
+__version__ = _subd2nurbs.__version__
+#: The OpenCASCADE version the module is linked with (FreeCAD must use the same one to read
+#: our BREP text: see occt_compatible).
+OCC_VERSION = _subd2nurbs.OCC_VERSION
+
+__all__ = [
+    "Cage", "ConversionResult", "read_obj", "info", "refine", "convert", "brep_summary",
+    "occt_compatible", "CageError", "SettingsError", "ConversionError", "WriteError",
+    "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
+]
+
+#: Sharpness at or above this is infinitely sharp (OpenSubdiv's convention).
+INFINITE_SHARPNESS = 10.0
+
+_BOUNDARY = ("none", "edge-only", "edge-and-corner")
+_CREASE_METHOD = ("uniform", "chaikin")
+_TRIANGLES = ("catmark", "smooth")
+
+
+def _is_int(x):
+    return isinstance(x, numbers.Integral) and not isinstance(x, bool)
+
+
+def _sharpness(value, element, index):
+    what = "%s %d" % (element, index)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise CageError("%s: sharpness must be a number, not %r" % (what, value), element=element, index=index)
+    value = float(value)
+    if not math.isfinite(value) or value < 0:
+        raise CageError("%s: sharpness must be finite and >= 0, not %r" % (what, value),
+                        element=element, index=index, code="invalid-tag")
+    return value
+
+
+class Cage:
+    """A subdivision cage: vertices, faces (any polygon sizes), tags.
+
+    vertices: array-like of shape (n, 3), finite numbers.
+    faces: a list of faces, each a sequence of >= 3 vertex indices (0-based, counter-clockwise
+        seen from outside); or a 2D integer array (all faces the same size).
+    creases: (a, b, sharpness) per tagged edge; sharpness >= 10 is infinitely sharp.
+    corners: (vertex, sharpness) per tagged vertex.
+    holes: faces that produce no surface.
+    boundary: "edge-and-corner" (default), "edge-only" or "none".
+    crease_method: "uniform" (default) or "chaikin"; triangles: "catmark" (default) or "smooth".
+
+    Raises CageError naming the element ("face 12: vertex index 99 out of range ...").
+    Topology (manifold edges and vertices, orientation) is checked by the core when the cage
+    is used; call validate() to check it now.
+    """
+
+    def __init__(self, vertices, faces, creases=(), corners=(), holes=(),
+                 boundary="edge-and-corner", crease_method="uniform", triangles="catmark",
+                 name="cage", warnings=None):
+        try:
+            v = np.array(vertices, dtype=np.float64, copy=True)
+        except (TypeError, ValueError) as e:
+            raise CageError("vertices: not an array of numbers (%s)" % e, element="vertices") from None
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise CageError("vertices: expected shape (n, 3), got %s" % (v.shape,), element="vertices")
+        if v.shape[0] == 0:
+            raise CageError("vertices: the cage has no vertices", element="vertices", code="empty-mesh")
+        bad = np.argwhere(~np.isfinite(v))
+        if bad.size:
+            i = int(bad[0][0])
+            raise CageError("vertex %d: coordinate is not finite (%s)" % (i, v[i].tolist()),
+                            element="vertex", index=i, code="non-finite-coordinate")
+        n = v.shape[0]
+
+        if isinstance(faces, np.ndarray):
+            if faces.ndim != 2:
+                raise CageError("faces: a face array must be 2D (faces x corners), got %d dimensions"
+                                % faces.ndim, element="faces")
+            if not np.issubdtype(faces.dtype, np.integer):
+                raise CageError("faces: face indices must be integers, got %s" % faces.dtype, element="faces")
+            faces = faces.tolist()
+        try:
+            faces = list(faces)
+        except TypeError:
+            raise CageError("faces: expected a list of faces", element="faces") from None
+        if not faces:
+            raise CageError("faces: the cage has no faces", element="faces", code="empty-mesh")
+        sizes, indices = [], []
+        for f, face in enumerate(faces):
+            try:
+                face = list(face)
+            except TypeError:
+                raise CageError("face %d: expected a sequence of vertex indices, got %r" % (f, face),
+                                element="face", index=f) from None
+            if len(face) < 3:
+                raise CageError("face %d: has %d vertices, at least 3 are needed" % (f, len(face)),
+                                element="face", index=f, code="face-too-small")
+            for k in face:
+                if not _is_int(k):
+                    raise CageError("face %d: vertex index %r is not an integer" % (f, k),
+                                    element="face", index=f)
+                if k < 0 or k >= n:
+                    raise CageError("face %d: vertex index %d out of range (the cage has %d vertices)"
+                                    % (f, k, n), element="face", index=f, code="index-out-of-range")
+            if len(set(face)) != len(face):
+                raise CageError("face %d: a vertex appears twice (%s)" % (f, face),
+                                element="face", index=f, code="repeated-vertex-in-face")
+            sizes.append(len(face))
+            indices.extend(int(k) for k in face)
+
+        crease_list = []
+        for i, c in enumerate(creases):
+            try:
+                a, b, s = c
+            except (TypeError, ValueError):
+                raise CageError("crease %d: expected (vertex, vertex, sharpness), got %r" % (i, c),
+                                element="crease", index=i) from None
+            for x in (a, b):
+                if not _is_int(x) or x < 0 or x >= n:
+                    raise CageError("crease %d: vertex index %r out of range (the cage has %d vertices)"
+                                    % (i, x, n), element="crease", index=i, code="invalid-tag")
+            crease_list.append((int(a), int(b), _sharpness(s, "crease", i)))
+        corner_list = []
+        for i, c in enumerate(corners):
+            try:
+                a, s = c
+            except (TypeError, ValueError):
+                raise CageError("corner %d: expected (vertex, sharpness), got %r" % (i, c),
+                                element="corner", index=i) from None
+            if not _is_int(a) or a < 0 or a >= n:
+                raise CageError("corner %d: vertex index %r out of range (the cage has %d vertices)"
+                                % (i, a, n), element="corner", index=i, code="invalid-tag")
+            corner_list.append((int(a), _sharpness(s, "corner", i)))
+        hole_list = []
+        for i, h in enumerate(holes):
+            if not _is_int(h) or h < 0 or h >= len(sizes):
+                raise CageError("hole %d: face index %r out of range (the cage has %d faces)"
+                                % (i, h, len(sizes)), element="hole", index=i, code="invalid-tag")
+            hole_list.append(int(h))
+        for value, allowed, what in ((boundary, _BOUNDARY, "boundary"),
+                                     (crease_method, _CREASE_METHOD, "crease_method"),
+                                     (triangles, _TRIANGLES, "triangles")):
+            if value not in allowed:
+                raise SettingsError("%s must be one of %s, not %r" % (what, ", ".join(allowed), value))
+
+        self.vertices = v
+        self.face_sizes = np.array(sizes, dtype=np.int32)
+        self.face_indices = np.array(indices, dtype=np.int32)
+        self.creases = crease_list
+        self.corners = corner_list
+        self.holes = hole_list
+        self.options = {"boundary": boundary, "crease_method": crease_method, "triangles": triangles}
+        self.name = name
+        #: Warnings from reading the file (None for a cage built from arrays: validation
+        #: warnings then come from validate() and convert()).
+        self.warnings = None if warnings is None else list(warnings)
+
+    @classmethod
+    def _from_dict(cls, d, name):
+        sizes = d["face_sizes"]
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        idx = d["face_indices"]
+        faces = [idx[offsets[f]:offsets[f + 1]].tolist() for f in range(len(sizes))]
+        o = d["options"]
+        return cls(d["vertices"], faces, d["creases"], d["corners"], d["holes"], o["boundary"],
+                   o["crease_method"], o["triangles"], name=name, warnings=d.get("warnings"))
+
+    # Arguments of the compiled functions.
+    def _args(self):
+        return (self.vertices, self.face_sizes, self.face_indices, self.creases, self.corners,
+                self.holes, self.options)
+
+    @property
+    def faces(self):
+        """The faces as a list of lists of vertex indices."""
+        offsets = np.concatenate([[0], np.cumsum(self.face_sizes)])
+        return [self.face_indices[offsets[f]:offsets[f + 1]].tolist() for f in range(len(self.face_sizes))]
+
+    @property
+    def num_vertices(self):
+        return int(self.vertices.shape[0])
+
+    @property
+    def num_faces(self):
+        return int(self.face_sizes.shape[0])
+
+    def validate(self):
+        """Checks the topology and tags (manifold, oriented, tags naming existing edges);
+        returns the warnings (e.g. unused vertices). Raises CageError."""
+        return _subd2nurbs.validate(*self._args())
+
+    def __repr__(self):
+        return "<subd2nurbs.Cage %r: %d vertices, %d faces>" % (self.name, self.num_vertices, self.num_faces)
+
+
+def read_obj(path):
+    """Reads and validates an OBJ cage with OpenSubdiv 't' tags (crease, corner, hole,
+    interpolateboundary, ...; see docs/formats.md). Errors name the file and line."""
+    d = _subd2nurbs.read_obj(str(path))
+    return Cage._from_dict(d, str(path))
+
+
+def _cage(cage):
+    if not isinstance(cage, Cage):
+        raise TypeError("expected a subd2nurbs.Cage (see subd2nurbs.Cage and subd2nurbs.read_obj), got %s"
+                        % type(cage).__name__)
+    return cage
+
+
+def info(cage):
+    """Counts of a cage, as `subd2nurbs info --json`: vertices, faces, edges, face_sizes,
+    valences, boundary, creases, components, euler_characteristic, closed, bounds, warnings."""
+    return _subd2nurbs.info(*_cage(cage)._args())
+
+
+def refine(cage, levels=1):
+    """Refines a cage uniformly `levels` times (Catmull-Clark, tags honoured); returns the last
+    level as a new Cage (without tags: its sharpness is in its positions)."""
+    cage = _cage(cage)
+    if not _is_int(levels) or levels < 0:
+        raise SettingsError("levels must be an integer >= 0, not %r" % (levels,))
+    corners = cage.face_sizes.sum() if levels else cage.num_faces
+    faces_out = corners * 4.0 ** max(levels - 1, 0)
+    if faces_out > 50e6:
+        raise SettingsError("refining %d faces to level %d would produce about %.3g faces (limit 5e7)"
+                            % (cage.num_faces, levels, faces_out))
+    vertices, sizes, indices = _subd2nurbs.refine(*cage._args(), levels)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    faces = [indices[offsets[f]:offsets[f + 1]].tolist() for f in range(len(sizes))]
+    return Cage(vertices, faces, name="%s (level %d)" % (cage.name, levels))
+
+
+class ConversionResult:
+    """What convert() returns.
+
+    patches: one dict per NURBS patch: degree_u, degree_v, knots_u, mults_u, knots_v, mults_v
+        (distinct knots and their multiplicities, numpy), poles (numpy (nu, nv, 3)),
+        weights (numpy (nu, nv), or None when all are 1), base_faces (cage faces it comes from).
+    brep_text: OCCT BREP text of the B-rep (None with brep=False); FreeCAD reads it with
+        Part.Shape().importBrepFromString(text).
+    brep: the B-rep's counts and validity (faces, edges, vertices, solids, shells, is_solid,
+        valid, check_message, tolerance), or None.
+    report: the quality report (subd2nurbs-report v1, docs/formats.md) as a dict.
+    report_json: the same as JSON text.
+    curve_measures: per shared curve, numpy arrays: curve, claimed (0 boundary, 1 C0, 2 G1,
+        3 C1, 4 C2), gap, normal_angle_deg, edge (1-based index into the shape's edges, i.e.
+        FreeCAD's "EdgeN", 0 if none).
+    warnings: list of text.
+    """
+
+    def __init__(self, d):
+        self.patches = d["patches"]
+        self.brep_text = d["brep_text"]
+        self.brep = d["brep"]
+        self.report_json = d["report"]
+        self.report = json.loads(d["report"])
+        self.curve_measures = d["curve_measures"]
+        self.warnings = d["warnings"]
+        self.model_size = d["model_size"]
+        self.closed = d["closed"]
+
+    @property
+    def num_patches(self):
+        return len(self.patches)
+
+    def worst_edges(self, count=5):
+        """The B-rep edges (1-based "EdgeN" indices) of the `count` shared smooth curves with
+        the largest normal angle, as (edge, normal_angle_deg, gap), worst first."""
+        m = self.curve_measures
+        smooth = np.nonzero((m["claimed"] >= 2) & (m["edge"] > 0))[0]
+        order = smooth[np.argsort(-m["normal_angle_deg"][smooth], kind="stable")]
+        return [(int(m["edge"][i]), float(m["normal_angle_deg"][i]), float(m["gap"][i]))
+                for i in order[:count]]
+
+    def __repr__(self):
+        b = self.brep
+        return "<subd2nurbs.ConversionResult: %d patches%s>" % (
+            self.num_patches,
+            "" if b is None else ", %s, %d faces, %s" % ("solid" if b["is_solid"] else "shell", b["faces"],
+                                                        "valid" if b["valid"] else "NOT valid"))
+
+
+def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
+            progress=None):
+    """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
+
+    level: extra refinement levels beyond the minimum (>= 0; default 0), as --level.
+    tolerance: choose the level so that the deviation from the limit surface is at most this
+        (relative to the bounding-box diagonal, or in model units with absolute=True), as
+        --tolerance / --absolute. Excludes level.
+    progress: a callable(stage: str, fraction: float) called as the stages run.
+    allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
+    """
+    cage = _cage(cage)
+    if level is not None and tolerance is not None:
+        raise SettingsError("level and tolerance exclude each other (tolerance chooses the level)")
+    if level is None:
+        level = 0
+    if not _is_int(level) or level < 0:
+        raise SettingsError("level must be an integer >= 0, not %r" % (level,))
+    if tolerance is not None:
+        if isinstance(tolerance, bool) or not isinstance(tolerance, numbers.Real) \
+                or not math.isfinite(tolerance) or tolerance <= 0:
+            raise SettingsError("tolerance must be a positive number, not %r" % (tolerance,))
+    elif absolute:
+        raise SettingsError("absolute needs a tolerance")
+    if progress is not None and not callable(progress):
+        raise TypeError("progress must be callable(stage, fraction)")
+    d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
+                            cage.name, cage.warnings, progress)
+    result = ConversionResult(d)
+    if brep and not allow_invalid and not result.brep["valid"]:
+        raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")
+    return result
+
+
+def brep_summary(text):
+    """OCCT's own measurement of BREP text: solids, shells, faces, edges, free_edges, valid,
+    area, volume, max_gap, max_normal_angle_deg."""
+    if not isinstance(text, str):
+        raise TypeError("expected BREP text (str)")
+    return _subd2nurbs.brep_summary(text)
+
+
+def occt_compatible(version):
+    """True if an OCCT version string (e.g. FreeCAD's Part.OCC_VERSION) is the one this module
+    links: BREP text is only exchanged between identical OCCT versions."""
+    return str(version).split(".")[:3] == OCC_VERSION.split(".")[:3]

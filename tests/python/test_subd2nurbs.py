@@ -1,0 +1,266 @@
+"""Tests of the Python module subd2nurbs (label python), run by Debian's /usr/bin/python3 with
+unittest: PYTHONPATH holds build/python; SUBD2NURBS_CLI is the subd2nurbs executable and
+SUBD2NURBS_CORPUS_DIR the OpenSubdiv corpus.
+
+Oracles: counts that follow from the cage (one face per quad, one per corner of an n-gon;
+Euler's formula for refinement), OCCT's own measurement of the BREP text, the CLI's output
+for the same cage (the module must produce the same B-rep byte for byte), and exact identities
+of clamped B-splines (pole counts from the knots)."""
+
+import json
+import math
+import os
+import subprocess
+import tempfile
+import unittest
+
+import numpy as np
+
+import subd2nurbs as s2n
+
+CORPUS = os.environ.get("SUBD2NURBS_CORPUS_DIR", "")
+CLI = os.environ.get("SUBD2NURBS_CLI", "")
+
+
+def corpus(name):
+    return os.path.join(CORPUS, name + ".obj")
+
+
+def cube_cage():
+    """The unit cube as a quad cage (counter-clockwise seen from outside)."""
+    v = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
+    faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    return v, faces
+
+
+def prism_cage(n=5):
+    """An n-gonal prism: two n-gons and n quads (n-gons are split by one CC step, so the
+    B-rep has one face per face corner: 2n + 4n)."""
+    ring = [[math.cos(2 * math.pi * k / n), math.sin(2 * math.pi * k / n)] for k in range(n)]
+    v = [[x, y, 0.0] for x, y in ring] + [[x, y, 1.0] for x, y in ring]
+    bottom = list(reversed(range(n)))
+    top = [n + k for k in range(n)]
+    sides = [[k, (k + 1) % n, n + (k + 1) % n, n + k] for k in range(n)]
+    return np.array(v), [bottom, top] + sides
+
+
+class CageConstruction(unittest.TestCase):
+    def test_from_numpy_and_lists_agree(self):
+        v, f = cube_cage()
+        a = s2n.Cage(v, f)
+        b = s2n.Cage(v.tolist(), np.array(f, dtype=np.int64))
+        self.assertEqual(a.num_vertices, 8)
+        self.assertEqual(a.num_faces, 6)
+        self.assertEqual(a.faces, f)
+        self.assertEqual(b.faces, f)
+        np.testing.assert_array_equal(a.vertices, b.vertices)
+        self.assertEqual(a.face_sizes.tolist(), [4] * 6)
+
+    def test_read_obj_matches_file(self):
+        cage = s2n.read_obj(corpus("catmark_cube_creases0"))
+        self.assertEqual(cage.vertices.shape, (8, 3))
+        self.assertEqual(cage.num_faces, 6)
+        self.assertTrue(cage.creases)  # the file has crease tags
+        for a, b, s in cage.creases:
+            self.assertTrue(0 <= a < 8 and 0 <= b < 8 and s >= 0)
+
+    def test_info_counts(self):
+        v, f = prism_cage(5)
+        i = s2n.info(s2n.Cage(v, f))
+        self.assertEqual(i["vertices"], 10)
+        self.assertEqual(i["faces"], 7)
+        self.assertEqual(i["edges"], 15)
+        self.assertEqual(i["euler_characteristic"], 2)
+        self.assertTrue(i["closed"])
+        self.assertEqual(i["face_sizes"], {4: 5, 5: 2})
+
+    def test_refine_counts_follow_euler(self):
+        v, f = prism_cage(5)
+        cage = s2n.Cage(v, f)
+        one = s2n.refine(cage, 1)
+        # One CC step: a vertex per vertex, edge and face; a quad per face corner.
+        self.assertEqual(one.num_vertices, 10 + 15 + 7)
+        self.assertEqual(one.num_faces, 5 * 4 + 2 * 5)
+        self.assertEqual(set(one.face_sizes.tolist()), {4})
+        two = s2n.refine(cage, 2)
+        self.assertEqual(two.num_faces, 4 * one.num_faces)
+        self.assertEqual(s2n.info(two)["euler_characteristic"], 2)
+        self.assertEqual(s2n.refine(cage, 0).faces, cage.faces)
+
+
+class BadInput(unittest.TestCase):
+    def assertCageError(self, fn, element, index=None, fragment=None, code=None):
+        with self.assertRaises(s2n.CageError) as cm:
+            fn()
+        e = cm.exception
+        self.assertIsInstance(e, ValueError)
+        self.assertEqual(e.element, element, str(e))
+        if index is not None:
+            self.assertEqual(e.index, index, str(e))
+        if fragment is not None:
+            self.assertIn(fragment, str(e))
+        if code is not None:
+            self.assertEqual(e.code, code)
+        return e
+
+    def test_bad_arrays_name_the_element(self):
+        v, f = cube_cage()
+        self.assertCageError(lambda: s2n.Cage(v[:, :2], f), "vertices", fragment="shape (n, 3)")
+        self.assertCageError(lambda: s2n.Cage(np.zeros((0, 3)), f), "vertices", code="empty-mesh")
+        w = v.copy()
+        w[5, 1] = np.nan
+        self.assertCageError(lambda: s2n.Cage(w, f), "vertex", 5, code="non-finite-coordinate")
+        self.assertCageError(lambda: s2n.Cage(v, f[:3] + [[0, 1, 99]]), "face", 3,
+                             "face 3: vertex index 99 out of range", "index-out-of-range")
+        self.assertCageError(lambda: s2n.Cage(v, f + [[0, -1, 2]]), "face", 6)
+        self.assertCageError(lambda: s2n.Cage(v, [[0, 1]]), "face", 0, code="face-too-small")
+        self.assertCageError(lambda: s2n.Cage(v, [[0, 1, 1, 2]]), "face", 0, code="repeated-vertex-in-face")
+        self.assertCageError(lambda: s2n.Cage(v, [[0, 1.5, 2]]), "face", 0, "not an integer")
+        self.assertCageError(lambda: s2n.Cage(v, []), "faces", code="empty-mesh")
+        self.assertCageError(lambda: s2n.Cage(v, f, creases=[(0, 8, 1.0)]), "crease", 0, code="invalid-tag")
+        self.assertCageError(lambda: s2n.Cage(v, f, creases=[(0, 1, -1.0)]), "crease", 0, "sharpness")
+        self.assertCageError(lambda: s2n.Cage(v, f, creases=[(0, 1)]), "crease", 0)
+        self.assertCageError(lambda: s2n.Cage(v, f, corners=[(9, 1.0)]), "corner", 0)
+        self.assertCageError(lambda: s2n.Cage(v, f, holes=[6]), "hole", 0)
+        with self.assertRaises(s2n.SettingsError):
+            s2n.Cage(v, f, boundary="sometimes")
+
+    def test_topology_errors_come_from_the_core(self):
+        v, f = cube_cage()
+        # Flip one face: its edges run the same way as its neighbours'.
+        flipped = [list(reversed(f[0]))] + f[1:]
+        e = self.assertCageError(lambda: s2n.convert(s2n.Cage(v, flipped)), "face", code="inconsistent-orientation")
+        self.assertIn("orient", str(e))
+        # A crease tag on two vertices that share no edge (0 and 7 are opposite corners).
+        self.assertCageError(lambda: s2n.Cage(v, f, creases=[(0, 7, 1.0)]).validate(), "tag",
+                             code="invalid-tag")
+
+    def test_files(self):
+        with self.assertRaises(s2n.CageError) as cm:
+            s2n.read_obj("/nonexistent/cage.obj")
+        self.assertEqual(cm.exception.file, "/nonexistent/cage.obj")
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "bad.obj")
+            with open(p, "w") as out:
+                out.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n")
+            with self.assertRaises(s2n.CageError) as cm:
+                s2n.read_obj(p)
+            self.assertEqual(cm.exception.line, 4, str(cm.exception))
+            self.assertIn("bad.obj:4", str(cm.exception))
+
+    def test_settings(self):
+        v, f = cube_cage()
+        cage = s2n.Cage(v, f)
+        for kwargs in ({"level": -1}, {"level": 1.5}, {"tolerance": 0}, {"tolerance": float("nan")},
+                       {"level": 1, "tolerance": 0.1}, {"absolute": True}):
+            with self.assertRaises(s2n.SettingsError, msg=str(kwargs)):
+                s2n.convert(cage, **kwargs)
+        with self.assertRaises(s2n.SettingsError):
+            s2n.refine(cage, -1)
+        with self.assertRaises(TypeError):
+            s2n.convert(v)
+
+
+class Conversion(unittest.TestCase):
+    def test_cube_patches_are_clamped_bicubic_nurbs(self):
+        v, f = cube_cage()
+        r = s2n.convert(s2n.Cage(v, f))
+        self.assertEqual(r.num_patches, 6)
+        for p in r.patches:
+            for d in "uv":
+                deg, mults, knots = p["degree_" + d], p["mults_" + d], p["knots_" + d]
+                self.assertEqual(deg, 3)
+                self.assertEqual(mults[0], 4)
+                self.assertEqual(mults[-1], 4)
+                self.assertTrue(np.all(np.diff(knots) > 0))
+            nu, nv, three = p["poles"].shape
+            self.assertEqual(three, 3)
+            self.assertEqual(nu, int(np.sum(p["mults_u"])) - 4)
+            self.assertEqual(nv, int(np.sum(p["mults_v"])) - 4)
+            self.assertTrue(p["weights"] is None or p["weights"].shape == (nu, nv))
+            self.assertEqual(len(p["base_faces"]), 1)
+        # The limit surface of a convex cage lies inside its hull.
+        poles = np.concatenate([p["poles"].reshape(-1, 3) for p in r.patches])
+        self.assertTrue(np.all(poles >= -1e-12) and np.all(poles <= 1 + 1e-12))
+
+    def test_round_trip_numpy_to_brep_text_measured_by_occt(self):
+        for n in (3, 5, 6):
+            v, f = prism_cage(n)
+            r = s2n.convert(s2n.Cage(v, f), level=0)
+            m = s2n.brep_summary(r.brep_text)
+            expected_faces = 2 * n + 4 * n  # one face per corner of every face (n-gons split)
+            self.assertTrue(m["valid"], m["check_message"])
+            self.assertEqual(m["solids"], 1)
+            self.assertEqual(m["faces"], expected_faces)
+            self.assertEqual(r.brep["faces"], expected_faces)
+            self.assertEqual(m["free_edges"], 0)
+            self.assertGreater(m["volume"], 0)
+            self.assertLess(m["max_gap"], 1e-9 * r.model_size)
+            self.assertEqual(r.report["brep"]["faces"], expected_faces)
+            self.assertEqual(r.report["patches"]["total"], expected_faces)
+
+    def test_crease_tags_reach_the_patches(self):
+        v, f = cube_cage()
+        # Every edge of the top face infinitely sharp: four C0 curves.
+        creases = [(4, 5, 10.0), (5, 7, 10.0), (7, 6, 10.0), (6, 4, 10.0)]
+        r = s2n.convert(s2n.Cage(v, f, creases=creases))
+        self.assertEqual(r.report["curves"]["c0"], 4)
+        self.assertEqual(s2n.convert(s2n.Cage(v, f)).report["curves"]["c0"], 0)
+
+    def test_level_and_tolerance(self):
+        cage = s2n.read_obj(corpus("catmark_cube"))
+        r0 = s2n.convert(cage, level=0, brep=False)
+        r1 = s2n.convert(cage, level=1, brep=False)
+        self.assertIsNone(r0.brep_text)
+        self.assertEqual(r1.report["level"], r0.report["level"] + 1)
+        self.assertLess(r1.report["deviation"]["max"], r0.report["deviation"]["max"])
+        t = 0.25 * r0.report["deviation"]["relative"]
+        rt = s2n.convert(cage, tolerance=t, brep=False)
+        tol = rt.report["deviation"]["tolerance"]
+        self.assertTrue(tol["met"])
+        self.assertLessEqual(rt.report["deviation"]["max"], t * r0.model_size)
+        self.assertGreaterEqual(tol["extra_levels_used"], 1)
+
+    def test_progress_is_reported(self):
+        stages = []
+        s2n.convert(s2n.read_obj(corpus("catmark_cube")), progress=lambda s, x: stages.append((s, x)))
+        names = [s for s, _ in stages]
+        self.assertIn("building patches", names)
+        self.assertIn("building the B-rep", names)
+        self.assertTrue(all(0 <= x <= 1 for _, x in stages))
+        self.assertEqual(max(x for s, x in stages if s == "building the B-rep"), 1.0)
+
+    def test_worst_edges_are_edges_of_the_shape(self):
+        r = s2n.convert(s2n.read_obj(corpus("catmark_cube")))
+        worst = r.worst_edges(3)
+        self.assertEqual(len(worst), 3)
+        for edge, angle, gap in worst:
+            self.assertTrue(1 <= edge <= r.brep["edges"])
+            self.assertGreaterEqual(angle, 0)
+        self.assertGreaterEqual(worst[0][1], worst[-1][1])
+
+    def test_same_brep_and_report_as_the_cli(self):
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        for name in ("catmark_cube_creases0", "catmark_nonquads"):
+            with tempfile.TemporaryDirectory() as d:
+                out, rep = os.path.join(d, "out.brep"), os.path.join(d, "rep.json")
+                subprocess.run([CLI, "convert", corpus(name), "-o", out, "--report", rep, "-q"], check=True)
+                r = s2n.convert(s2n.read_obj(corpus(name)))
+                with open(out) as fh:
+                    self.assertEqual(fh.read(), "DBRep_DrawableShape\n" + r.brep_text)
+                with open(rep) as fh:
+                    cli = json.load(fh)
+                for key in ("patches", "curves", "fans", "brep", "level", "warnings"):
+                    self.assertEqual(r.report[key], cli[key], key)
+                self.assertEqual(r.report["deviation"]["max"], cli["deviation"]["max"])
+
+
+class Versions(unittest.TestCase):
+    def test_occt_version(self):
+        self.assertRegex(s2n.OCC_VERSION, r"^\d+\.\d+\.\d+")
+        self.assertTrue(s2n.occt_compatible(s2n.OCC_VERSION))
+        self.assertFalse(s2n.occt_compatible("7.5.0"))
+
+
+if __name__ == "__main__":
+    unittest.main()
