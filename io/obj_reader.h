@@ -43,6 +43,15 @@ struct LoadedCage {
   /// Warnings found while reading. They concern a line of the file rather than a mesh
   /// element, so their `element` is ElementKind::None and their `index` is the line number.
   Diagnostics diagnostics;
+  /// Set when the file holds triangles only (glTF, io/gltf_reader.h) and quads were recovered
+  /// from triangle pairs (core/mesh/quad_recovery.h).
+  struct QuadRecovery {
+    bool applied = false;
+    int source_triangles = 0;  ///< triangles in the file (after welding)
+    int quads = 0;             ///< quads recovered from two triangles each
+    int triangles_kept = 0;    ///< triangles left as they were
+    int fan_vertices = 0;      ///< fan (polar candidate) vertices whose triangles were kept
+  } recovery;
 };
 
 /// Reads an OBJ file. Topology is not validated yet (see load_and_validate).

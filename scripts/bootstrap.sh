@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(
   build-essential cmake pkg-config
-  libeigen3-dev libtinyobjloader-dev libcli11-dev
+  libeigen3-dev libtinyobjloader-dev libtinygltf-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libosd-dev                       # OpenSubdiv: the Catmull-Clark oracle in tests and benchmarks
   pybind11-dev python3-dev python3-numpy   # the Python module (built for /usr/bin/python3)

@@ -14,6 +14,7 @@
 #include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/refine/refiner.h"
+#include "io/gltf_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 #include "io/obj_writer.h"
@@ -53,7 +54,7 @@ struct Loaded {
 
 Loaded load(const std::string& path) {
   Loaded result;
-  result.cage = read_obj(path);
+  result.cage = read_cage(path);
   Diagnostics validation;
   result.level = load_and_validate(result.cage, &validation);
   for (const Diagnostic& d : result.cage.diagnostics)
@@ -123,6 +124,10 @@ void print_text(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
       << "  options      boundary " << boundary_name(o.boundary) << ", creases "
       << crease_method_name(o.crease_method) << ", triangles " << triangle_rule_name(o.triangles)
       << "\n";
+  const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
+  if (q.applied)
+    out << "  recovered    " << q.quads << " quads from " << q.source_triangles << " triangles ("
+        << q.triangles_kept << " triangles kept, " << q.fan_vertices << " fan vertices)\n";
   out << "  warnings     " << (loaded.warnings.empty() ? "none" : std::to_string(loaded.warnings.size()))
       << "\n";
   for (const std::string& w : loaded.warnings) out << "    " << w << "\n";
@@ -169,8 +174,14 @@ void print_json(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
       << "},\n"
       << "  \"options\": {\"boundary\": " << json_string(boundary_name(o.boundary))
       << ", \"crease_method\": " << json_string(crease_method_name(o.crease_method))
-      << ", \"triangles\": " << json_string(triangle_rule_name(o.triangles)) << "},\n"
-      << "  \"warnings\": [";
+      << ", \"triangles\": " << json_string(triangle_rule_name(o.triangles)) << "},\n";
+  const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
+  if (q.applied)
+    out << "  \"quad_recovery\": {\"source_triangles\": " << q.source_triangles << ", \"quads\": " << q.quads
+        << ", \"triangles_kept\": " << q.triangles_kept << ", \"fan_vertices\": " << q.fan_vertices << "},\n";
+  else
+    out << "  \"quad_recovery\": null,\n";
+  out << "  \"warnings\": [";
   for (size_t i = 0; i < loaded.warnings.size(); ++i)
     out << (i ? ",\n    " : "\n    ") << json_string(loaded.warnings[i]);
   out << (loaded.warnings.empty() ? "]\n" : "\n  ]\n") << "}\n";
@@ -229,13 +240,13 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   InfoOptions info;
   CLI::App* info_command =
       app.add_subcommand("info", "Describe a cage: counts, boundary, creases, warnings");
-  info_command->add_option("MESH", info.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
+  info_command->add_option("MESH", info.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
   info_command->add_flag("--json", info.json, "Print JSON on stdout instead of text");
 
   RefineOptions refine;
   CLI::App* refine_command =
       app.add_subcommand("refine", "Refine a cage uniformly and write the result as OBJ");
-  refine_command->add_option("MESH", refine.mesh, "OBJ cage (with OpenSubdiv 't' tags)")
+  refine_command->add_option("MESH", refine.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
       ->required();
   refine_command->add_option("-l,--levels", refine.levels, "Number of refinement levels (>= 0)")
       ->check(CLI::Range(0, kMaxLevels))
@@ -247,7 +258,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       "convert",
       "Convert a cage to bicubic NURBS patches, written as STEP, IGES, BREP or patch JSON "
       "(by the output's extension), with continuity and deviation measures");
-  convert_command->add_option("MESH", convert.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
+  convert_command->add_option("MESH", convert.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
   convert_command
       ->add_option("-o,--output", convert.output,
                    "Output file: .step/.stp, .iges/.igs, .brep, or .json (the patches as JSON)")

@@ -16,6 +16,7 @@
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
 #include "io/atomic_file.h"
+#include "io/gltf_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 #include "io/patch_json.h"
@@ -190,13 +191,17 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   // Load.
   auto t = Clock::now();
   progress.stage("reading " + options.mesh);
-  const LoadedCage cage = read_obj(options.mesh);
+  const LoadedCage cage = read_cage(options.mesh);
   Diagnostics validation;
   const SubdivLevel base = load_and_validate(cage, &validation);
   for (const Diagnostic& d : cage.diagnostics) warn(format_diagnostic(cage, d));
   for (const Diagnostic& d : validation) warn(format_diagnostic(cage, d));
   const std::vector<Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
   const double load_ms = ms_since(t);
+  if (cage.recovery.applied && !options.quiet)
+    err << "subd2nurbs: recovered " << cage.recovery.quads << " quads from " << cage.recovery.source_triangles
+        << " triangles (" << cage.recovery.triangles_kept << " triangles kept, " << cage.recovery.fan_vertices
+        << " fan vertices)\n";
 
   if (options.level_given && level_faces(base, options.level) > kMaxLevelFaces)
     throw UsageError("--level " + std::to_string(options.level) + " would refine " + options.mesh +

@@ -27,6 +27,8 @@
 #include "core/analysis/mesh_stats.h"
 #include "core/mesh/errors.h"
 #include "core/refine/refiner.h"
+#include "core/mesh/quad_recovery.h"
+#include "io/gltf_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 
@@ -179,9 +181,19 @@ std::vector<std::string> diagnostics_text(const Diagnostics& diagnostics) {
   return out;
 }
 
-/// Reads and validates an OBJ cage (errors name the file and line).
-py::dict read_obj_cage(const std::string& path) {
-  const LoadedCage cage = read_obj(path);
+py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
+  py::dict d;
+  d["source_triangles"] = q.source_triangles;
+  d["quads"] = q.quads;
+  d["triangles_kept"] = q.triangles_kept;
+  d["fan_vertices"] = q.fan_vertices;
+  return d;
+}
+
+/// Reads and validates a cage: OBJ (errors name the file and line), or glTF / GLB (quads
+/// recovered from the triangles).
+py::dict read_cage_file(const std::string& path) {
+  const LoadedCage cage = read_cage(path);
   Diagnostics validation;
   load_and_validate(cage, &validation);
   py::dict d = cage_dict(cage.input);
@@ -190,7 +202,25 @@ py::dict read_obj_cage(const std::string& path) {
   for (const Diagnostic& diag : validation) warnings.push_back(format_diagnostic(cage, diag));
   d["warnings"] = warnings;
   d["path"] = path;
+  d["quad_recovery"] = cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none());
   return d;
+}
+
+/// Pairs triangles into quads (core/mesh/quad_recovery.h): (cage dict, counts, sources).
+py::tuple recover_quads_from(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                             const std::vector<std::tuple<int, int, double>>& creases,
+                             const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                             const py::dict& options) {
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  const QuadRecoveryResult r = recover_quads(in);
+  py::dict counts;
+  counts["source_triangles"] = r.input_triangles;
+  counts["quads"] = r.quads;
+  counts["triangles_kept"] = r.triangles_kept;
+  counts["fan_vertices"] = r.fan_vertices;
+  counts["fan_triangles"] = r.fan_triangles;
+  counts["other_faces"] = r.other_faces;
+  return py::make_tuple(cage_dict(r.mesh), counts, r.sources);
 }
 
 /// Validates a cage given as arrays: the warnings (unused vertices, ...) as text.
@@ -405,7 +435,8 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   py::register_exception_translator(&translate);
   m.attr("__version__") = SUBD2NURBS_VERSION;
   m.attr("OCC_VERSION") = OCC_VERSION_COMPLETE;
-  m.def("read_obj", &read_obj_cage, py::arg("path"));
+  m.def("read_cage", &read_cage_file, py::arg("path"));
+  m.def("recover_quads", &recover_quads_from);
   m.def("validate", &validate);
   m.def("info", &info);
   m.def("refine", &refine);

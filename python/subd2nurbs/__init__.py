@@ -3,7 +3,7 @@
 The same code as the ``subd2nurbs`` command line, from Python::
 
     import subd2nurbs
-    cage = subd2nurbs.read_obj("part.obj")            # OBJ with OpenSubdiv 't' tags
+    cage = subd2nurbs.read_cage("part.obj")           # OBJ with OpenSubdiv 't' tags, or .glb
     cage = subd2nurbs.Cage(vertices, faces,            # or from arrays / lists
                            creases=[(0, 1, 10.0)], corners=[(3, 10.0)])
     subd2nurbs.info(cage)                              # counts, as `subd2nurbs info --json`
@@ -33,7 +33,7 @@ __version__ = _subd2nurbs.__version__
 OCC_VERSION = _subd2nurbs.OCC_VERSION
 
 __all__ = [
-    "Cage", "ConversionResult", "read_obj", "info", "refine", "convert", "brep_summary",
+    "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "brep_summary",
     "occt_compatible", "CageError", "SettingsError", "ConversionError", "WriteError",
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
 ]
@@ -178,6 +178,8 @@ class Cage:
         #: Warnings from reading the file (None for a cage built from arrays: validation
         #: warnings then come from validate() and convert()).
         self.warnings = None if warnings is None else list(warnings)
+        #: For a cage rebuilt from triangles (glTF, from_triangles): the counts, else None.
+        self.quad_recovery = None
 
     @classmethod
     def _from_dict(cls, d, name):
@@ -217,11 +219,33 @@ class Cage:
         return "<subd2nurbs.Cage %r: %d vertices, %d faces>" % (self.name, self.num_vertices, self.num_faces)
 
 
-def read_obj(path):
-    """Reads and validates an OBJ cage with OpenSubdiv 't' tags (crease, corner, hole,
-    interpolateboundary, ...; see docs/formats.md). Errors name the file and line."""
-    d = _subd2nurbs.read_obj(str(path))
-    return Cage._from_dict(d, str(path))
+def read_cage(path):
+    """Reads and validates a cage: OBJ with OpenSubdiv 't' tags (crease, corner, hole,
+    interpolateboundary, ...; see docs/formats.md), errors naming the file and line; or glTF /
+    GLB triangles, whose quads are recovered (the cage's ``quad_recovery`` says how many)."""
+    d = _subd2nurbs.read_cage(str(path))
+    cage = Cage._from_dict(d, str(path))
+    cage.quad_recovery = d["quad_recovery"]
+    return cage
+
+
+read_obj = read_cage
+
+
+def from_triangles(vertices, triangles):
+    """A cage from a triangle mesh (e.g. FreeCAD's Mesh.Topology): triangle pairs that form
+    reasonable quads (convex, nearly planar and rectangular) become quads, triangle fans
+    around high-valence vertices stay triangles (polar-structure candidates).
+
+    Returns the Cage; its ``quad_recovery`` dict holds source_triangles, quads,
+    triangles_kept, fan_vertices, fan_triangles, other_faces, and ``sources`` lists the
+    input faces of each cage face."""
+    tri = Cage(vertices, triangles, name="triangles")
+    d, counts, sources = _subd2nurbs.recover_quads(*tri._args())
+    cage = Cage._from_dict(d, "recovered quads")
+    cage.quad_recovery = counts
+    cage.sources = sources
+    return cage
 
 
 def _cage(cage):

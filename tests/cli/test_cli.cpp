@@ -4,10 +4,12 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <regex>
 #include <string>
 
+#include "common/gltf_writer.h"
 #include "io/obj_reader.h"
 #include "io/temp_dir.h"
 
@@ -432,4 +434,56 @@ TEST(CliConvert, ApproximateFansReportTheirNormalJump) {
                                       "for a in " + fans + ")"), 0) << read_text(report);
   // C0 rays: the normals do jump across them (by how much is what the report is for).
   EXPECT_EQ(python_json_check(report, "max(a['normal_angle_deg'] for a in " + fans + ") > 0.1"), 0);
+}
+
+// glTF holds triangles only: the CLI rebuilds the quads (core/mesh/quad_recovery.h), says so
+// in `info`, and converts the .glb like the cage it came from. Oracle: the OBJ cage.
+TEST(CliGltf, InfoReportsRecoveredQuadsAndConvertMatchesTheObj) {
+  TempDir dir;
+  const LoadedCage cage = read_obj(sample());
+  const int quads = cage.input.num_faces();
+  const std::string glb = dir.file("box.glb");
+  subd2nurbs::testing::GltfOptions o;
+  o.split_vertices = true;
+  subd2nurbs::testing::write_gltf(cage.input, glb, o);
+
+  const Result info = run("info " + quote(glb));
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("recovered    " + std::to_string(quads) + " quads from " + std::to_string(2 * quads) +
+                          " triangles (0 triangles kept"),
+            std::string::npos)
+      << info.out;
+  const Result info_json = run("info --json " + quote(glb));
+  EXPECT_EQ(info_json.exit_code, 0);
+  {
+    std::ofstream(dir.file("info.json")) << info_json.out;
+  }
+  EXPECT_EQ(python_json_check(dir.file("info.json"), "r['quad_recovery']['quads'] == " + std::to_string(quads) +
+                                                         " and r['faces'] == " + std::to_string(quads)),
+            0);
+
+  const Result from_glb = run("convert " + quote(glb) + " -o " + quote(dir.file("glb.step")) + " --report " +
+                              quote(dir.file("glb.json")) + " -q");
+  ASSERT_EQ(from_glb.exit_code, 0) << from_glb.err;
+  const Result from_obj = run("convert " + quote(sample()) + " -o " + quote(dir.file("obj.step")) + " --report " +
+                              quote(dir.file("obj.json")) + " -q");
+  ASSERT_EQ(from_obj.exit_code, 0) << from_obj.err;
+  EXPECT_EQ(python_json_check(dir.file("glb.json"), "r['brep']['faces'] == " + std::to_string(quads) +
+                                                        " and r['brep']['type'] == 'solid' and r['brep']['valid']"),
+            0);
+  // The sample's creases are not in the glTF (it has no tags), so only the counts agree.
+  EXPECT_EQ(python_json_check(dir.file("glb.json"),
+                              "r['patches']['total'] == json.load(open('" + dir.file("obj.json") +
+                                  "'))['patches']['total']"),
+            0);
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir.file("glb.step")));
+
+  // A file that is not glTF: exit 2 naming it.
+  {
+    std::ofstream(dir.file("bad.glb")) << "nope";
+  }
+  const Result bad = run("convert " + quote(dir.file("bad.glb")) + " -o " + quote(dir.file("bad.step")));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("bad.glb"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.step")));
 }

@@ -255,6 +255,28 @@ class Conversion(unittest.TestCase):
                 self.assertEqual(r.report["deviation"]["max"], cli["deviation"]["max"])
 
 
+class Triangles(unittest.TestCase):
+    def test_from_triangles_recovers_the_cube_and_converts(self):
+        v, f = cube_cage()
+        tris = [t for q in f for t in ([q[0], q[1], q[2]], [q[0], q[2], q[3]])]
+        cage = s2n.from_triangles(v, tris)
+        self.assertEqual(cage.quad_recovery["quads"], 6)
+        self.assertEqual(cage.quad_recovery["triangles_kept"], 0)
+        self.assertEqual(sorted(sorted(x) for x in cage.faces), sorted(sorted(x) for x in f))
+        self.assertEqual(len(cage.sources), 6)
+        r = s2n.convert(cage)
+        self.assertEqual(s2n.brep_summary(r.brep_text)["faces"], 6)
+
+    def test_from_triangles_keeps_a_pole_fan(self):
+        n = 8
+        v = [[0, 0, 0]] + [[math.cos(2 * math.pi * k / n), math.sin(2 * math.pi * k / n), 0] for k in range(n)]
+        tris = [[0, 1 + k, 1 + (k + 1) % n] for k in range(n)]
+        cage = s2n.from_triangles(v, tris)
+        self.assertEqual(cage.quad_recovery["fan_vertices"], 1)
+        self.assertEqual(cage.quad_recovery["quads"], 0)
+        self.assertEqual(cage.num_faces, n)
+
+
 class Versions(unittest.TestCase):
     def test_occt_version(self):
         self.assertRegex(s2n.OCC_VERSION, r"^\d+\.\d+\.\d+")

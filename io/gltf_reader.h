@@ -1,0 +1,25 @@
+// Reading a subdivision cage from glTF 2.0 (.gltf with its buffers, or binary .glb).
+//
+// glTF stores triangles only, so the cage is rebuilt: every triangle primitive (mode 4) of
+// every mesh instanced in the scene (the default scene, else the first, else every mesh
+// once), with node transforms applied; vertices welded where their transformed positions
+// are identical (exporters split vertices at normal and UV seams); then triangle pairs made
+// into quads where they form reasonable quads (core/mesh/quad_recovery.h), triangle fans
+// around high-valence vertices kept. LoadedCage::recovery says how many quads came back.
+// Attributes other than POSITION, materials and animations are ignored.
+#pragma once
+
+#include <string>
+
+#include "io/obj_reader.h"
+
+namespace subd2nurbs {
+
+/// \throw InputError naming the file (glTF has no lines: line 0) if it cannot be read or
+/// parsed, has no triangles, uses an unsupported primitive mode or accessor layout.
+LoadedCage read_gltf(const std::string& path);
+
+/// Reads a cage by extension: .gltf / .glb with read_gltf, anything else with read_obj.
+LoadedCage read_cage(const std::string& path);
+
+}  // namespace subd2nurbs
