@@ -100,6 +100,25 @@ void write_patch(JsonWriter& w, const NurbsPatch& p) {
   w.array(p.curves, [&](int c) { w.integer(c); });
   w.key("curve_reversed");
   w.array(p.curve_reversed, [&](bool b) { w.boolean(b); });
+  bool split = false;
+  for (const auto& pieces : p.split_sides) split = split || !pieces.empty();
+  if (split) {  // sides made of several curves (polar cap boundary), counter-clockwise
+    w.key("split_sides");
+    w.array(p.split_sides, [&](const std::vector<SidePiece>& pieces) {
+      w.array(pieces, [&](const SidePiece& q) {
+        s += '{';
+        w.key("curve", true);
+        w.integer(q.curve);
+        w.key("reversed");
+        w.boolean(q.reversed);
+        w.key("t0");
+        w.number(q.t0, "piece t0");
+        w.key("t1");
+        w.number(q.t1, "piece t1");
+        s += '}';
+      });
+    });
+  }
   s += '}';
 }
 
@@ -125,6 +144,12 @@ void write_curve(JsonWriter& w, const BoundaryCurve& c) {
     w.integer(u.side);
     w.key("reversed");
     w.boolean(u.reversed);
+    if (u.t0 != 0 || u.t1 != 1) {  // a piece of a split side (polar cap boundary)
+      w.key("t0");
+      w.number(u.t0, "use t0");
+      w.key("t1");
+      w.number(u.t1, "use t1");
+    }
     s += '}';
   });
   s += '}';

@@ -180,6 +180,31 @@ double signed_volume(const std::vector<Handle(Geom_BSplineSurface)>& surfaces, c
   return volume / 3;
 }
 
+/// A split side (patch_set.h) must be a chain of listed curve uses from the side's first
+/// corner to its last, covering [0, 1] in order.
+void check_split_side(const PatchSet& ps, int p, int side) {
+  const NurbsPatch& patch = ps.patches[p];
+  auto fail = [&](const std::string& why) {
+    throw ExportError("topology", p, "split side " + std::to_string(side) + ": " + why);
+  };
+  int at = patch.corners[side];
+  double t = 0;
+  for (const SidePiece& q : patch.split_sides[side]) {
+    if (q.curve < 0 || q.curve >= static_cast<int>(ps.curves.size())) fail("curve index out of range");
+    const BoundaryCurve& curve = ps.curves[q.curve];
+    bool listed = false;
+    for (const CurveUse& use : curve.uses)
+      listed |= use.patch == p && use.side == side && use.reversed == q.reversed && use.t0 == q.t0 &&
+                use.t1 == q.t1;
+    if (!listed) fail("curve " + std::to_string(q.curve) + " does not list this piece among its uses");
+    if (q.t0 != t || !(q.t1 > q.t0)) fail("pieces do not cover [0, 1] in order");
+    if ((q.reversed ? curve.corner1 : curve.corner0) != at) fail("pieces do not form a chain of corners");
+    at = q.reversed ? curve.corner0 : curve.corner1;
+    t = q.t1;
+  }
+  if (t != 1 || at != patch.corners[(side + 1) % 4]) fail("pieces do not end at the side's last corner");
+}
+
 /// One use of a curve by a patch side, remembered until the edge gets its pcurves.
 struct PendingUse {
   bool reversed;
@@ -211,6 +236,11 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
         throw ExportError("topology", p, "corner index out of range at side " +
                                              std::to_string(side));
       const int k = patch.curves[side];
+      if (k < 0 && !patch.split_sides[side].empty()) {
+        check_split_side(ps, p, side);
+        for (const SidePiece& q : patch.split_sides[side]) ++uses_seen[q.curve];
+        continue;
+      }
       if (k < 0) {
         if (c0 != c1)
           throw ExportError("topology", p, "side " + std::to_string(side) +
@@ -282,14 +312,28 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
 
       // pcurves of this patch per curve (two for a seam).
       std::vector<std::pair<int, PendingUse>> pending;
-      std::array<TopoDS_Edge, 4> side_edge;
+      std::array<std::vector<TopoDS_Edge>, 4> side_edges;
       for (int side = 0; side < 4; ++side) {
         const auto [start, end] = side_ends(d, side);
         const int k = patch.curves[side];
+        if (k < 0 && !patch.split_sides[side].empty()) {
+          // A side made of several curves (a polar cap's boundary): one edge per piece, each
+          // with the straight pcurve over its part [t0, t1] of the side.
+          auto at = [&](double t) { return gp_Pnt2d(start.XY() + t * (end.XY() - start.XY())); };
+          for (const SidePiece& q : patch.split_sides[side]) {
+            const auto [s0, s1] = edge_range[q.curve];
+            const gp_Pnt2d a = at(q.reversed ? q.t1 : q.t0), b = at(q.reversed ? q.t0 : q.t1);
+            pending.push_back({q.curve, {q.reversed, segment(a, b, s0, s1)}});
+            side_edges[side].push_back(
+                TopoDS::Edge(edges[q.curve].Oriented(q.reversed ? TopAbs_REVERSED : TopAbs_FORWARD)));
+          }
+          continue;
+        }
         if (k < 0) {
           // Collapsed side (e.g. the pole of a polar cap): a degenerated edge, which has no 3D
           // curve, only the pcurve along the side and the one vertex at both ends.
-          TopoDS_Edge& e = side_edge[side];
+          side_edges[side].emplace_back();
+          TopoDS_Edge& e = side_edges[side].back();
           builder.MakeEdge(e);
           const double length = gp_Vec2d(start, end).Magnitude();
           builder.UpdateEdge(e, segment(start, end, 0, length), face, tol);
@@ -305,7 +349,7 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
         const auto [s0, s1] = edge_range[k];
         pending.push_back({k, {rev, segment(rev ? end : start, rev ? start : end, s0, s1)}});
         // In the wire the edge runs the way the side does: against the curve when reversed.
-        side_edge[side] = TopoDS::Edge(edges[k].Oriented(rev ? TopAbs_REVERSED : TopAbs_FORWARD));
+        side_edges[side].push_back(TopoDS::Edge(edges[k].Oriented(rev ? TopAbs_REVERSED : TopAbs_FORWARD)));
       }
 
       for (size_t a = 0; a < pending.size(); ++a) {
@@ -330,7 +374,8 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
 
       TopoDS_Wire wire;
       builder.MakeWire(wire);
-      for (int side = 0; side < 4; ++side) builder.Add(wire, side_edge[side]);
+      for (const auto& list : side_edges)
+        for (const TopoDS_Edge& e : list) builder.Add(wire, e);
       wire.Closed(Standard_True);
       builder.Add(face, wire);
       // The wire is the boundary of the whole parameter rectangle.

@@ -41,8 +41,8 @@ CurveMeasure measure_curve(const PatchSet& ps, int ci, int samples) {
   const CurveUse& B = c.uses[1];
   for (int k = 0; k < samples; ++k) {
     const double s = static_cast<double>(k) / (samples - 1);
-    const SideFrame fa = side_frame(ps.patches[A.patch], A.side, A.reversed ? 1 - s : s);
-    const SideFrame fb = side_frame(ps.patches[B.patch], B.side, B.reversed ? 1 - s : s);
+    const SideFrame fa = side_frame(ps.patches[A.patch], A.side, A.side_parameter(s));
+    const SideFrame fb = side_frame(ps.patches[B.patch], B.side, B.side_parameter(s));
     m.gap = std::max(m.gap, (fa.p - fb.p).norm());
     const double ang = angle_deg(fa.normal, fb.normal);
     if (ang > m.normal_angle_deg) { m.normal_angle_deg = ang; m.worst_s = s; }

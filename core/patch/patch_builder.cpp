@@ -566,7 +566,22 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     throw std::invalid_argument("build_patches: one position per cage vertex expected");
   PatchBuild out;
   PatchBuildInfo& info = out.info;
-  info.coarse_level = base.mesh.all_quads() ? 0 : 1;
+  // Polar structures: their cap faces make no Catmull-Clark patch.
+  std::vector<char> cap_face(base.mesh.num_faces(), 0);
+  if (options.polar) {
+    PolarDetection polar = detect_polar_structures(base);
+    info.rejected_poles = std::move(polar.rejected);
+    for (PolarStructure& s : polar.structures) {
+      for (int f : s.cap_faces) cap_face[f] = 1;
+      CapInfo ci;
+      ci.structure = std::move(s);
+      info.caps.push_back(std::move(ci));
+    }
+  }
+  bool quads = true;
+  for (int f = 0; f < base.mesh.num_faces(); ++f)
+    quads = quads && (cap_face[f] || base.face_hole[f] || base.mesh.face_size(f) == 4);
+  info.coarse_level = quads ? 0 : 1;
   int k = info.coarse_level + 2 + std::max(0, options.extra_levels);
 
   // Refine until level k is reached and no semi-sharp sharpness is left.
@@ -596,10 +611,22 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       if (s > 0 && s < kInfiniteSharpness) { s = static_cast<float>(kInfiniteSharpness); ++info.sharpened_vertices; }
   }
   const int a = info.coarse_level, d = k - a, N = 1 << d;
+  std::vector<char> capped_a;  // level-a faces inside polar caps
   const SubdivLevel& lk = out.refinement.levels[k];
   const PolyMesh& mk = lk.mesh;
   out.level_positions = x;
   LevelView L{lk, mk, out.level_positions};
+
+  // Level-k faces inside polar caps (level t+1 face h is the child of level-t corner h).
+  std::vector<char> capped = cap_face;
+  for (int t = 0; t < k; ++t) {
+    const PolyMesh& mt = out.refinement.levels[t].mesh;
+    std::vector<char> next(mt.num_corners());
+    for (int h = 0; h < mt.num_corners(); ++h) next[h] = capped[mt.corner_face(h)];
+    capped.swap(next);
+    if (t + 1 == a) capped_a = capped;
+  }
+  if (a == 0) capped_a = cap_face;
 
   // Limit positions of level-k vertices (closed-form masks: nothing semi-sharp is left).
   std::vector<Point3> limit;
@@ -629,6 +656,9 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   const int va = out.refinement.levels[a].mesh.num_vertices();
   for (int v = 0; v < va; ++v) {
     for (const Fan& fan : fans_at(L, v)) {
+      bool inside_cap = true;  // the pole of a polar cap: no Catmull-Clark patch there
+      for (int c : fan.sectors) inside_cap = inside_cap && capped[mk.corner_face(c)];
+      if (inside_cap) continue;
       std::vector<RayKind> kinds;
       std::vector<int> ray_edges;
       IrregularFan rec;
@@ -646,7 +676,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     }
   }
   for (int f = 0; f < mk.num_faces(); ++f)
-    if (zone[f] && !covered[f])
+    if (zone[f] && !covered[f] && !capped[f])
       throw std::logic_error("patch builder: level-" + std::to_string(k) + " face " + std::to_string(f) +
                              " has an irregular corner that no fan covers");
 
@@ -658,7 +688,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   std::vector<int> curve_of_edge(ma.num_edges(), -1);
   const int dx[4] = {0, 1, 1, 0}, dy[4] = {0, 0, 1, 1};
   for (int F = 0; F < ma.num_faces(); ++F) {
-    if (la.face_hole[F]) continue;
+    if (la.face_hole[F] || capped_a[F]) continue;
     std::vector<int> grid{ma.face_begin(F)};  // frame corners, row-major [y][x]
     int size = 1;
     for (int t = 0; t < d; ++t) {
@@ -745,6 +775,66 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     ps.patches.push_back(std::move(patch));
   }
 
+  // Polar caps, after their neighbours: the boundary curves exist by now.
+  std::vector<char> cap_boundary_edge(ma.num_edges(), 0);
+  for (CapInfo& ci : info.caps) {
+    const PolarStructure& st = ci.structure;
+    ci.input = polar_net_of(st, positions);
+    ci.cap = build_polar_cap(ci.input, options.cap);
+    NurbsPatch patch = polar_cap_patch(ci.cap, a);
+    patch.base_faces = st.cap_faces;
+    const int pi = static_cast<int>(ps.patches.size());
+    // Corners: the pole at (0,0) and (0,1); ring 2's spoke 0 at (1,0) and (1,1).
+    const int pole_corner = static_cast<int>(ps.corners.size());
+    ps.corners.push_back({ci.cap.centre, st.pole});
+    const int rim_corner = corner_of_vertex[st.rings[1][0]];  // level-a index = cage index
+    if (rim_corner < 0) throw std::logic_error("patch builder: polar cap without neighbour patches");
+    patch.corners = {pole_corner, rim_corner, rim_corner, pole_corner};
+    // The seam at spoke 0, used by sides 0 and 2.
+    BoundaryCurve seam;
+    seam.corner0 = pole_corner;
+    seam.corner1 = rim_corner;
+    seam.knots = patch.knots_u;
+    for (int i = 0; i < patch.num_poles_u; ++i) seam.poles.push_back(patch.pole(i, 0));
+    seam.uses = {{pi, 0, false}, {pi, 2, true}};
+    seam.continuity = Continuity::C2;
+    const int seam_curve = static_cast<int>(ps.curves.size());
+    ps.curves.push_back(std::move(seam));
+    patch.curves = {seam_curve, -1, seam_curve, -1};
+    patch.curve_reversed = {false, false, true, false};
+    // Side 1 (u = 1, v from 0 to 1): the level-a edges along ring 2, spoke 0 onwards.
+    const int n = st.valence, pieces = n << a;
+    int q = 0;
+    for (int j = 0; j < n; ++j) {
+      const int v0 = st.rings[1][j], v1 = st.rings[1][(j + 1) % n];
+      const int e0 = base.mesh.find_edge(v0, v1);
+      std::vector<int> level_edges{e0};
+      if (a == 1) {  // the two halves: child edge 2e is the half at edge_vertex(e, 0)
+        const bool v0_first = base.mesh.edge_vertex(e0, 0) == v0;
+        level_edges = {2 * e0 + (v0_first ? 0 : 1), 2 * e0 + (v0_first ? 1 : 0)};
+      }
+      int at = corner_of_vertex[v0];
+      for (int e : level_edges) {
+        const int k_curve = curve_of_edge[e];
+        if (k_curve < 0) throw std::logic_error("patch builder: polar cap boundary edge without a curve");
+        BoundaryCurve& bc = ps.curves[k_curve];
+        SidePiece piece;
+        piece.curve = k_curve;
+        piece.reversed = bc.corner0 != at;
+        piece.t0 = static_cast<double>(q) / pieces;
+        piece.t1 = static_cast<double>(q + 1) / pieces;
+        at = piece.reversed ? bc.corner0 : bc.corner1;
+        bc.uses.push_back({pi, 1, piece.reversed, piece.t0, piece.t1});
+        patch.split_sides[1].push_back(piece);
+        cap_boundary_edge[e] = 1;
+        ++q;
+      }
+    }
+    ci.patch = pi;
+    info.sub_corners.emplace_back();
+    ps.patches.push_back(std::move(patch));
+  }
+
   // Continuity claims per coarse edge, and the rays of irregular vertices.
   ps.closed = true;
   for (int e = 0; e < ma.num_edges(); ++e) {
@@ -762,6 +852,12 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     for (int ek = e << d; ek < (e + 1) << d; ++ek) sharp = sharp || L.sharp(ek);
     if (sharp) {
       bc.continuity = Continuity::C0;
+      continue;
+    }
+    if (cap_boundary_edge[e]) {
+      // C2 in geometry, but the cap's parameter is an affine image of the neighbours'
+      // (MATH.md 4.2: x_u = 2^-s x_U), so derivatives are not equal: claimed G1.
+      bc.continuity = Continuity::G1;
       continue;
     }
     bc.continuity = Continuity::C2;

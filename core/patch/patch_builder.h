@@ -19,11 +19,20 @@
 //      with the claimed continuity, which the tests verify piece by piece).
 //   6. The shared boundary topology (corners, one curve per coarse edge, which patches use
 //      it, and the continuity the construction guarantees across it).
+//   With PatchOptions::polar, polar structures are found first (MATH.md 3.1). Their
+//   triangles and 1-layer quads produce no Catmull-Clark patch and do not count for a; each
+//   structure becomes one polar cap (MATH.md 4) whose boundary, the cage's 2-link, is split
+//   into the curves of its neighbour patches, with a seam at spoke 0 and a collapsed side at
+//   the pole. The whole cage is still refined by Catmull-Clark: the level-k points the
+//   neighbour patches use lie on rings >= 2^(k+1) - 1, which do not depend on the pole
+//   (MATH.md 3.3), so they are the Catmull-Clark side of the paper's 4-step procedure.
 #pragma once
 
 #include <vector>
 
 #include "core/patch/patch_set.h"
+#include "core/polar/polar_cap.h"
+#include "core/polar/polar_structure.h"
 #include "core/refine/refiner.h"
 
 namespace subd2nurbs {
@@ -36,6 +45,10 @@ struct PatchOptions {
   /// above the coarse all-quad level (each level quadruples the work). Sharpness left at
   /// that level is treated as infinite, and PatchBuildInfo says how many edges it touched.
   int max_levels_above_coarse = 5;
+  /// Polar structures of the cage (MATH.md 3.1) become one singular polar cap each (MATH.md
+  /// 4); off: every vertex goes through Catmull-Clark, poles included.
+  bool polar = true;
+  PolarCapOptions cap;
 };
 
 /// How the quads around one irregular vertex (one fan between sharp edges) were built.
@@ -66,8 +79,16 @@ struct RayCurve {
   double c = 0;            ///< the fan's G1 coefficient (MATH.md 5.3: D + E = 2c(1-t)^2 e')
 };
 
+/// One polar cap: the structure it replaces and the cap before clamping.
+struct CapInfo {
+  int patch = -1;           ///< PatchSet patch index
+  PolarStructure structure;
+  PolarCap cap;
+  PolarNet input;           ///< rings 0..3 of the cage
+};
+
 struct PatchBuildInfo {
-  int coarse_level = 0;  ///< a: 0 if the cage is all quads, else 1
+  int coarse_level = 0;  ///< a: 0 if the cage is all quads (polar cap faces aside), else 1
   int level = 0;         ///< k: the level the patches are built from
   int regular_patches = 0;
   int pccm_patches = 0;
@@ -75,6 +96,8 @@ struct PatchBuildInfo {
   /// were made infinitely sharp (0 when every semi-sharp crease was refined to smoothness).
   int sharpened_edges = 0, sharpened_vertices = 0;
   std::vector<IrregularFan> fans;
+  std::vector<CapInfo> caps;             ///< polar caps (PatchOptions::polar)
+  std::vector<RejectedPole> rejected_poles;  ///< pole-like vertices left to Catmull-Clark
   std::vector<RayCurve> rays;
   /// For each patch, its (2^(k-a))^2 level-k quads, row-major [y][x] with x along u, each as
   /// the level-k corner at the quad's patch-frame origin (its x axis runs along u).

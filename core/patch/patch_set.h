@@ -31,7 +31,7 @@ namespace subd2nurbs {
 enum class PatchKind : unsigned char {
   RegularBSpline,  ///< every sub-quad is the exact Catmull-Clark limit (C2 inside)
   Pccm,            ///< touches an extraordinary vertex: Construction Q (MATH.md 5.3) there
-  PolarCap,        ///< singular polar NURBS cap (issue #4)
+  PolarCap,        ///< singular polar cap (MATH.md 4): u = 0 collapsed, periodic around the pole
 };
 const char* to_string(PatchKind kind);
 
@@ -54,6 +54,13 @@ struct KnotVector {
   std::vector<double> flat() const; ///< every knot repeated by its multiplicity
 };
 
+/// One curve covering part [t0, t1] of a split side (side parameter t counter-clockwise).
+struct SidePiece {
+  int curve = -1;
+  bool reversed = false;  ///< the side runs from the curve's corner1 to corner0 on [t0, t1]
+  double t0 = 0, t1 = 1;
+};
+
 struct NurbsPatch {
   PatchKind kind = PatchKind::RegularBSpline;
   int degree_u = 3, degree_v = 3;
@@ -66,6 +73,7 @@ struct NurbsPatch {
   std::array<int, 4> corners{{-1, -1, -1, -1}};  ///< PatchSet::corners index per patch corner
   std::array<int, 4> curves{{-1, -1, -1, -1}};   ///< PatchSet::curves index per side
   std::array<bool, 4> curve_reversed{{false, false, false, false}};
+  std::array<std::vector<SidePiece>, 4> split_sides;  ///< non-empty only where curves[side] == -1
 
   const Point3& pole(int i, int j) const { return poles[static_cast<size_t>(i) * num_poles_v + j]; }
   Point3& pole(int i, int j) { return poles[static_cast<size_t>(i) * num_poles_v + j]; }
@@ -75,6 +83,10 @@ struct CurveUse {
   int patch = -1;
   int side = -1;          ///< 0..3, see the header comment
   bool reversed = false;  ///< side traversed counter-clockwise from corner1 to corner0
+  double t0 = 0, t1 = 1;  ///< part of the side the curve covers (a piece of a split side)
+
+  /// The side parameter t where the curve parameter is s (s in [0, 1]).
+  double side_parameter(double s) const { return t0 + (reversed ? 1 - s : s) * (t1 - t0); }
 };
 
 struct BoundaryCurve {

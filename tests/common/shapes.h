@@ -1,7 +1,9 @@
 // Small generated cages for tests and benchmarks (header-only).
 #pragma once
 
+#include <array>
 #include <cmath>
+#include <vector>
 
 #include "core/mesh/mesh_input.h"
 
@@ -89,6 +91,56 @@ inline MeshInput star(int n) {
   m.face_sizes.push_back(2 * n);
   for (int k = 2 * n; k >= 1; --k) m.face_indices.push_back(k);
   return m;
+}
+
+
+/// A closed surface of revolution with a polar structure at each end: profile[0] and
+/// profile.back() are the poles (radius ignored), every other entry a ring of n vertices
+/// (radius, z), top to bottom. Ring i is turned by twist * i radians; `noise` moves every
+/// vertex by a deterministic pseudo-random offset of at most that size. Vertex 0 is the top
+/// pole, ring i (1-based) spoke j is 1 + (i - 1) * n + j, the bottom pole is last.
+inline MeshInput revolved(int n, const std::vector<std::array<double, 2>>& profile, double twist = 0,
+                          double noise = 0) {
+  MeshInput m;
+  const int rings = static_cast<int>(profile.size()) - 2;
+  auto jitter = [&](int k, int axis) {
+    return noise * std::sin(12.9898 * k + 78.233 * axis + 0.5 * k * axis);
+  };
+  auto push = [&](double x, double y, double z) {
+    const int k = static_cast<int>(m.positions.size());
+    m.positions.push_back({x + jitter(k, 0), y + jitter(k, 1), z + jitter(k, 2)});
+  };
+  push(0, 0, profile.front()[1]);
+  for (int i = 1; i <= rings; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double a = 2 * M_PI * j / n + twist * i;
+      push(profile[i][0] * std::cos(a), profile[i][0] * std::sin(a), profile[i][1]);
+    }
+  push(0, 0, profile.back()[1]);
+  auto ring = [&](int i, int j) { return 1 + (i - 1) * n + ((j % n) + n) % n; };
+  const int bottom = 1 + rings * n;
+  for (int j = 0; j < n; ++j) add_face(m, {0, ring(1, j), ring(1, j + 1)});
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < n; ++j) add_face(m, {ring(i, j + 1), ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+  for (int j = 0; j < n; ++j) add_face(m, {bottom, ring(rings, j + 1), ring(rings, j)});
+  return m;
+}
+
+/// A cylinder of radius 1 and height 2 with flat polar caps: rings at radius 1/3 and 2/3 on
+/// each end face, then the rim and three rings down the side.
+inline MeshInput capped_cylinder(int n, double twist = 0, double noise = 0) {
+  return revolved(n, {{0, 1}, {1.0 / 3, 1}, {2.0 / 3, 1}, {1, 1}, {1, 1.0 / 3}, {1, -1.0 / 3}, {1, -1},
+                      {2.0 / 3, -1}, {1.0 / 3, -1}, {0, -1}},
+                  twist, noise);
+}
+
+/// A mushroom: a wide domed head on a narrow stem, poles at the top of the head and the
+/// bottom of the stem.
+inline MeshInput mushroom(int n, double twist = 0, double noise = 0) {
+  return revolved(n, {{0, 2.0}, {0.5, 1.97}, {1.0, 1.85}, {1.45, 1.6}, {1.6, 1.3}, {1.2, 1.1},
+                      {0.5, 1.0}, {0.4, 0.6}, {0.45, 0.2}, {0.55, 0.05}, {0.3, 0.0}, {0.15, 0.0},
+                      {0, 0.0}},
+                  twist, noise);
 }
 
 }  // namespace subd2nurbs::testing

@@ -119,7 +119,7 @@ inline double max_g1_residual(const PatchBuild& b, int samples = 17) {
       Eigen::Vector3d inward[2], along;
       for (int w = 0; w < 2; ++w) {
         const CurveUse& u = bc.uses[w];
-        const double side_t = u.reversed ? 1 - s : s;
+        const double side_t = u.side_parameter(s);
         const SideDerivs d = side_derivatives(b.set.patches[u.patch], u.side, side_t);
         const Eigen::Vector3d a = ev(d.along), in = ev(d.inward);
         inward[w] = in;

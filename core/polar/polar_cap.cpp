@@ -1,0 +1,123 @@
+#include "core/polar/polar_cap.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Core>
+
+namespace subd2nurbs {
+namespace {
+
+using V3 = Eigen::Vector3d;
+V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
+Point3 pt(const V3& v) { return {v.x(), v.y(), v.z()}; }
+constexpr double kPi = 3.14159265358979323846;
+
+/// Clamped knots 0 (x4), 1, ..., count-1, count (x4), divided by count.
+KnotVector clamped_uniform(int count) {
+  KnotVector kv;
+  for (int i = 0; i <= count; ++i) {
+    kv.knots.push_back(static_cast<double>(i) / count);
+    kv.mults.push_back(i == 0 || i == count ? 4 : 1);
+  }
+  return kv;
+}
+
+}  // namespace
+
+PolarNet polar_net_of(const PolarStructure& s, const std::vector<Point3>& positions) {
+  PolarNet net;
+  net.n = s.valence;
+  net.pole = positions[s.pole];
+  for (const auto& ring : s.rings)
+    for (int v : ring) net.rings.push_back(positions[v]);
+  return net;
+}
+
+PolarCap build_polar_cap(const PolarNet& input, const PolarCapOptions& options) {
+  if (input.n < 3 || input.num_rings() < 3)
+    throw std::invalid_argument("build_polar_cap: needs n >= 3 and rings 0..3");
+  if (options.radial_steps < 1) throw std::invalid_argument("build_polar_cap: radial_steps must be >= 1");
+  if (!(options.lambda > 0)) throw std::invalid_argument("build_polar_cap: lambda must be > 0");
+  // (i) radial pre-subdivision of rings 0..3 only (further rings would not be valid BP rings).
+  PolarNet p = input;
+  p.rings.resize(static_cast<size_t>(3) * p.n);
+  for (int s = 0; s < options.radial_steps; ++s) p = radial_step(p);
+  const int n = p.n, R = p.num_rings();  // rows c_0..c_R
+  PolarCap cap;
+  cap.n = n;
+  cap.m = R - 2;
+  // (iii) the collapsed row interpolates the BP limit point.
+  cap.centre = bp_limit_point(p);
+  cap.normal = bp_limit_normal(p);
+  const V3 c0 = v3(cap.centre);
+  // (iv) c_1i = c0 + lambda (cos t_i E1 + sin t_i E2), E = (2/n) sum (cos, sin) t_j (p_1j - c0).
+  V3 E1 = V3::Zero(), E2 = V3::Zero();
+  for (int j = 0; j < n; ++j) {
+    const double t = 2 * kPi * j / n;
+    const V3 d = v3(p.at(1, j)) - c0;
+    E1 += std::cos(t) * d;
+    E2 += std::sin(t) * d;
+  }
+  E1 *= 2.0 / n;
+  E2 *= 2.0 / n;
+  // (ii) row r = ring r.
+  cap.rows.resize(static_cast<size_t>(R + 1) * n);
+  for (int j = 0; j < n; ++j) {
+    const double t = 2 * kPi * j / n;
+    cap.rows[j] = cap.centre;
+    cap.rows[static_cast<size_t>(n) + j] = pt(c0 + options.lambda * (std::cos(t) * E1 + std::sin(t) * E2));
+    for (int r = 2; r <= R; ++r) cap.rows[static_cast<size_t>(r) * n + j] = p.at(r, j);
+  }
+  return cap;
+}
+
+NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
+  // Circular knot insertion on every row (the periodic cubic B-spline refinement of 2.2).
+  int n = cap.n;
+  std::vector<Point3> rows = cap.rows;
+  const int num_rows = static_cast<int>(rows.size()) / n;
+  for (int s = 0; s < circular_refinements; ++s) {
+    std::vector<Point3> next(static_cast<size_t>(num_rows) * 2 * n);
+    for (int r = 0; r < num_rows; ++r)
+      for (int i = 0; i < n; ++i) {
+        auto at = [&](int j) { return v3(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
+        next[static_cast<size_t>(r) * 2 * n + 2 * i] = pt((at(i - 1) + 6 * at(i) + at(i + 1)) / 8);
+        next[static_cast<size_t>(r) * 2 * n + 2 * i + 1] = pt((at(i) + at(i + 1)) / 2);
+      }
+    rows.swap(next);
+    n *= 2;
+  }
+  auto c = [&](int r, int j) { return v3(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
+  // Seam clamp (MATH.md 4.5), column j = blossom f(j-1, j, j+1): n + 3 columns per row.
+  std::vector<std::vector<V3>> clamped_v(num_rows);
+  for (int r = 0; r < num_rows; ++r) {
+    std::vector<V3>& D = clamped_v[r];
+    D.push_back((c(r, n - 1) + 4 * c(r, 0) + c(r, 1)) / 6);
+    D.push_back((2 * c(r, 0) + c(r, 1)) / 3);
+    for (int k = 2; k <= n; ++k) D.push_back(c(r, k - 1));
+    D.push_back((c(r, n - 1) + 2 * c(r, 0)) / 3);
+    D.push_back(D.front());
+  }
+  // Outer clamp (MATH.md 4.1 (v)): rows c_0..c_m kept, then (c_m + 2c_{m+1})/3 and
+  // (c_m + 4c_{m+1} + c_{m+2})/6.
+  const int m = cap.m;
+  NurbsPatch patch;
+  patch.kind = PatchKind::PolarCap;
+  patch.num_poles_u = m + 3;
+  patch.num_poles_v = n + 3;
+  patch.knots_u = clamped_uniform(m);
+  patch.knots_v = clamped_uniform(n);
+  patch.poles.resize(static_cast<size_t>(patch.num_poles_u) * patch.num_poles_v);
+  for (int j = 0; j < patch.num_poles_v; ++j) {
+    auto row = [&](int r) { return clamped_v[r][j]; };
+    // u knots 0,0,0,0,1,...: row 0 = f(0,0,0), row 1 = f(0,0,1), row r >= 2 = f(r-2, r-1, r):
+    // with the 4-fold start the unclamped rows already are the clamped poles up to row m.
+    for (int r = 0; r <= m; ++r) patch.pole(r, j) = pt(row(r));
+    patch.pole(m + 1, j) = pt((row(m) + 2 * row(m + 1)) / 3);
+    patch.pole(m + 2, j) = pt((row(m) + 4 * row(m + 1) + row(m + 2)) / 6);
+  }
+  return patch;
+}
+
+}  // namespace subd2nurbs
