@@ -44,6 +44,9 @@ CurveMeasure measure_curve(const PatchSet& ps, int ci, int samples) {
     const SideFrame fa = side_frame(ps.patches[A.patch], A.side, A.side_parameter(s));
     const SideFrame fb = side_frame(ps.patches[B.patch], B.side, B.side_parameter(s));
     m.gap = std::max(m.gap, (fa.p - fb.p).norm());
+    // A singular point (a polar cap's pole, at the end of its seam) has no normal and no
+    // cross derivatives to compare.
+    if (fa.normal.norm() == 0 || fb.normal.norm() == 0) continue;
     const double ang = angle_deg(fa.normal, fb.normal);
     if (ang > m.normal_angle_deg) { m.normal_angle_deg = ang; m.worst_s = s; }
     const V3& D = fa.inward;

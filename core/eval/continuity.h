@@ -1,5 +1,7 @@
 // Continuity across the shared boundary curves of a PatchSet (MATH.md section 9): both
-// patches are sampled with their own parameters at the same curve parameter.
+// patches are sampled with their own parameters at the same curve parameter. Points where a
+// patch has no normal (the pole of a polar cap, at one end of its seam) count for the gap
+// only.
 #pragma once
 
 #include <vector>

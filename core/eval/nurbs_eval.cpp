@@ -113,7 +113,10 @@ Point3 unit_normal(const SurfaceDerivs& d) {
   const Point3& b = d.dv;
   Point3 n{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
   const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  if (len == 0) return {0, 0, 0};
+  // Singular where Xu and Xv are parallel or one vanishes (the collapsed edge of a polar
+  // cap, where rounding leaves |Xv| ~ 1e-16 |Xu|): no normal rather than a random one.
+  const double scale = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+  if (!(len > 1e-12 * scale)) return {0, 0, 0};
   for (double& c : n) c /= len;
   return n;
 }

@@ -14,7 +14,8 @@ struct SurfaceDerivs {
 /// Position and derivatives up to second order at (u, v) in [0,1]^2.
 SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v);
 
-/// Unit normal Xu x Xv (zero vector where the parametrization is singular).
+/// Unit normal Xu x Xv; the zero vector where the parametrization is singular
+/// (|Xu x Xv| <= 1e-12 (|Xu|^2 + |Xv|^2), e.g. the collapsed edge of a polar cap).
 Point3 unit_normal(const SurfaceDerivs& d);
 
 /// Point on a boundary curve at s in [0,1].
