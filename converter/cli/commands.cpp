@@ -13,6 +13,8 @@
 #include "converter/cli/convert.h"
 #include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
+#include "core/polar/polar_refine.h"
+#include "core/polar/polar_structure.h"
 #include "core/refine/refiner.h"
 #include "io/gltf_reader.h"
 #include "io/input_error.h"
@@ -128,6 +130,18 @@ void print_text(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
   if (q.applied)
     out << "  recovered    " << q.quads << " quads from " << q.source_triangles << " triangles ("
         << q.triangles_kept << " triangles kept, " << q.fan_vertices << " fan vertices)\n";
+  const PolarDetection polar = detect_polar_structures(loaded.level);
+  out << "  polar        " << polar.structures.size() << " polar structure"
+      << (polar.structures.size() == 1 ? "" : "s");
+  for (const PolarStructure& p : polar.structures)
+    out << (&p == &polar.structures.front() ? ": " : ", ") << "vertex " << p.pole << " (valence " << p.valence << ")";
+  out << "\n";
+  constexpr size_t kListed = 20;
+  for (size_t i = 0; i < polar.rejected.size() && i < kListed; ++i)
+    out << "    not polar: vertex " << polar.rejected[i].vertex << " (valence " << polar.rejected[i].valence
+        << "): " << polar.rejected[i].reason << "\n";
+  if (polar.rejected.size() > kListed)
+    out << "    not polar: " << polar.rejected.size() - kListed << " more all-triangle vertices\n";
   out << "  warnings     " << (loaded.warnings.empty() ? "none" : std::to_string(loaded.warnings.size()))
       << "\n";
   for (const std::string& w : loaded.warnings) out << "    " << w << "\n";
@@ -181,6 +195,15 @@ void print_json(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
         << ", \"triangles_kept\": " << q.triangles_kept << ", \"fan_vertices\": " << q.fan_vertices << "},\n";
   else
     out << "  \"quad_recovery\": null,\n";
+  const PolarDetection polar = detect_polar_structures(loaded.level);
+  out << "  \"polar_structures\": [";
+  for (size_t i = 0; i < polar.structures.size(); ++i)
+    out << (i ? ", " : "") << "{\"vertex\": " << polar.structures[i].pole << ", \"valence\": " << polar.structures[i].valence << "}";
+  out << "],\n  \"not_polar\": [";
+  for (size_t i = 0; i < polar.rejected.size(); ++i)
+    out << (i ? ",\n    " : "\n    ") << "{\"vertex\": " << polar.rejected[i].vertex << ", \"valence\": "
+        << polar.rejected[i].valence << ", \"reason\": " << json_string(polar.rejected[i].reason) << "}";
+  out << (polar.rejected.empty() ? "],\n" : "\n  ],\n");
   out << "  \"warnings\": [";
   for (size_t i = 0; i < loaded.warnings.size(); ++i)
     out << (i ? ",\n    " : "\n    ") << json_string(loaded.warnings[i]);
@@ -220,11 +243,15 @@ void run_refine(const RefineOptions& options, std::ostream& err) {
   if (report)
     err << "subd2nurbs: refining " << options.mesh << " to level " << options.levels
         << " (" << number(faces) << " faces)\n";
-  const Refinement refinement = refine_uniform(loaded.level, options.levels);
-  const std::vector<std::vector<Point3>> positions =
-      refinement.positions(base_positions(loaded.cage));
+  std::vector<PolarStructure> structures;
+  if (options.polar == "on") structures = detect_polar_structures(loaded.level).structures;
+  else if (options.polar != "off") throw UsageError("--polar must be on or off");
+  const PolarRefinement refined =
+      refine_with_polar(loaded.level, base_positions(loaded.cage), options.levels, structures);
+  if (refined.structures > 0 && report)
+    err << "subd2nurbs: " << refined.structures << " polar structures refined by BP subdivision\n";
   if (report) err << "subd2nurbs: writing " << options.output << "\n";
-  write_obj(options.output, positions.back(), refinement.levels.back());
+  write_obj(options.output, refined.positions, refined.level);
 }
 
 // --- command line --------------------------------------------------------------------------
@@ -252,6 +279,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       ->check(CLI::Range(0, kMaxLevels))
       ->capture_default_str();
   refine_command->add_option("-o,--output", refine.output, "Output OBJ file")->required();
+  refine_command->add_option("--polar", refine.polar,
+                             "Polar structures: on (BP subdivision there, default) or off (Catmull-Clark)");
 
   ConvertOptions convert;
   CLI::App* convert_command = app.add_subcommand(
@@ -279,6 +308,13 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
           ->excludes(level_option);
   convert_command->add_flag("--absolute", convert.absolute, "--tolerance is in model units")
       ->needs(tolerance_option);
+  convert_command->add_option("--polar", convert.polar,
+                              "Polar structures: on (one singular polar cap each, default) or off "
+                              "(Catmull-Clark)");
+  convert_command->add_option("--radial-steps", convert.radial_steps,
+                              "Radial BP pre-steps of a polar cap: 1 (default) or 2 (elongated shapes)");
+  convert_command->add_option("--lambda", convert.lambda,
+                              "Scale of a polar cap's projected 1-link, > 0 (default 0.75)");
   convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242")
       ->check(CLI::IsMember({"ap214", "ap242"}));
   convert_command->add_option("--report", convert.report,

@@ -26,6 +26,7 @@ struct RefineOptions {
   std::string mesh;
   int levels = 1;
   std::string output;
+  std::string polar = "on";  ///< "on": BP subdivision at polar structures; "off": Catmull-Clark only
 };
 
 /// Describes a cage on `out` (text or JSON); warnings are part of the description.

@@ -127,8 +127,19 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
   if (kind == OutputKind::Step) err << " " << occt::to_string(schema);
   err << ")\n";
   err << "  patches    " << ps.patches.size() << " (" << info.regular_patches << " regular, "
-      << info.pccm_patches << " pccm), level " << info.level << " (coarse level " << info.coarse_level
-      << ", " << c.extra_levels << " extra)\n";
+      << info.pccm_patches << " pccm, " << info.caps.size() << " polar caps), level " << info.level
+      << " (coarse level " << info.coarse_level << ", " << c.extra_levels << " extra)\n";
+  if (!c.caps.empty()) {
+    double dist = 0, angle = 0;
+    for (const pipeline::CapMeasure& m : c.caps) {
+      dist = std::max(dist, m.bp_distance);
+      angle = std::max(angle, m.pole_normal_angle_deg);
+    }
+    err << "  polar      " << c.caps.size() << " caps (" << c.cap_options.radial_steps << " radial pre-step"
+        << (c.cap_options.radial_steps > 1 ? "s" : "") << ", lambda " << short_number(c.cap_options.lambda)
+        << "): max distance from the BP limit " << short_number(dist) << " (" << short_number(dist / size)
+        << " of the model size); normal at the pole within " << short_number(angle) << " deg of BP's\n";
+  }
   const auto& fm = c.fans_by_mode;
   err << "  fans       " << fm[0] << " smooth, " << fm[1] << " dart, " << fm[2] << " crease, " << fm[3]
       << " corner, " << fm[4] << " approximate\n";
@@ -175,6 +186,9 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   if (options.absolute && !options.tolerance_given) throw UsageError("--absolute needs --tolerance");
   if (options.schema != "ap214" && options.schema != "ap242")
     throw UsageError("--schema must be ap214 or ap242");
+  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
+  if (options.radial_steps != 1 && options.radial_steps != 2) throw UsageError("--radial-steps must be 1 or 2");
+  if (!(options.lambda > 0 && std::isfinite(options.lambda))) throw UsageError("--lambda must be a positive number");
 
   const OutputKind kind = output_kind(options.output);
   const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
@@ -215,6 +229,9 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   settings.tolerance = options.tolerance;
   settings.absolute = options.absolute;
   settings.build_brep = kind != OutputKind::Json;
+  settings.patch.polar = options.polar == "on";
+  settings.patch.cap.radial_steps = options.radial_steps;
+  settings.patch.cap.lambda = options.lambda;
   pipeline::ConversionProgress callbacks;
   std::function<void(double)> brep_percent;  // started with the B-rep stage (percent() times it)
   callbacks.stage = [&](const std::string& what) {

@@ -20,6 +20,9 @@ struct ConvertOptions {
   bool absolute = false;      ///< tolerance in model units, else relative to the bbox diagonal
   std::string schema = "ap214";  ///< STEP schema: ap214 or ap242
   std::string report;         ///< JSON report path, empty for none
+  std::string polar = "on";   ///< polar structures: "on" (singular caps) or "off" (Catmull-Clark)
+  int radial_steps = 1;       ///< radial BP pre-steps of a polar cap (1 or 2)
+  double lambda = 0.75;       ///< polar cap's 1-link scale (MATH.md 4.1 (iv)), > 0
   bool quiet = false;         ///< no progress and no summary (warnings are still printed)
   bool progress_tty = false;  ///< stderr is a terminal: show the B-rep percentage in place
 };

@@ -1,5 +1,7 @@
 #include "converter/pipeline/conversion.h"
 
+#include "core/eval/nurbs_eval.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -89,8 +91,34 @@ void collect_fans(ConversionResult& c) {
 
 }  // namespace
 
+/// Each cap against BP: the distance from the BP limit surface and the normal next to the
+/// pole against the BP limit normal.
+void measure_caps(ConversionResult& c) {
+  for (const CapInfo& ci : c.build.info.caps) {
+    CapMeasure m;
+    m.pole = ci.structure.pole;
+    m.valence = ci.structure.valence;
+    const NurbsPatch& patch = c.build.set.patches[ci.patch];
+    m.bp_distance = cap_distance_to_bp(ci.input, ci.cap, patch);
+    const Point3& bn = ci.cap.normal;
+    for (int q = 0; q < 32; ++q) {
+      const Point3 nv = unit_normal(evaluate(patch, 1e-4, (q + 0.5) / 32));
+      const double dot = nv[0] * bn[0] + nv[1] * bn[1] + nv[2] * bn[2];
+      const double cx = nv[1] * bn[2] - nv[2] * bn[1], cy = nv[2] * bn[0] - nv[0] * bn[2],
+                   cz = nv[0] * bn[1] - nv[1] * bn[0];
+      m.pole_normal_angle_deg =
+          std::max(m.pole_normal_angle_deg, std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180 / M_PI);
+    }
+    c.caps.push_back(m);
+  }
+}
+
 void check_settings(const ConversionSettings& settings) {
   if (settings.level < 0) throw SettingsError("the level must be >= 0");
+  if (settings.patch.cap.radial_steps < 1 || settings.patch.cap.radial_steps > 4)
+    throw SettingsError("the radial pre-steps of polar caps must be 1 .. 4");
+  if (!(settings.patch.cap.lambda > 0 && std::isfinite(settings.patch.cap.lambda)))
+    throw SettingsError("the polar cap's lambda must be a positive number");
   if (settings.tolerance_given && !(settings.tolerance > 0 && std::isfinite(settings.tolerance)))
     throw SettingsError("the tolerance must be a positive number");
 }
@@ -179,6 +207,13 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   c.ms.continuity = ms_since(t);
   if (!settings.tolerance_given) measure_deviation_now();
   collect_fans(c);
+  measure_caps(c);
+  c.polar = settings.patch.polar;
+  c.cap_options = settings.patch.cap;
+  for (const RejectedPole& r : info.rejected_poles)
+    if (settings.patch.polar && r.valence >= kMinPolarValence)
+      warn("subd2nurbs: note: vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
+           ") is not a polar structure, Catmull-Clark is used there: " + r.reason);
 
   if (settings.build_brep) {
     t = Clock::now();
@@ -215,7 +250,8 @@ std::string report_json(const ConversionResult& c) {
   line("  \"level\": " + std::to_string(info.level) + ",");
   line("  \"extra_levels\": " + std::to_string(c.extra_levels) + ",");
   line("  \"patches\": {\"total\": " + std::to_string(ps.patches.size()) + ", \"regular\": " +
-       std::to_string(info.regular_patches) + ", \"pccm\": " + std::to_string(info.pccm_patches) + "},");
+       std::to_string(info.regular_patches) + ", \"pccm\": " + std::to_string(info.pccm_patches) +
+       ", \"polar_caps\": " + std::to_string(info.caps.size()) + "},");
   const auto& cc = c.curves_by_continuity;
   line("  \"curves\": {\"total\": " + std::to_string(ps.curves.size()) + ", \"boundary\": " +
        std::to_string(cc[0]) + ", \"c0\": " + std::to_string(cc[1]) + ", \"g1\": " +
@@ -233,6 +269,23 @@ std::string report_json(const ConversionResult& c) {
               (a.normal_angle_deg < 0 ? std::string("null") : json_number(a.normal_angle_deg)) + "}";
   }
   line(approx + (c.approximate.empty() ? "]" : "\n    ]") + "},");
+  std::string polar = "  \"polar\": {\"enabled\": " + json_bool(c.polar) + ", \"radial_steps\": " +
+                      std::to_string(c.cap_options.radial_steps) + ", \"lambda\": " +
+                      json_number(c.cap_options.lambda) + ",\n    \"caps\": [";
+  for (size_t i = 0; i < c.caps.size(); ++i) {
+    const CapMeasure& m = c.caps[i];
+    polar += std::string(i ? ",\n      " : "\n      ") + "{\"pole\": " + std::to_string(m.pole) +
+             ", \"valence\": " + std::to_string(m.valence) + ", \"bp_distance\": " + json_number(m.bp_distance) +
+             ", \"bp_distance_relative\": " + relative(m.bp_distance) +
+             ", \"pole_normal_angle_deg\": " + json_number(m.pole_normal_angle_deg) + "}";
+  }
+  polar += std::string(c.caps.empty() ? "]" : "\n    ]") + ",\n    \"not_polar\": [";
+  for (size_t i = 0; i < info.rejected_poles.size(); ++i) {
+    const RejectedPole& r = info.rejected_poles[i];
+    polar += std::string(i ? ",\n      " : "\n      ") + "{\"vertex\": " + std::to_string(r.vertex) +
+             ", \"valence\": " + std::to_string(r.valence) + ", \"reason\": " + json_string(r.reason) + "}";
+  }
+  line(polar + (info.rejected_poles.empty() ? "]" : "\n    ]") + "},");
   line("  \"sharpened_edges\": " + std::to_string(info.sharpened_edges) + ",");
   line("  \"sharpened_vertices\": " + std::to_string(info.sharpened_vertices) + ",");
   if (c.has_brep) {

@@ -76,6 +76,14 @@ struct ApproximateFan {
   double normal_angle_deg = -1;  ///< max over its measured C0 rays, -1 if none was measured
 };
 
+/// One polar cap, measured.
+struct CapMeasure {
+  int pole = -1;             ///< cage vertex
+  int valence = 0;
+  double bp_distance = 0;    ///< max distance from the BP limit surface to the cap (model units)
+  double pole_normal_angle_deg = 0;  ///< cap normal at u = 1e-4 (max over v) vs the BP limit normal
+};
+
 /// Where the result went, for the report; filled by the caller (empty strings give null).
 struct OutputInfo {
   std::string path;
@@ -96,6 +104,9 @@ struct ConversionResult {
   std::array<int, 5> fans_by_mode{};  ///< indexed by FanMode
   std::vector<ApproximateFan> approximate;
   std::array<int, 5> curves_by_continuity{};  ///< indexed by Continuity
+  bool polar = true;               ///< polar structures became caps (PatchOptions::polar)
+  PolarCapOptions cap_options;
+  std::vector<CapMeasure> caps;    ///< one per PatchBuildInfo::caps
   bool has_brep = false;
   occt::BrepResult brep;  ///< check brep.valid: an invalid B-rep is returned, not thrown
   Timings ms;             ///< load and write are the caller's to fill

@@ -1,9 +1,13 @@
 #include "core/polar/polar_cap.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include <Eigen/Core>
+#include <Eigen/Dense>
+
+#include "core/eval/nurbs_eval.h"
 
 namespace subd2nurbs {
 namespace {
@@ -47,6 +51,7 @@ PolarCap build_polar_cap(const PolarNet& input, const PolarCapOptions& options) 
   PolarCap cap;
   cap.n = n;
   cap.m = R - 2;
+  cap.radial_steps = options.radial_steps;
   // (iii) the collapsed row interpolates the BP limit point.
   cap.centre = bp_limit_point(p);
   cap.normal = bp_limit_normal(p);
@@ -118,6 +123,55 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
     patch.pole(m + 2, j) = pt((row(m) + 4 * row(m + 1) + row(m + 2)) / 6);
   }
   return patch;
+}
+
+namespace {
+
+/// Closest point of a patch to x by damped Gauss-Newton from (u, v), v periodic; started a
+/// little away from u = 0, where a cap's Xv vanishes. Returns the distance.
+double distance_to_patch(const NurbsPatch& patch, const V3& x, double u, double v) {
+  u = std::max(u, 0.02);
+  double best = (x - v3(evaluate(patch, u, v).p)).norm(), mu = 1e-3;
+  for (int it = 0; it < 100 && best > 0; ++it) {
+    const SurfaceDerivs d = evaluate(patch, u, v);
+    const V3 r = x - v3(d.p), xu = v3(d.du), xv = v3(d.dv);
+    Eigen::Matrix2d A;
+    A << xu.dot(xu) * (1 + mu), xu.dot(xv), xu.dot(xv), xv.dot(xv) * (1 + mu);
+    A += 1e-30 * Eigen::Matrix2d::Identity();
+    const Eigen::Vector2d step = A.ldlt().solve(Eigen::Vector2d(xu.dot(r), xv.dot(r)));
+    if (!step.allFinite()) break;
+    const double un = std::clamp(u + step[0], 0.0, 1.0);
+    const double vn = v + step[1] - std::floor(v + step[1]);
+    const double dist = (x - v3(evaluate(patch, un, vn).p)).norm();
+    if (dist < best) {
+      best = dist;
+      u = un;
+      v = vn;
+      mu = std::max(mu / 4, 1e-12);
+      if (step.norm() < 1e-14) break;
+    } else if ((mu *= 8) > 1e12) {
+      break;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+double cap_distance_to_bp(const PolarNet& rings0to3, const PolarCap& cap, const NurbsPatch& patch, int levels) {
+  PolarNet p = rings0to3;
+  p.rings.resize(static_cast<size_t>(3) * p.n);
+  for (int l = 0; l < levels; ++l) p = radial_step(p);
+  double worst = (v3(bp_limit_point(rings0to3)) - v3(cap.centre)).norm();
+  const int last = 2 << levels;  // input ring 2 = the cap's boundary
+  const double scale = 1.0 / (1 << levels), pre = 1 << cap.radial_steps;
+  for (int r = 3; r <= last && r + 1 <= p.num_rings(); ++r)
+    for (int j = 0; j < p.n; ++j) {
+      // Input parameter U = r 2^-levels; the cap's u = 2^s U - 1 where the two coincide.
+      const double u = std::clamp((pre * r * scale - 1) / cap.m, 0.0, 1.0);
+      worst = std::max(worst, distance_to_patch(patch, v3(bp_grid_limit(p, r, j)), u, static_cast<double>(j) / p.n));
+    }
+  return worst;
 }
 
 }  // namespace subd2nurbs

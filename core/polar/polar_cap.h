@@ -25,6 +25,7 @@ struct PolarCapOptions {
 struct PolarCap {
   int n = 0;                ///< spokes (pole valence)
   int m = 0;                ///< u domain [0, m]: 3 after one radial step, 7 after two
+  int radial_steps = 1;     ///< as built (m = 2^(radial_steps + 1) - 1)
   Point3 centre{};          ///< row 0: the BP limit point of the pole
   Point3 normal{};          ///< BP limit normal at the pole (unit)
   /// The periodic net before clamping: rows c_0..c_{m+2} (radial), n columns each; row 0 is
@@ -45,5 +46,12 @@ PolarCap build_polar_cap(const PolarNet& rings0to3, const PolarCapOptions& optio
 /// j at v = j / n. `circular_refinements` circular knot-insertion steps first (exact), so
 /// that the boundary has n * 2^circular_refinements spans, one per neighbouring patch.
 NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements = 0);
+
+/// Largest distance from the BP limit surface of rings 0..3 to the cap `patch` (built from
+/// them): the pole's limit point, and the limit points of the grid after `levels` radial BP
+/// steps from ring 3 (where BP is the tensor spline, so bp_grid_limit is exact) out to the
+/// cap's boundary, each projected onto the patch (damped Gauss-Newton). The cap equals the
+/// BP limit beyond input ring 3 / 2^radial_steps, so this measures the pole region only.
+double cap_distance_to_bp(const PolarNet& rings0to3, const PolarCap& cap, const NurbsPatch& patch, int levels = 6);
 
 }  // namespace subd2nurbs

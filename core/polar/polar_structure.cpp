@@ -44,7 +44,7 @@ std::string read_structure(const SubdivLevel& level, int p, PolarStructure& s) {
   for (int j = 0; j < n; ++j) {
     const int t0 = m.twin(m.next(c[j]));
     const int t = m.twin(m.next(m.next(t0)));  // ring2[j+1] -> ring2[j] in the 2-layer quad
-    if (t < 0) return "it has no 2-layer: edge " + vtx(s.rings[1][j]) + " - " +
+    if (t < 0) return "it has no 2-layer (only one quad ring): the 1-layer's outer edge " + vtx(s.rings[1][j]) + " - " +
                       vtx(s.rings[1][(j + 1) % n]) + " is on the boundary";
     const int f = m.corner_face(t);
     if (m.face_size(f) != 4)

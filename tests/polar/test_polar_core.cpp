@@ -202,7 +202,8 @@ TEST(PolarCap, ConvergesToTheBpLimitAsRadialPreStepsGrow) {
       double previous = 0;
       for (int s = 1; s <= 4; ++s) {
         const PolarCap cap = build_polar_cap(in, {s, 0.75});
-        const double d = distance_bp_to_cap(in, cap, polar_cap_patch(cap, 0), s + 4);
+        const double d = cap_distance_to_bp(in, cap, polar_cap_patch(cap, 0), s + 4);
+        if (n == 8) RecordProperty("distance_s" + std::to_string(s), std::to_string(d));
         if (s > 1) EXPECT_LT(d, 0.7 * previous) << "n = " << n << ", steps " << s << ": " << previous << " -> " << d;
         previous = d;
       }
