@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <regex>
+#include <fstream>
 #include <string>
 
 #include "common/gltf_writer.h"
@@ -87,6 +88,70 @@ long json_int(const std::string& json, const std::string& key) {
   std::smatch m;
   if (!std::regex_search(json, m, std::regex("\n  \"" + key + "\": (-?[0-9]+)"))) return -1;
   return std::stol(m[1]);
+}
+
+// --- polar structures -------------------------------------------------------------------------
+
+std::string polar_sample() { return std::string(SUBD2NURBS_SAMPLES_DIR) + "/capped_cylinder.obj"; }
+
+TEST(CliPolar, InfoListsPolarStructuresAndWhyOthersAreNot) {
+  const Result r = run("info " + quote(polar_sample()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 polar structures: vertex 0 (valence 16), vertex 129 (valence 16)"), std::string::npos) << r.out;
+  // OpenSubdiv's pole shapes have one quad ring only: not polar structures, and info says why.
+  for (const char* shape : {"corpus/catmark_pole8.obj", "corpus/catmark_pole64.obj"}) {
+    const Result p = run("info " + quote(data(shape)));
+    ASSERT_EQ(p.exit_code, 0) << p.err;
+    EXPECT_NE(p.out.find("0 polar structures"), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("not polar: vertex 4"), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("no 2-layer (only one quad ring)"), std::string::npos) << p.out;
+  }
+  TempDir dir;
+  const Result j = run("info --json " + quote(polar_sample()));
+  ASSERT_EQ(j.exit_code, 0);
+  std::ofstream(dir.file("i.json")) << j.out;
+  EXPECT_EQ(python_json_check(dir.file("i.json"),
+                              "[p['valence'] for p in r['polar_structures']] == [16, 16] and r['not_polar'] == []"),
+            0);
+}
+
+TEST(CliPolar, RefineUsesBpAtPolesUnlessOff) {
+  TempDir dir;
+  ASSERT_EQ(run("refine " + quote(polar_sample()) + " -l 2 -o " + quote(dir.file("on.obj"))).exit_code, 0);
+  ASSERT_EQ(run("refine " + quote(polar_sample()) + " -l 2 --polar off -o " + quote(dir.file("off.obj"))).exit_code, 0);
+  const LoadedCage on = read_obj(dir.file("on.obj")), off = read_obj(dir.file("off.obj"));
+  auto triangles = [](const LoadedCage& c) {
+    int t = 0;
+    for (int s : c.input.face_sizes) t += s == 3;
+    return t;
+  };
+  EXPECT_EQ(triangles(on), 2 * 16 * 4);  // each pole keeps a fan of n 2^k triangles
+  EXPECT_EQ(triangles(off), 0);          // Catmull-Clark: quads only
+  EXPECT_EQ(run("refine " + quote(polar_sample()) + " -l 1 --polar maybe -o " + quote(dir.file("x.obj"))).exit_code, 1);
+}
+
+TEST(CliPolar, ConvertMakesCapsUnlessOffAndChecksItsOptions) {
+  TempDir dir;
+  const std::string in = quote(polar_sample());
+  const Result on = run("convert " + in + " -o " + quote(dir.file("on.step")) + " --report " + quote(dir.file("on.json")));
+  ASSERT_EQ(on.exit_code, 0) << on.err;
+  EXPECT_EQ(python_json_check(dir.file("on.json"),
+                              "r['patches']['polar_caps'] == 2 and r['brep']['faces'] == 16 * 5 + 2 and "
+                              "r['brep']['type'] == 'solid' and len(r['polar']['caps']) == 2"),
+            0);
+  const Result off = run("convert " + in + " --polar off -o " + quote(dir.file("off.step")) + " --report " +
+                         quote(dir.file("off.json")));
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  EXPECT_EQ(python_json_check(dir.file("off.json"), "r['patches']['polar_caps'] == 0 and r['polar']['enabled'] == False"), 0);
+  const Result two = run("convert " + in + " --radial-steps 2 --lambda 0.9 -o " + quote(dir.file("two.brep")) +
+                         " --report " + quote(dir.file("two.json")));
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_EQ(python_json_check(dir.file("two.json"), "r['polar']['radial_steps'] == 2 and r['polar']['lambda'] == 0.9"), 0);
+  for (const char* bad : {"--radial-steps 3", "--radial-steps 0", "--lambda 0", "--lambda -1", "--polar yes"}) {
+    const Result r = run("convert " + in + " " + bad + " -o " + quote(dir.file("bad.step")));
+    EXPECT_EQ(r.exit_code, 1) << bad;
+  }
+  EXPECT_FALSE(std::ifstream(dir.file("bad.step")).good());
 }
 
 }  // namespace

@@ -11,6 +11,8 @@
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
 #include "core/patch/patch_builder.h"
+#include "core/eval/continuity.h"
+#include "io/obj_reader.h"
 #include "io/temp_dir.h"
 
 namespace subd2nurbs::testing {
@@ -51,6 +53,32 @@ TEST_P(PolarBrep, StepReadBackIsAValidSmoothSolid) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Valences, PolarBrep, ::testing::Values(6, 7, 8, 12, 16, 24, 32, 64));
+
+// OpenSubdiv's catmark_pole8 / catmark_pole64 have one quad ring around the pole, so they are
+// not polar structures: they convert through Catmull-Clark (Construction Q at the pole), to a
+// valid open shell that is G1 at the pole.
+TEST(PolarCorpus, OneRingPolesConvertThroughCatmullClark) {
+  for (const char* name : {"catmark_pole8", "catmark_pole64"}) {
+    const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj");
+    const SubdivLevel base = load_and_validate(cage);
+    const PatchBuild b = build_patches(base, std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()));
+    EXPECT_TRUE(b.info.caps.empty()) << name;
+    ASSERT_EQ(b.info.rejected_poles.size(), 1u) << name;
+    EXPECT_NE(b.info.rejected_poles[0].reason.find("no 2-layer"), std::string::npos) << b.info.rejected_poles[0].reason;
+    bool pole_fan = false;
+    for (const IrregularFan& f : b.info.fans) pole_fan = pole_fan || (f.base_vertex == 4 && f.mode == FanMode::Smooth);
+    EXPECT_TRUE(pole_fan) << name;
+    const ContinuityReport k = measure_continuity(b.set);
+    EXPECT_LT(k.max_normal_angle_deg, 1e-6) << name;
+    const occt::BrepResult brep = occt::build_brep(b.set);
+    ASSERT_TRUE(brep.valid) << name << ": " << brep.check_message;
+    EXPECT_FALSE(brep.is_solid);
+    EXPECT_EQ(brep.num_shells, 1);
+    const occt::ShapeSummary s = occt::summarize(brep.shape, 9, false);
+    EXPECT_LE(s.max_normal_angle_deg, 1e-6) << name;  // no creases: every shared edge is G1 or smoother
+    EXPECT_GT(s.free_edges, 0);
+  }
+}
 
 }  // namespace
 }  // namespace subd2nurbs::testing
