@@ -580,7 +580,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   }
   bool quads = true;
   for (int f = 0; f < base.mesh.num_faces(); ++f)
-    quads = quads && (cap_face[f] || base.face_hole[f] || base.mesh.face_size(f) == 4);
+    quads = quads && (cap_face[f] || base.mesh.face_size(f) == 4);  // holes too: as before
   info.coarse_level = quads ? 0 : 1;
   int k = info.coarse_level + 2 + std::max(0, options.extra_levels);
 

@@ -118,7 +118,8 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
     auto row = [&](int r) { return clamped_v[r][j]; };
     // u knots 0,0,0,0,1,...: row 0 = f(0,0,0), row 1 = f(0,0,1), row r >= 2 = f(r-2, r-1, r):
     // with the 4-fold start the unclamped rows already are the clamped poles up to row m.
-    for (int r = 0; r <= m; ++r) patch.pole(r, j) = pt(row(r));
+    patch.pole(0, j) = cap.centre;  // exactly: the averages above would round it
+    for (int r = 1; r <= m; ++r) patch.pole(r, j) = pt(row(r));
     patch.pole(m + 1, j) = pt((row(m) + 2 * row(m + 1)) / 3);
     patch.pole(m + 2, j) = pt((row(m) + 4 * row(m + 1) + row(m + 2)) / 6);
   }

@@ -329,7 +329,7 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "r['format'] == 'subd2nurbs-report' and r['version'] == 1",
       "r['input'].endswith('rounded_box.obj') and r['output_format'] == 'STEP' and r['step_schema'] == 'AP214'",
       "r['coarse_level'] == 0 and r['level'] == 2 and r['extra_levels'] == 0",
-      "r['patches'] == {'total': 24, 'regular': 0, 'pccm': 24}",
+      "r['patches'] == {'total': 24, 'regular': 0, 'pccm': 24, 'polar_caps': 0}",
       "r['fans']['smooth'] == 8 and r['fans']['approximate'] == 0 and r['fans']['approximate_fans'] == []",
       "r['brep'] == {'faces': 24, 'edges': 48, 'vertices': 26, 'type': 'solid', 'solids': 1, 'shells': 1, 'valid': True, 'tolerance': r['brep']['tolerance']}",
       "r['continuity']['max_gap'] < 1e-12 and r['continuity']['max_normal_angle_deg'] < 1e-6",

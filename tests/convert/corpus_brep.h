@@ -23,6 +23,7 @@
 #include "converter/occt/brep_builder.h"
 #include "converter/occt/shape_check.h"
 #include "core/patch/patch_builder.h"
+#include "core/polar/polar_structure.h"
 #include "io/obj_reader.h"
 #include "common/corpus.h"
 
@@ -58,17 +59,25 @@ struct ExpectedBrep {
 /// that BoundaryRule::None removes). The coarsest all-quad mesh is the cage when every face
 /// (holes included) is a quad, else level 1, where each face of size n becomes n quads that
 /// inherit its hole flag and each cage edge becomes two edges.
-inline ExpectedBrep expected_brep(const MeshInput& in, const std::vector<char>& face_hole) {
+/// Polar structures (`caps`, from detect_polar_structures) replace their triangles and 1-layer
+/// quads by one face each, and those faces do not count when deciding whether the cage is all
+/// quads.
+inline ExpectedBrep expected_brep(const MeshInput& in, const std::vector<char>& face_hole,
+                                  const std::vector<PolarStructure>& caps = {}) {
   ExpectedBrep e;
-  const bool all_quads =
-      std::all_of(in.face_sizes.begin(), in.face_sizes.end(), [](int n) { return n == 4; });
+  std::vector<char> cap_face(in.num_faces(), 0);
+  for (const PolarStructure& s : caps)
+    for (int f : s.cap_faces) cap_face[f] = 1;
+  bool all_quads = true;
+  for (int f = 0; f < in.num_faces(); ++f) all_quads = all_quads && (cap_face[f] || in.face_sizes[f] == 4);
+  e.faces += static_cast<int>(caps.size());
   std::map<std::pair<int, int>, int> live_faces_on_edge;  // undirected cage edge -> non-hole faces
   bool any_hole = false;
   for (int f = 0, begin = 0; f < in.num_faces(); begin += in.face_sizes[f], ++f) {
     const int n = in.face_sizes[f];
     const bool hole = face_hole[f] != 0;
     any_hole = any_hole || hole;
-    if (!hole) e.faces += all_quads ? 1 : n;
+    if (!hole && !cap_face[f]) e.faces += all_quads ? 1 : n;
     for (int i = 0; i < n; ++i) {
       const int a = in.face_indices[begin + i], b = in.face_indices[begin + (i + 1) % n];
       int& count = live_faces_on_edge[{std::min(a, b), std::max(a, b)}];
@@ -181,7 +190,7 @@ inline CorpusBrep corpus_brep(const std::string& shape, int samples_per_edge = 1
   CorpusBrep r;
   const LoadedCage cage = read_obj(corpus_file(shape));
   const SubdivLevel base = load_and_validate(cage);
-  r.expected = expected_brep(cage.input, base.face_hole);
+  r.expected = expected_brep(cage.input, base.face_hole, detect_polar_structures(base).structures);
   auto t = Clock::now();
   r.build = build_patches(base, std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()));
   r.patch_seconds = since(t);

@@ -49,10 +49,18 @@ std::string sci(double x) {
 }
 
 int expected_patch_count(const SubdivLevel& base) {
-  int count = 0;
+  // Polar structures give one cap each in place of their triangles and 1-layer quads, which
+  // do not count when deciding whether the cage is all quads.
+  const PolarDetection polar = detect_polar_structures(base);
   const PolyMesh& m = base.mesh;
+  std::vector<char> cap(m.num_faces(), 0);
+  for (const PolarStructure& s : polar.structures)
+    for (int f : s.cap_faces) cap[f] = 1;
+  bool quads = true;
+  for (int f = 0; f < m.num_faces(); ++f) quads = quads && (cap[f] || m.face_size(f) == 4);
+  int count = static_cast<int>(polar.structures.size());
   for (int f = 0; f < m.num_faces(); ++f)
-    if (!base.face_hole[f]) count += m.all_quads() ? 1 : m.face_size(f);
+    if (!base.face_hole[f] && !cap[f]) count += quads ? 1 : m.face_size(f);
   return count;
 }
 
