@@ -28,8 +28,9 @@ def revolved(path, n, profile, title):
         f.write("\n".join(lines) + "\n")
 
 revolved("samples/capped_cylinder.obj", 16,
-         [(0, 1), (1 / 3, 1), (2 / 3, 1), (1, 1), (1, 1 / 3), (1, -1 / 3), (1, -1), (2 / 3, -1), (1 / 3, -1), (0, -1)],
-         "Capped cylinder: radius 1, height 2, flat polar caps")
+         [(0, 1.3), (1 / 3, 1.27), (2 / 3, 1.18), (1, 1), (1, 1 / 3), (1, -1 / 3), (1, -1), (2 / 3, -1.18),
+          (1 / 3, -1.27), (0, -1.3)],
+         "Capped cylinder: radius 1, height 2, domed polar caps")
 revolved("samples/mushroom.obj", 24,
          [(0, 2.0), (0.5, 1.97), (1.0, 1.85), (1.45, 1.6), (1.6, 1.3), (1.2, 1.1), (0.5, 1.0), (0.4, 0.6),
           (0.45, 0.2), (0.55, 0.05), (0.3, 0.0), (0.15, 0.0), (0, 0.0)],

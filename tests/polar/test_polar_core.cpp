@@ -232,7 +232,8 @@ TEST(PolarCap, RotationallySymmetricStructureGivesASymmetricCap) {
 // normal converges to the BP limit normal, linearly in the distance.
 TEST(PolarCap, BoundedCurvatureAndNormalConvergenceAtThePole) {
   for (int n : {6, 8, 12, 16, 64}) {
-    for (const MeshInput& shape : {capped_cylinder(n, 0.1, 0.05), mushroom(n, 0.3, 0.04)}) {
+    const MeshInput shapes[2] = {capped_cylinder(n, 0.1, 0.05), mushroom(n, 0.3, 0.04)};
+    for (const MeshInput& shape : shapes) {
       const PolarCap cap = build_polar_cap(net_of(shape), {1, 0.75});
       const NurbsPatch patch = relative_to_centre(polar_cap_patch(cap, 0), cap.centre);
       double kmax[4], angle[4];
@@ -247,6 +248,12 @@ TEST(PolarCap, BoundedCurvatureAndNormalConvergenceAtThePole) {
           angle[i] = std::max(angle[i], angle_deg(c.normal, ev(cap.normal)));
         }
       }
+      if (n == 8 || n == 64)
+        for (int i = 0; i < 4; ++i) {
+          const std::string key = "n" + std::to_string(n) + "_" + std::to_string(&shape == &shapes[0] ? 0 : 1) + "_d" + std::to_string(i + 1);
+          RecordProperty(key + "_kmax", std::to_string(kmax[i]));
+          RecordProperty(key + "_angle_deg", std::to_string(angle[i]));
+        }
       EXPECT_TRUE(std::isfinite(kmax[3]));
       EXPECT_LT(kmax[3], 2 * kmax[1]) << "n = " << n << ": max |k| at 1e-4 " << kmax[3] << " vs 1e-2 " << kmax[1];
       EXPECT_LT(kmax[2], 2 * kmax[1]) << "n = " << n;

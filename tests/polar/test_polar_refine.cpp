@@ -2,6 +2,9 @@
 // elsewhere, merged where the two agree.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+
 #include "common/shapes.h"
 #include "core/polar/polar_net.h"
 #include "core/polar/polar_refine.h"
@@ -11,6 +14,7 @@ namespace subd2nurbs::testing {
 namespace {
 
 TEST(PolarRefine, OverlapRingsAgreeAndTheMeshIsTheMergedOne) {
+  double worst_overlap = 0;
   for (int n : {6, 9, 16}) {
     for (const MeshInput& in : {capped_cylinder(n, 0.1, 0.03), mushroom(n, 0.2, 0.03)}) {
       const SubdivLevel base = SubdivLevel::from_input(in);
@@ -22,6 +26,7 @@ TEST(PolarRefine, OverlapRingsAgreeAndTheMeshIsTheMergedOne) {
         EXPECT_EQ(r.structures, 2);
         // Identical to rounding where both are valid (the paper's merge condition).
         EXPECT_LT(r.max_overlap_difference, 1e-14 * 8) << "n " << n << " k " << k;
+        worst_overlap = std::max(worst_overlap, r.max_overlap_difference);
         // Faces: the quads refined, the two poles with n 2^k triangles each and 2^k - 1 BP
         // rings of quads inside the first ring.
         const int N = n << k, inner = 1 << k;
@@ -40,6 +45,9 @@ TEST(PolarRefine, OverlapRingsAgreeAndTheMeshIsTheMergedOne) {
       }
     }
   }
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", worst_overlap);
+  RecordProperty("max_overlap_difference", text);
 }
 
 TEST(PolarRefine, WithoutStructuresItIsCatmullClark) {
