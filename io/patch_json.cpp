@@ -73,6 +73,14 @@ class JsonWriter {
   std::string s_;
 };
 
+/// The part [t0, t1] of a patch side that a curve covers (pieces of split sides).
+void write_range(JsonWriter& w, double t0, double t1) {
+  w.key("t0");
+  w.number(t0, "side piece t0");
+  w.key("t1");
+  w.number(t1, "side piece t1");
+}
+
 void write_patch(JsonWriter& w, const NurbsPatch& p) {
   std::string& s = w.out();
   s += '{';
@@ -111,10 +119,7 @@ void write_patch(JsonWriter& w, const NurbsPatch& p) {
         w.integer(q.curve);
         w.key("reversed");
         w.boolean(q.reversed);
-        w.key("t0");
-        w.number(q.t0, "piece t0");
-        w.key("t1");
-        w.number(q.t1, "piece t1");
+        write_range(w, q.t0, q.t1);
         s += '}';
       });
     });
@@ -144,12 +149,7 @@ void write_curve(JsonWriter& w, const BoundaryCurve& c) {
     w.integer(u.side);
     w.key("reversed");
     w.boolean(u.reversed);
-    if (u.t0 != 0 || u.t1 != 1) {  // a piece of a split side (polar cap boundary)
-      w.key("t0");
-      w.number(u.t0, "use t0");
-      w.key("t1");
-      w.number(u.t1, "use t1");
-    }
+    if (u.t0 != 0 || u.t1 != 1) write_range(w, u.t0, u.t1);  // a piece of a split side (polar cap)
     s += '}';
   });
   s += '}';

@@ -9,12 +9,14 @@
 
 #include "core/eval/nurbs_eval.h"
 
+#include "core/util/eigen_point.h"
+
 namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
-Point3 pt(const V3& v) { return {v.x(), v.y(), v.z()}; }
+V3 v3(const Point3& p) { return to_eigen(p); }
+Point3 pt(const V3& v) { return to_point(v); }
 constexpr double kPi = 3.14159265358979323846;
 
 /// Clamped knots 0 (x4), 1, ..., count-1, count (x4), divided by count.
