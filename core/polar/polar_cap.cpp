@@ -15,8 +15,6 @@ namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-V3 v3(const Point3& p) { return to_eigen(p); }
-Point3 pt(const V3& v) { return to_point(v); }
 constexpr double kPi = 3.14159265358979323846;
 
 /// Clamped knots 0 (x4), 1, ..., count-1, count (x4), divided by count.
@@ -57,12 +55,12 @@ PolarCap build_polar_cap(const PolarNet& input, const PolarCapOptions& options) 
   // (iii) the collapsed row interpolates the BP limit point.
   cap.centre = bp_limit_point(p);
   cap.normal = bp_limit_normal(p);
-  const V3 c0 = v3(cap.centre);
+  const V3 c0 = to_eigen(cap.centre);
   // (iv) c_1i = c0 + lambda (cos t_i E1 + sin t_i E2), E = (2/n) sum (cos, sin) t_j (p_1j - c0).
   V3 E1 = V3::Zero(), E2 = V3::Zero();
   for (int j = 0; j < n; ++j) {
     const double t = 2 * kPi * j / n;
-    const V3 d = v3(p.at(1, j)) - c0;
+    const V3 d = to_eigen(p.at(1, j)) - c0;
     E1 += std::cos(t) * d;
     E2 += std::sin(t) * d;
   }
@@ -73,7 +71,7 @@ PolarCap build_polar_cap(const PolarNet& input, const PolarCapOptions& options) 
   for (int j = 0; j < n; ++j) {
     const double t = 2 * kPi * j / n;
     cap.rows[j] = cap.centre;
-    cap.rows[static_cast<size_t>(n) + j] = pt(c0 + options.lambda * (std::cos(t) * E1 + std::sin(t) * E2));
+    cap.rows[static_cast<size_t>(n) + j] = to_point(c0 + options.lambda * (std::cos(t) * E1 + std::sin(t) * E2));
     for (int r = 2; r <= R; ++r) cap.rows[static_cast<size_t>(r) * n + j] = p.at(r, j);
   }
   return cap;
@@ -88,14 +86,14 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
     std::vector<Point3> next(static_cast<size_t>(num_rows) * 2 * n);
     for (int r = 0; r < num_rows; ++r)
       for (int i = 0; i < n; ++i) {
-        auto at = [&](int j) { return v3(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
-        next[static_cast<size_t>(r) * 2 * n + 2 * i] = pt((at(i - 1) + 6 * at(i) + at(i + 1)) / 8);
-        next[static_cast<size_t>(r) * 2 * n + 2 * i + 1] = pt((at(i) + at(i + 1)) / 2);
+        auto at = [&](int j) { return to_eigen(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
+        next[static_cast<size_t>(r) * 2 * n + 2 * i] = to_point((at(i - 1) + 6 * at(i) + at(i + 1)) / 8);
+        next[static_cast<size_t>(r) * 2 * n + 2 * i + 1] = to_point((at(i) + at(i + 1)) / 2);
       }
     rows.swap(next);
     n *= 2;
   }
-  auto c = [&](int r, int j) { return v3(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
+  auto c = [&](int r, int j) { return to_eigen(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
   // Seam clamp (MATH.md 4.5), column j = blossom f(j-1, j, j+1): n + 3 columns per row.
   std::vector<std::vector<V3>> clamped_v(num_rows);
   for (int r = 0; r < num_rows; ++r) {
@@ -121,9 +119,9 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
     // u knots 0,0,0,0,1,...: row 0 = f(0,0,0), row 1 = f(0,0,1), row r >= 2 = f(r-2, r-1, r):
     // with the 4-fold start the unclamped rows already are the clamped poles up to row m.
     patch.pole(0, j) = cap.centre;  // exactly: the averages above would round it
-    for (int r = 1; r <= m; ++r) patch.pole(r, j) = pt(row(r));
-    patch.pole(m + 1, j) = pt((row(m) + 2 * row(m + 1)) / 3);
-    patch.pole(m + 2, j) = pt((row(m) + 4 * row(m + 1) + row(m + 2)) / 6);
+    for (int r = 1; r <= m; ++r) patch.pole(r, j) = to_point(row(r));
+    patch.pole(m + 1, j) = to_point((row(m) + 2 * row(m + 1)) / 3);
+    patch.pole(m + 2, j) = to_point((row(m) + 4 * row(m + 1) + row(m + 2)) / 6);
   }
   return patch;
 }
@@ -134,10 +132,10 @@ namespace {
 /// little away from u = 0, where a cap's Xv vanishes. Returns the distance.
 double distance_to_patch(const NurbsPatch& patch, const V3& x, double u, double v) {
   u = std::max(u, 0.02);
-  double best = (x - v3(evaluate(patch, u, v).p)).norm(), mu = 1e-3;
+  double best = (x - to_eigen(evaluate(patch, u, v).p)).norm(), mu = 1e-3;
   for (int it = 0; it < 100 && best > 0; ++it) {
     const SurfaceDerivs d = evaluate(patch, u, v);
-    const V3 r = x - v3(d.p), xu = v3(d.du), xv = v3(d.dv);
+    const V3 r = x - to_eigen(d.p), xu = to_eigen(d.du), xv = to_eigen(d.dv);
     Eigen::Matrix2d A;
     A << xu.dot(xu) * (1 + mu), xu.dot(xv), xu.dot(xv), xv.dot(xv) * (1 + mu);
     A += 1e-30 * Eigen::Matrix2d::Identity();
@@ -145,7 +143,7 @@ double distance_to_patch(const NurbsPatch& patch, const V3& x, double u, double 
     if (!step.allFinite()) break;
     const double un = std::clamp(u + step[0], 0.0, 1.0);
     const double vn = v + step[1] - std::floor(v + step[1]);
-    const double dist = (x - v3(evaluate(patch, un, vn).p)).norm();
+    const double dist = (x - to_eigen(evaluate(patch, un, vn).p)).norm();
     if (dist < best) {
       best = dist;
       u = un;
@@ -165,14 +163,14 @@ double cap_distance_to_bp(const PolarNet& rings0to3, const PolarCap& cap, const 
   PolarNet p = rings0to3;
   p.rings.resize(static_cast<size_t>(3) * p.n);
   for (int l = 0; l < levels; ++l) p = radial_step(p);
-  double worst = (v3(bp_limit_point(rings0to3)) - v3(cap.centre)).norm();
+  double worst = (to_eigen(bp_limit_point(rings0to3)) - to_eigen(cap.centre)).norm();
   const int last = 2 << levels;  // input ring 2 = the cap's boundary
   const double scale = 1.0 / (1 << levels), pre = 1 << cap.radial_steps;
   for (int r = 3; r <= last && r + 1 <= p.num_rings(); ++r)
     for (int j = 0; j < p.n; ++j) {
       // Input parameter U = r 2^-levels; the cap's u = 2^s U - 1 where the two coincide.
       const double u = std::clamp((pre * r * scale - 1) / cap.m, 0.0, 1.0);
-      worst = std::max(worst, distance_to_patch(patch, v3(bp_grid_limit(p, r, j)), u, static_cast<double>(j) / p.n));
+      worst = std::max(worst, distance_to_patch(patch, to_eigen(bp_grid_limit(p, r, j)), u, static_cast<double>(j) / p.n));
     }
   return worst;
 }

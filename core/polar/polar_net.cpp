@@ -12,8 +12,6 @@ namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-V3 v3(const Point3& p) { return to_eigen(p); }
-Point3 pt(const V3& v) { return to_point(v); }
 constexpr double kPi = 3.14159265358979323846;
 
 int wrap(int j, int n) { return ((j % n) + n) % n; }
@@ -35,9 +33,9 @@ PolarNet radial_step(const PolarNet& net, const BpParameters& bp) {
   out.rings.resize(static_cast<size_t>(2 * R - 1) * n);
   const double alpha = bp.alpha(), beta = bp.beta;
   V3 m = V3::Zero();
-  for (int j = 0; j < n; ++j) m += v3(net.at(1, j));
+  for (int j = 0; j < n; ++j) m += to_eigen(net.at(1, j));
   m /= n;
-  out.pole = pt((1 - alpha) * v3(net.pole) + alpha * m);
+  out.pole = to_point((1 - alpha) * to_eigen(net.pole) + alpha * m);
   // gamma_k = (beta + cos t + cos(2t)/2 + cos(3t)/8) / n, t = 2 pi k / n.
   std::vector<double> gamma(n);
   for (int k = 0; k < n; ++k) {
@@ -47,14 +45,14 @@ PolarNet radial_step(const PolarNet& net, const BpParameters& bp) {
   for (int i = 0; i < n; ++i) {
     // Relative to the pole: sum(gamma) = beta exactly, so this is the affine rule.
     V3 s = V3::Zero();
-    for (int j = 0; j < n; ++j) s += gamma[wrap(j - i, n)] * (v3(net.at(1, j)) - v3(net.pole));
-    out.at(1, i) = pt(v3(net.pole) + s);
+    for (int j = 0; j < n; ++j) s += gamma[wrap(j - i, n)] * (to_eigen(net.at(1, j)) - to_eigen(net.pole));
+    out.at(1, i) = to_point(to_eigen(net.pole) + s);
   }
   for (int r = 1; r < R; ++r)
     for (int i = 0; i < n; ++i) {
-      const V3 a = v3(net.at(r - 1, i)), b = v3(net.at(r, i)), c = v3(net.at(r + 1, i));
-      out.at(2 * r, i) = pt(0.125 * a + 0.75 * b + 0.125 * c);
-      out.at(2 * r + 1, i) = pt(0.5 * (b + c));
+      const V3 a = to_eigen(net.at(r - 1, i)), b = to_eigen(net.at(r, i)), c = to_eigen(net.at(r + 1, i));
+      out.at(2 * r, i) = to_point(0.125 * a + 0.75 * b + 0.125 * c);
+      out.at(2 * r + 1, i) = to_point(0.5 * (b + c));
     }
   return out;
 }
@@ -67,31 +65,31 @@ PolarNet circular_step(const PolarNet& net) {
   out.rings.resize(static_cast<size_t>(R) * 2 * n);
   for (int r = 1; r <= R; ++r)
     for (int i = 0; i < n; ++i) {
-      const V3 a = v3(net.at(r, i - 1)), b = v3(net.at(r, i)), c = v3(net.at(r, i + 1));
-      out.at(r, 2 * i) = pt((a + 6 * b + c) / 8);
-      out.at(r, 2 * i + 1) = pt(0.5 * (b + c));
+      const V3 a = to_eigen(net.at(r, i - 1)), b = to_eigen(net.at(r, i)), c = to_eigen(net.at(r, i + 1));
+      out.at(r, 2 * i) = to_point((a + 6 * b + c) / 8);
+      out.at(r, 2 * i + 1) = to_point(0.5 * (b + c));
     }
   return out;
 }
 
 Point3 bp_limit_point(const PolarNet& net, const BpParameters& bp) {
   V3 m = V3::Zero();
-  for (int j = 0; j < net.n; ++j) m += v3(net.at(1, j));
+  for (int j = 0; j < net.n; ++j) m += to_eigen(net.at(1, j));
   m /= net.n;
   const double alpha = bp.alpha(), beta = bp.beta;
-  return pt(((1 - beta) * v3(net.pole) + alpha * m) / (1 - beta + alpha));
+  return to_point(((1 - beta) * to_eigen(net.pole) + alpha * m) / (1 - beta + alpha));
 }
 
 Point3 bp_limit_normal(const PolarNet& net) {
   V3 t1 = V3::Zero(), t2 = V3::Zero();
   for (int j = 0; j < net.n; ++j) {
     const double t = 2 * kPi * j / net.n;
-    const V3 d = v3(net.at(1, j)) - v3(net.pole);  // sum cos = sum sin = 0: same tangents
+    const V3 d = to_eigen(net.at(1, j)) - to_eigen(net.pole);  // sum cos = sum sin = 0: same tangents
     t1 += std::cos(t) * d;
     t2 += std::sin(t) * d;
   }
   const V3 nrm = t1.cross(t2);
-  return pt(nrm.norm() > 0 ? V3(nrm.normalized()) : V3::Zero());
+  return to_point(nrm.norm() > 0 ? V3(nrm.normalized()) : V3::Zero());
 }
 
 Point3 bp_grid_limit(const PolarNet& net, int r, int j) {
@@ -99,8 +97,8 @@ Point3 bp_grid_limit(const PolarNet& net, int r, int j) {
   const double w[3] = {1.0 / 6, 4.0 / 6, 1.0 / 6};
   V3 s = V3::Zero();
   for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) s += w[a] * w[b] * v3(net.at(r - 1 + a, j - 1 + b));
-  return pt(s);
+    for (int b = 0; b < 3; ++b) s += w[a] * w[b] * to_eigen(net.at(r - 1 + a, j - 1 + b));
+  return to_point(s);
 }
 
 }  // namespace subd2nurbs
