@@ -73,39 +73,43 @@ TEST(PolarPatches, OneCapPerStructureAndTheJoinsAreExact) {
 }
 
 // With a Catmull-Clark level a = 1 (an n-gon elsewhere) each boundary span of the cap is
-// split in two: 2n pieces, still exact.
-TEST(PolarPatches, CapBoundaryFollowsLevelOneNeighbours) {
-  MeshInput in = capped_cylinder(8, 0.1, 0.02);
-  // Merge two side quads of the middle band into a hexagon.
-  const int ring4 = 1 + 3 * 8, ring5 = 1 + 4 * 8;
-  std::vector<int> sizes, idx;
-  int off = 0, merged = 0;
-  for (size_t f = 0; f < in.face_sizes.size(); ++f) {
-    const int sz = in.face_sizes[f];
-    std::vector<int> face(in.face_indices.begin() + off, in.face_indices.begin() + off + sz);
-    off += sz;
-    const bool a = sz == 4 && face[1] == ring4 + 0 && face[2] == ring5 + 0;  // (r4[1], r4[0], r5[0], r5[1])
-    const bool b = sz == 4 && face[1] == ring4 + 1 && face[2] == ring5 + 1;
-    if (a) continue;
-    if (b) {
-      face = {ring4 + 2, ring4 + 1, ring4 + 0, ring5 + 0, ring5 + 1, ring5 + 2};
-      ++merged;
+// split in two: 2n pieces, still exact. The hexagon's valence-3 corners sit on ring 3 (the
+// structure's Catmull-Clark ring, right next to the 2-layer) or one ring further out.
+TEST(PolarPatches, CapBoundaryFollowsLevelOneNeighboursAndEvsOnRingThree) {
+  for (int band : {3, 4}) {
+    MeshInput in = capped_cylinder(8, 0.1, 0.02);
+    // Merge two quads of the band between rings `band` and `band` + 1 into a hexagon.
+    const int r0 = 1 + (band - 1) * 8, r1 = 1 + band * 8;
+    std::vector<int> sizes, idx;
+    int off = 0, merged = 0;
+    for (size_t f = 0; f < in.face_sizes.size(); ++f) {
+      const int sz = in.face_sizes[f];
+      std::vector<int> face(in.face_indices.begin() + off, in.face_indices.begin() + off + sz);
+      off += sz;
+      const bool a = sz == 4 && face[1] == r0 + 0 && face[2] == r1 + 0;  // (r0[1], r0[0], r1[0], r1[1])
+      const bool b = sz == 4 && face[1] == r0 + 1 && face[2] == r1 + 1;
+      if (a) continue;
+      if (b) {
+        face = {r0 + 2, r0 + 1, r0 + 0, r1 + 0, r1 + 1, r1 + 2};
+        ++merged;
+      }
+      sizes.push_back(static_cast<int>(face.size()));
+      idx.insert(idx.end(), face.begin(), face.end());
     }
-    sizes.push_back(static_cast<int>(face.size()));
-    idx.insert(idx.end(), face.begin(), face.end());
+    ASSERT_EQ(merged, 1);
+    in.face_sizes = sizes;
+    in.face_indices = idx;
+    const PatchBuild b = build(in);
+    ASSERT_EQ(b.info.caps.size(), 2u) << band;
+    EXPECT_EQ(b.info.coarse_level, 1);
+    EXPECT_EQ(b.set.patches[b.info.caps[0].patch].split_sides[1].size(), 16u);
+    const ContinuityReport r = measure_continuity(b.set);
+    EXPECT_LT(r.max_gap, 1e-13 * b.set.model_size) << band;
+    // G1 across the rays of the hexagon's valence-3 vertices is exact up to Construction Q's
+    // residual; everything at the caps is rounding.
+    EXPECT_LT(r.max_normal_angle_deg, 1e-6) << band;
+    EXPECT_LT(r.max_c1_jump, 1e-9) << band;
   }
-  ASSERT_EQ(merged, 1);
-  in.face_sizes = sizes;
-  in.face_indices = idx;
-  const PatchBuild b = build(in);
-  ASSERT_EQ(b.info.caps.size(), 2u);
-  EXPECT_EQ(b.info.coarse_level, 1);
-  EXPECT_EQ(b.set.patches[b.info.caps[0].patch].split_sides[1].size(), 16u);
-  const ContinuityReport r = measure_continuity(b.set);
-  EXPECT_LT(r.max_gap, 1e-13 * b.set.model_size);
-  // G1 across the rays of the hexagon's valence-3 vertices is exact only to Construction Q's
-  // residual; everything at the caps is rounding.
-  EXPECT_LT(r.max_normal_angle_deg, 1e-6);
 }
 
 TEST(PolarPatches, PolarOffIsPlainCatmullClark) {
