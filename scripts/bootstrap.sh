@@ -20,7 +20,8 @@ PACKAGES=(
 )
 # The tests also import our STEP files in FreeCAD (label freecad): scripts/test.sh sets
 # WITH_FREECAD=1. About 1.4 GB and 2 minutes; the demo does not need it.
-if [ "${WITH_FREECAD:-0}" = 1 ]; then PACKAGES+=(freecad); fi
+# xvfb + xauth: the workbench's GUI test runs FreeCAD under a virtual X server.
+if [ "${WITH_FREECAD:-0}" = 1 ]; then PACKAGES+=(freecad xvfb xauth); fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,0 +1,154 @@
+"""Headless API of the Subd2Nurbs workbench: usable from FreeCAD's Python console, macros and
+freecadcmd, with or without the GUI.
+
+    import s2n_freecad.api as s2n
+    cage = s2n.make_cage("/path/part.obj")            # parametric Cage (points, faces, tags)
+    nurbs = s2n.make_nurbs(cage, level=1)             # parametric NURBS solid from the cage
+    nurbs = s2n.make_nurbs(mesh_feature)              # ... or from a triangle Mesh::Feature
+    report = s2n.check_quality(nurbs)                 # gap, normal jump, deviation, worst edges
+
+Every factory checks its input before it touches the document: a bad cage raises (a
+subd2nurbs.CageError naming the element) and leaves the document as it was. With the GUI
+up, each factory runs inside a transaction, so one Undo removes what it added.
+"""
+
+import FreeCAD as App
+
+import subd2nurbs
+
+from . import features
+
+
+def _document(doc):
+    doc = doc or App.ActiveDocument or App.newDocument()
+    return doc
+
+
+class _Transaction:
+    """Opens a transaction (one Undo step) and aborts it if the body raises."""
+
+    def __init__(self, doc, name):
+        self.doc, self.name = doc, name
+
+    def __enter__(self):
+        self.doc.openTransaction(self.name)
+        return self
+
+    def __exit__(self, kind, value, tb):
+        if kind is None:
+            self.doc.commitTransaction()
+        else:
+            self.doc.abortTransaction()
+        return False
+
+
+def check_occt():
+    """Raises RuntimeError unless FreeCAD's OCCT is the version subd2nurbs links (BREP text
+    is exchanged between the two, see docs)."""
+    import Part
+    if not subd2nurbs.occt_compatible(Part.OCC_VERSION):
+        raise RuntimeError("subd2nurbs is linked with OpenCASCADE %s but FreeCAD uses %s: rebuild subd2nurbs "
+                           "against FreeCAD's OpenCASCADE" % (subd2nurbs.OCC_VERSION, Part.OCC_VERSION))
+
+
+def read_cage(path):
+    """A subd2nurbs.Cage from a file: OBJ with quads, n-gons and OpenSubdiv crease / corner /
+    hole tags (read by subd2nurbs itself; FreeCAD's OBJ reader drops 5+-gons), or glTF / GLB
+    (quads recovered from triangles)."""
+    return subd2nurbs.read_cage(path)
+
+
+def make_cage(source, doc=None, name="Cage"):
+    """A parametric Cage object from a file path or a subd2nurbs.Cage, shown as wires.
+    Raises subd2nurbs.CageError (document unchanged) if the cage is not valid."""
+    cage = read_cage(source) if isinstance(source, str) else source
+    if not isinstance(cage, subd2nurbs.Cage):
+        raise TypeError("make_cage: expected a file path or a subd2nurbs.Cage")
+    cage.validate()  # topology and tags, before the document is touched
+    doc = _document(doc)
+    with _Transaction(doc, "Import subdivision cage"):
+        obj = doc.addObject("Part::FeaturePython", name)
+        features.CageFeature(obj)
+        features.CageFeature.store(obj, cage, source if isinstance(source, str) else "")
+        if App.GuiUp:
+            features.ViewProviderCage(obj.ViewObject)
+        doc.recompute()
+        if not obj.isValid():
+            raise RuntimeError("the cage object failed to recompute")
+    return obj
+
+
+def make_nurbs(source, level=0, tolerance=0.0, polar="Catmull-Clark", shell=False, doc=None, name="NURBS",
+               progress=True):
+    """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
+    Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around
+    high-valence vertices are kept; the object's RecoveredQuads says how many).
+
+    level: extra refinement levels (>= 0); tolerance > 0: choose the level for this deviation
+    (relative to the model size); polar: "Catmull-Clark" (polar caps when subd2nurbs has
+    them); shell: a shell instead of a solid. It recomputes when the source or one of these
+    properties changes. Raises (document unchanged) when the conversion fails."""
+    check_occt()
+    if source is None or not hasattr(source, "Document"):
+        raise TypeError("make_nurbs: expected a Cage object or a Mesh::Feature")
+    doc = doc or source.Document
+    # Convert before touching the document (errors leave it as it was); the first recompute
+    # reuses the result.
+    cage = features.cage_of(source)
+    result = features.convert_cage(cage, level, tolerance, polar, progress=progress)
+    with _Transaction(doc, "Convert to NURBS"):
+        obj = doc.addObject("Part::FeaturePython", name)
+        proxy = features.NurbsFeature(obj)
+        proxy.prepare(features.NurbsFeature.signature(cage, level, tolerance, polar), result)
+        obj.Source = source
+        obj.Level = level
+        obj.Tolerance = tolerance
+        obj.PolarHandling = polar
+        obj.OutputType = "Shell" if shell else "Solid"
+        obj.ShowProgress = bool(progress)
+        if App.GuiUp:
+            features.ViewProviderNurbs(obj.ViewObject)
+            source.ViewObject.Visibility = False
+        doc.recompute()
+        if not obj.isValid():
+            raise RuntimeError("the NURBS object failed to recompute")
+    return obj
+
+
+def check_quality(obj, count=5, highlight=True):
+    """The surface quality of a NURBS object: max gap between patches, max normal jump across
+    smooth edges, max deviation from the limit surface, and the `count` worst edges (names
+    "EdgeN", normal angle in degrees, gap). Printed to the report view; with the GUI the worst
+    edges are drawn in red and selected."""
+    proxy = getattr(obj, "Proxy", None)
+    if not isinstance(proxy, features.NurbsFeature):
+        raise TypeError("check_quality: expected a NURBS object made by make_nurbs")
+    result = proxy.result(obj)
+    r = result.report
+    worst = [("Edge%d" % e, angle, gap) for e, angle, gap in result.worst_edges(count)]
+    report = {
+        "object": obj.Name,
+        "faces": r["brep"]["faces"] if r["brep"] else 0,
+        "valid": bool(r["brep"] and r["brep"]["valid"]),
+        "max_gap": r["continuity"]["max_gap"],
+        "max_gap_relative": r["continuity"]["max_gap_relative"],
+        "max_normal_angle_deg": r["continuity"]["max_normal_angle_deg"],
+        "max_crease_normal_angle_deg": r["continuity"]["max_crease_normal_angle_deg"],
+        "max_deviation": r["deviation"]["max"],
+        "deviation_relative": r["deviation"]["relative"],
+        "worst_edges": worst,
+        "report": r,
+    }
+    lines = ["Subd2Nurbs quality of %s (%d faces, %s):" % (obj.Label, report["faces"],
+                                                          "valid" if report["valid"] else "NOT valid"),
+             "  max gap between patches   %.3g (%.3g of the model size)" % (report["max_gap"],
+                                                                          report["max_gap_relative"] or 0),
+             "  max normal jump (smooth)  %.3g deg" % report["max_normal_angle_deg"],
+             "  max deviation from limit  %.3g (%.3g of the model size)" % (report["max_deviation"],
+                                                                          report["deviation_relative"] or 0)]
+    for name, angle, gap in worst:
+        lines.append("  worst: %-8s normal jump %.3g deg, gap %.3g" % (name, angle, gap))
+    App.Console.PrintMessage("\n".join(lines) + "\n")
+    if highlight and App.GuiUp:
+        features.highlight_edges(obj, [w[0] for w in worst])
+    return report

@@ -1,0 +1,110 @@
+"""GUI commands of the Subd2Nurbs workbench. Each runs the headless API (api.py) inside a
+transaction: one Undo reverts it, and a failure is reported (report view and a message box)
+with the document left as it was."""
+
+import os
+
+import FreeCAD as App
+import FreeCADGui as Gui
+
+from . import api, features
+
+
+def _report_failure(title, error):
+    App.Console.PrintError("Subd2Nurbs: %s failed: %s\n" % (title, error))
+    try:
+        from PySide import QtGui
+        QtGui.QMessageBox.critical(Gui.getMainWindow(), "Subd2Nurbs: " + title, str(error))
+    except Exception:  # no Qt (headless): the report view line is enough
+        pass
+
+
+def _selected_sources():
+    sel = Gui.Selection.getSelection()
+    return [o for o in sel if features.is_cage(o) or o.isDerivedFrom("Mesh::Feature")]
+
+
+class ImportCage:
+    def GetResources(self):
+        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Cage.svg"),
+                "MenuText": "Import subdivision cage...",
+                "ToolTip": "Read an OBJ cage (quads, n-gons, OpenSubdiv crease / corner / hole tags) or a "
+                           "glTF / GLB mesh (quads recovered) as a parametric Cage"}
+
+    def IsActive(self):
+        return True
+
+    def Activated(self):
+        from PySide import QtGui
+        path, _ = QtGui.QFileDialog.getOpenFileName(Gui.getMainWindow(), "Import subdivision cage", "",
+                                                    "Subdivision cages (*.obj *.glb *.gltf);;All files (*)")
+        if not path:
+            return
+        doc = App.ActiveDocument or App.newDocument()
+        try:
+            obj = api.make_cage(path, doc=doc, name=os.path.splitext(os.path.basename(path))[0] or "Cage")
+        except Exception as e:
+            _report_failure("Import subdivision cage", e)
+            return
+        Gui.SendMsgToActiveView("ViewFit")
+        App.Console.PrintMessage("Subd2Nurbs: imported %s: %d vertices, %d faces, %d creases\n"
+                                 % (path, obj.NumVertices, obj.NumFaces, obj.NumCreases))
+
+
+class ConvertToNurbs:
+    def GetResources(self):
+        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Convert.svg"),
+                "MenuText": "Convert to NURBS",
+                "ToolTip": "Convert the selected subdivision Cage or triangle Mesh into a parametric NURBS "
+                           "solid (recomputed when the source or its properties change)"}
+
+    def IsActive(self):
+        return App.ActiveDocument is not None and bool(_selected_sources())
+
+    def Activated(self):
+        made = []
+        for source in _selected_sources():
+            try:
+                obj = api.make_nurbs(source, name=source.Label + "_NURBS")
+            except Exception as e:
+                _report_failure("Convert to NURBS (%s)" % source.Label, e)
+                continue
+            made.append(obj)
+            msg = "Subd2Nurbs: %s: %d NURBS faces" % (obj.Label, obj.Patches)
+            if obj.RecoveredQuads >= 0:
+                msg += ", %d quads recovered from the mesh's triangles, %d triangles kept" % (
+                    obj.RecoveredQuads, obj.KeptTriangles)
+            App.Console.PrintMessage(msg + "\n")
+        if made:
+            Gui.Selection.clearSelection()
+            Gui.Selection.addSelection(made[-1])
+
+
+class CheckQuality:
+    def GetResources(self):
+        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Check.svg"),
+                "MenuText": "Check surface quality",
+                "ToolTip": "Report gaps, normal jumps and the deviation from the limit surface of the selected "
+                           "NURBS object in the report view, and highlight its worst edges"}
+
+    def IsActive(self):
+        return any(isinstance(getattr(o, "Proxy", None), features.NurbsFeature)
+                   for o in Gui.Selection.getSelection())
+
+    def Activated(self):
+        for obj in Gui.Selection.getSelection():
+            if isinstance(getattr(obj, "Proxy", None), features.NurbsFeature):
+                try:
+                    api.check_quality(obj)
+                except Exception as e:
+                    _report_failure("Check surface quality (%s)" % obj.Label, e)
+
+
+COMMANDS = {
+    "Subd2Nurbs_ImportCage": ImportCage(),
+    "Subd2Nurbs_Convert": ConvertToNurbs(),
+    "Subd2Nurbs_CheckQuality": CheckQuality(),
+}
+
+for _name, _command in COMMANDS.items():
+    Gui.addCommand(_name, _command)

@@ -1,0 +1,378 @@
+"""The workbench's parametric objects: Cage (a subdivision cage, shown as wires) and NURBS (the
+B-rep converted from a Cage or a Mesh::Feature), as Part::FeaturePython proxies, plus their
+view providers. The conversion is subd2nurbs's (the same code as the command line); the
+B-rep reaches FreeCAD as BREP text (Part.Shape.importBrepFromString)."""
+
+import os
+
+import FreeCAD as App
+import numpy as np
+
+import subd2nurbs
+
+ICONS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "Resources", "icons")
+
+BOUNDARY = ["edge-and-corner", "edge-only", "none"]
+CREASE_METHOD = ["uniform", "chaikin"]
+TRIANGLES = ["catmark", "smooth"]
+POLAR = ["Catmull-Clark", "Polar caps"]
+OUTPUT = ["Solid", "Shell"]
+
+
+def _add(obj, kind, name, group, doc, value=None, read_only=False, hidden=False):
+    if name not in obj.PropertiesList:
+        obj.addProperty(kind, name, group, doc)
+    if value is not None:
+        setattr(obj, name, value)
+    if read_only or hidden:
+        obj.setEditorMode(name, (["ReadOnly"] if read_only else []) + (["Hidden"] if hidden else []))
+
+
+def _placement_points(vertices, placement):
+    if placement.isIdentity():
+        return vertices
+    m = placement.toMatrix()
+    a = np.array([[m.A11, m.A12, m.A13], [m.A21, m.A22, m.A23], [m.A31, m.A32, m.A33]])
+    t = np.array([m.A14, m.A24, m.A34])
+    return vertices @ a.T + t
+
+
+class CageFeature:
+    """Proxy of a Cage object: the cage's arrays as properties (coordinates in double
+    precision), its shape the cage's edges."""
+
+    TYPE = "Subd2Nurbs::Cage"
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.setup(obj)
+
+    @staticmethod
+    def setup(obj):
+        g = "Cage"
+        _add(obj, "App::PropertyFloatList", "Coordinates", g, "Vertex coordinates x0 y0 z0 x1 ...", hidden=True)
+        _add(obj, "App::PropertyIntegerList", "FaceSizes", g, "Vertices per face", hidden=True)
+        _add(obj, "App::PropertyIntegerList", "FaceIndices", g, "Vertex indices of the faces, face after face",
+             hidden=True)
+        _add(obj, "App::PropertyIntegerList", "CreaseVertices", g, "Crease edges as vertex pairs", hidden=True)
+        _add(obj, "App::PropertyFloatList", "CreaseSharpness", g, "Sharpness per crease edge (10 = infinite)",
+             hidden=True)
+        _add(obj, "App::PropertyIntegerList", "CornerVertices", g, "Corner vertices", hidden=True)
+        _add(obj, "App::PropertyFloatList", "CornerSharpness", g, "Sharpness per corner vertex", hidden=True)
+        _add(obj, "App::PropertyIntegerList", "Holes", g, "Faces that produce no surface", hidden=True)
+        _add(obj, "App::PropertyInteger", "NumVertices", g, "Vertices of the cage", read_only=True)
+        _add(obj, "App::PropertyInteger", "NumFaces", g, "Faces of the cage", read_only=True)
+        _add(obj, "App::PropertyInteger", "NumCreases", g, "Tagged crease edges", read_only=True)
+        _add(obj, "App::PropertyString", "SourceFile", g, "The file the cage was read from", read_only=True)
+        _add(obj, "App::PropertyInteger", "RecoveredQuads", g,
+             "Quads recovered from triangle pairs (glTF sources), -1 if not a triangle source", read_only=True)
+        if "Boundary" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "Boundary", "Subdivision", "Boundary interpolation")
+            obj.Boundary = BOUNDARY
+        if "CreaseMethod" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "CreaseMethod", "Subdivision", "Semi-sharp crease decay")
+            obj.CreaseMethod = CREASE_METHOD
+        if "TriangleRule" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "TriangleRule", "Subdivision", "Edge rule next to triangles")
+            obj.TriangleRule = TRIANGLES
+
+    @staticmethod
+    def store(obj, cage, path=""):
+        obj.Coordinates = [float(x) for x in cage.vertices.reshape(-1)]
+        obj.FaceSizes = [int(x) for x in cage.face_sizes]
+        obj.FaceIndices = [int(x) for x in cage.face_indices]
+        obj.CreaseVertices = [int(v) for a, b, s in cage.creases for v in (a, b)]
+        obj.CreaseSharpness = [float(s) for a, b, s in cage.creases]
+        obj.CornerVertices = [int(v) for v, s in cage.corners]
+        obj.CornerSharpness = [float(s) for v, s in cage.corners]
+        obj.Holes = [int(h) for h in cage.holes]
+        obj.Boundary = cage.options["boundary"]
+        obj.CreaseMethod = cage.options["crease_method"]
+        obj.TriangleRule = cage.options["triangles"]
+        obj.NumVertices = cage.num_vertices
+        obj.NumFaces = cage.num_faces
+        obj.NumCreases = len(cage.creases)
+        obj.SourceFile = path
+        obj.RecoveredQuads = cage.quad_recovery["quads"] if cage.quad_recovery else -1
+
+    @staticmethod
+    def cage(obj, placed=True):
+        """The subd2nurbs.Cage of a Cage object (in global coordinates when placed)."""
+        v = np.array(obj.Coordinates, dtype=np.float64).reshape(-1, 3)
+        if placed:
+            v = _placement_points(v, obj.Placement)
+        sizes = list(obj.FaceSizes)
+        idx = list(obj.FaceIndices)
+        faces, o = [], 0
+        for n in sizes:
+            faces.append(idx[o:o + n])
+            o += n
+        cv = list(obj.CreaseVertices)
+        creases = [(cv[2 * i], cv[2 * i + 1], s) for i, s in enumerate(obj.CreaseSharpness)]
+        corners = list(zip(obj.CornerVertices, obj.CornerSharpness))
+        return subd2nurbs.Cage(v, faces, creases, corners, list(obj.Holes), obj.Boundary, obj.CreaseMethod,
+                               obj.TriangleRule, name=obj.Label)
+
+    def execute(self, obj):
+        import Part
+        cage = self.cage(obj, placed=False)
+        edges, seen = [], set()
+        for face in cage.faces:
+            for a, b in zip(face, face[1:] + face[:1]):
+                key = (min(a, b), max(a, b))
+                if key in seen:
+                    continue
+                seen.add(key)
+                pa, pb = (App.Vector(*cage.vertices[k]) for k in key)
+                edges.append(Part.LineSegment(pa, pb).toShape())
+        placement = obj.Placement
+        obj.Shape = Part.Compound(edges)
+        obj.Placement = placement
+
+    def onDocumentRestored(self, obj):
+        obj.Proxy = self
+        self.setup(obj)
+
+    # FreeCAD 0.20 pickles proxies with __getstate__ / __setstate__, 0.21+ with dumps / loads.
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+
+def is_cage(obj):
+    return isinstance(getattr(obj, "Proxy", None), CageFeature)
+
+
+def cage_of(source):
+    """The subd2nurbs.Cage of a Cage object or a Mesh::Feature (quads recovered)."""
+    if is_cage(source):
+        return CageFeature.cage(source)
+    if hasattr(source, "isDerivedFrom") and source.isDerivedFrom("Mesh::Feature"):
+        points, facets = source.Mesh.Topology
+        if not facets:
+            raise subd2nurbs.CageError("%s: the mesh has no facets" % source.Label, element="faces")
+        # Topology's points already carry the feature's placement.
+        v = np.array([[p.x, p.y, p.z] for p in points], dtype=np.float64)
+        cage = subd2nurbs.from_triangles(v, [list(f) for f in facets])
+        cage.name = source.Label
+        return cage
+    raise TypeError("%s is neither a subdivision Cage nor a Mesh::Feature" % getattr(source, "Label", source))
+
+
+class _Progress:
+    """FreeCAD's progress indicator (status bar in the GUI, nothing visible headless) driven by
+    subd2nurbs's progress callback."""
+
+    STEPS = 100
+
+    def __init__(self, title):
+        self.indicator = App.Base.ProgressIndicator()
+        self.indicator.start(title, self.STEPS)
+        self.done = 0
+
+    def __call__(self, stage, fraction):
+        target = {"building patches": 10, "measuring the deviation from the limit surface": 20,
+                  "measuring continuity": 30}.get(stage, None)
+        if stage == "building the B-rep":
+            target = 30 + int(70 * fraction)
+        if target is not None:
+            while self.done < min(target, self.STEPS):
+                self.indicator.next()
+                self.done += 1
+        if App.GuiUp:
+            import FreeCADGui
+            FreeCADGui.updateGui()
+
+    def stop(self):
+        self.indicator.stop()
+
+
+def convert_cage(cage, level, tolerance, polar, progress=True):
+    """subd2nurbs.convert with the NURBS object's settings."""
+    if polar not in POLAR:
+        raise subd2nurbs.SettingsError("PolarHandling must be one of %s" % ", ".join(POLAR))
+    if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
+        raise subd2nurbs.SettingsError("polar caps are not available in this subd2nurbs build: use Catmull-Clark")
+    kwargs = {"tolerance": tolerance} if tolerance and tolerance > 0 else {"level": int(level)}
+    indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
+    try:
+        return subd2nurbs.convert(cage, progress=indicator, **kwargs)
+    finally:
+        if indicator:
+            indicator.stop()
+
+
+class NurbsFeature:
+    """Proxy of a NURBS object: converts its Source (Cage or Mesh::Feature) on recompute."""
+
+    TYPE = "Subd2Nurbs::NURBS"
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self._result = None
+        self.setup(obj)
+
+    @staticmethod
+    def setup(obj):
+        g = "Conversion"
+        _add(obj, "App::PropertyLink", "Source", g, "The Cage or Mesh::Feature to convert")
+        _add(obj, "App::PropertyInteger", "Level", g, "Extra refinement levels (0 = the minimum)")
+        _add(obj, "App::PropertyFloat", "Tolerance", g,
+             "If > 0: choose the level so that the deviation from the limit surface is at most this "
+             "(relative to the model size); Level is then ignored")
+        if "PolarHandling" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "PolarHandling", g,
+                 "Triangle fans around poles: Catmull-Clark patches, or polar caps (when available)")
+            obj.PolarHandling = POLAR
+        if "OutputType" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "OutputType", g, "A solid (closed cages) or a shell")
+            obj.OutputType = OUTPUT
+        _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
+        r = "Result"
+        _add(obj, "App::PropertyInteger", "Patches", r, "NURBS patches (= faces)", read_only=True)
+        _add(obj, "App::PropertyInteger", "RecoveredQuads", r,
+             "Quads recovered from triangle pairs of a Mesh source (-1 for a Cage)", read_only=True)
+        _add(obj, "App::PropertyInteger", "KeptTriangles", r,
+             "Triangles of a Mesh source kept as triangles (fans around poles, unpaired)", read_only=True)
+        _add(obj, "App::PropertyFloat", "MaxGap", r, "Largest gap between patches (model units)", read_only=True)
+        _add(obj, "App::PropertyFloat", "MaxNormalAngle", r, "Largest normal jump across smooth edges (degrees)",
+             read_only=True)
+        _add(obj, "App::PropertyFloat", "MaxDeviation", r, "Largest deviation from the limit surface",
+             read_only=True)
+        _add(obj, "App::PropertyStringList", "Warnings", r, "Conversion warnings", read_only=True)
+
+    @staticmethod
+    def signature(cage, level, tolerance, polar):
+        """What a conversion depends on: a result can be reused while this is unchanged."""
+        return (cage.vertices.tobytes(), cage.face_sizes.tobytes(), cage.face_indices.tobytes(),
+                tuple(cage.creases), tuple(cage.corners), tuple(cage.holes), tuple(sorted(cage.options.items())),
+                int(level), float(tolerance), polar)
+
+    def prepare(self, signature, result):
+        """A result computed before the object existed (make_nurbs), used by the first recompute."""
+        self._prepared = (signature, result)
+
+    def execute(self, obj):
+        import Part
+        if obj.Source is None:
+            raise ValueError("%s: no Source" % obj.Label)
+        cage = cage_of(obj.Source)
+        prepared, self._prepared = getattr(self, "_prepared", None), None
+        if prepared and prepared[0] == self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling):
+            result = prepared[1]
+        else:
+            result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress)
+        shape = Part.Shape()
+        shape.importBrepFromString(result.brep_text)
+        if obj.OutputType == "Shell" and shape.Solids:
+            shells = shape.Shells
+            shape = shells[0] if len(shells) == 1 else Part.Compound(shells)
+        placement = obj.Placement
+        obj.Shape = shape
+        obj.Placement = placement
+        q = cage.quad_recovery
+        obj.RecoveredQuads = q["quads"] if q else -1
+        obj.KeptTriangles = q["triangles_kept"] if q else 0
+        obj.Patches = result.num_patches
+        r = result.report
+        obj.MaxGap = r["continuity"]["max_gap"] or 0.0
+        obj.MaxNormalAngle = r["continuity"]["max_normal_angle_deg"] or 0.0
+        obj.MaxDeviation = r["deviation"]["max"] or 0.0
+        obj.Warnings = [str(w) for w in result.warnings]
+        self._result = result
+        if q:
+            App.Console.PrintMessage("Subd2Nurbs: %s: %d quads recovered from %d triangles, %d triangles kept "
+                                     "(%d fan vertices)\n" % (obj.Label, q["quads"], q["source_triangles"],
+                                                              q["triangles_kept"], q["fan_vertices"]))
+        for w in result.warnings:
+            App.Console.PrintWarning("Subd2Nurbs: %s: %s\n" % (obj.Label, w))
+
+    def result(self, obj):
+        """The last subd2nurbs.ConversionResult (converted again after a reload)."""
+        if getattr(self, "_result", None) is None:
+            self._result = convert_cage(cage_of(obj.Source), obj.Level, obj.Tolerance, obj.PolarHandling,
+                                        progress=obj.ShowProgress)
+        return self._result
+
+    def onDocumentRestored(self, obj):
+        obj.Proxy = self
+        self._result = None
+        self.setup(obj)
+
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        self._result = None
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        self._result = None
+        return None
+
+
+def highlight_edges(obj, names, color=(1.0, 0.0, 0.0)):
+    """Draws the named edges ("EdgeN") of obj in `color`, thicker, and selects them."""
+    import FreeCADGui as Gui
+    vobj = obj.ViewObject
+    base = tuple(vobj.LineColor[:3])
+    indices = {int(n[4:]) - 1 for n in names}
+    vobj.LineColorArray = [color if i in indices else base for i in range(len(obj.Shape.Edges))]
+    vobj.LineWidth = max(vobj.LineWidth, 3.0)
+    Gui.Selection.clearSelection()
+    for n in names:
+        Gui.Selection.addSelection(obj.Document.Name, obj.Name, n)
+
+
+class _ViewProvider:
+    ICON = "Subd2Nurbs.svg"
+
+    def __init__(self, vobj):
+        vobj.Proxy = self
+
+    def attach(self, vobj):
+        self.Object = vobj.Object
+
+    def getIcon(self):
+        return os.path.join(ICONS, self.ICON)
+
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        return None
+
+
+class ViewProviderCage(_ViewProvider):
+    ICON = "Subd2Nurbs_Cage.svg"
+
+    def __init__(self, vobj):
+        super().__init__(vobj)
+        vobj.LineColor = (0.2, 0.4, 0.9)
+        vobj.PointColor = (0.2, 0.4, 0.9)
+        vobj.PointSize = 4.0
+
+
+class ViewProviderNurbs(_ViewProvider):
+    ICON = "Subd2Nurbs_Convert.svg"
+
+    def claimChildren(self):
+        source = getattr(self, "Object", None) and self.Object.Source
+        return [source] if source is not None else []

@@ -1,0 +1,228 @@
+"""Headless tests of the Subd2Nurbs workbench (label freecad), run inside freecadcmd by
+run_workbench_tests.py. Environment: S2N_CLI (the subd2nurbs executable), S2N_CORPUS (the
+OpenSubdiv corpus); sys.path holds build/python and freecad_plugin.
+
+Oracles: face counts from the cage file itself (one face per quad; one per face corner when
+the cage has n-gons or triangles), FreeCAD's own checks (isValid, isClosed), OCCT's
+measurement of the CLI's STEP file read by FreeCAD (faces, area), the document's object
+list before and after a failure."""
+
+import os
+import shutil
+import subprocess
+import tempfile
+import unittest
+
+import FreeCAD as App
+import Mesh
+import Part
+
+import subd2nurbs
+import s2n_freecad.api as s2n
+from s2n_freecad import features
+
+CORPUS = os.environ.get("S2N_CORPUS", "")
+CLI = os.environ.get("S2N_CLI", "")
+
+
+def corpus(name):
+    return os.path.join(CORPUS, name + ".obj")
+
+
+def face_sizes(path):
+    return [len(line.split()) - 1 for line in open(path) if line.startswith("f ")]
+
+
+def expected_faces(path):
+    """One B-rep face per quad of an all-quad cage, else one per face corner (one
+    Catmull-Clark step makes the cage all quads)."""
+    sizes = face_sizes(path)
+    return len(sizes) if all(n == 4 for n in sizes) else sum(sizes)
+
+
+def first_face_poles(shape):
+    s = shape.Faces[0].Surface
+    return s.NbUPoles * s.NbVPoles
+
+
+class Workbench(unittest.TestCase):
+    def setUp(self):
+        self.doc = App.newDocument("s2n_test")
+        self.tmp = tempfile.mkdtemp(prefix="s2n_fc_")
+
+    def tearDown(self):
+        App.closeDocument(self.doc.Name)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def names(self):
+        return sorted(o.Name for o in self.doc.Objects)
+
+    def assertSolid(self, shape, faces):
+        self.assertTrue(shape.isValid())
+        self.assertEqual(len(shape.Solids), 1)
+        self.assertTrue(shape.Solids[0].isClosed())
+        self.assertEqual(len(shape.Faces), faces)
+        self.assertGreater(shape.Volume, 0)
+
+    def test_import_and_convert_corpus_cages(self):
+        for name in ("catmark_cube_creases0", "catmark_pyramid_creases0", "catmark_torus_creases0"):
+            with self.subTest(name):
+                path = corpus(name)
+                cage = s2n.make_cage(path, doc=self.doc)
+                self.assertEqual(cage.NumFaces, len(face_sizes(path)))
+                self.assertEqual(cage.NumVertices, sum(1 for line in open(path) if line.startswith("v ")))
+                info = subd2nurbs.info(subd2nurbs.read_cage(path))
+                self.assertEqual(len(cage.Shape.Edges), info["edges"])  # the cage as wires
+                nurbs = s2n.make_nurbs(cage, progress=False)
+                self.assertSolid(nurbs.Shape, expected_faces(path))
+                self.assertEqual(nurbs.Patches, expected_faces(path))
+                self.assertEqual(nurbs.RecoveredQuads, -1)
+                self.assertLess(nurbs.MaxGap, 1e-9 * info["bounds"]["diagonal"])
+
+    def test_creases_survive_import(self):
+        path = corpus("catmark_cube_creases0")
+        cage = s2n.make_cage(path, doc=self.doc)
+        self.assertEqual(cage.NumCreases, len(subd2nurbs.read_cage(path).creases))
+        self.assertGreater(cage.NumCreases, 0)
+
+    def test_properties_and_source_changes_recompute(self):
+        cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
+        nurbs = s2n.make_nurbs(cage, progress=False)
+        poles0, area0 = first_face_poles(nurbs.Shape), nurbs.Shape.Area
+        nurbs.Level = 1
+        self.doc.recompute()
+        # One face per cage quad at every level; the level refines each face's B-spline.
+        self.assertSolid(nurbs.Shape, 6)
+        self.assertGreater(first_face_poles(nurbs.Shape), poles0)
+        # Moving a cage vertex recomputes the NURBS object through the link.
+        coords = list(cage.Coordinates)
+        coords[0] -= 0.5
+        cage.Coordinates = coords
+        self.doc.recompute()
+        self.assertSolid(nurbs.Shape, 6)
+        self.assertNotAlmostEqual(nurbs.Shape.Area, area0, places=6)
+        # A different source gives its face count.
+        other = s2n.make_cage(corpus("catmark_pyramid_creases0"), doc=self.doc)
+        nurbs.Source = other
+        self.doc.recompute()
+        self.assertSolid(nurbs.Shape, expected_faces(corpus("catmark_pyramid_creases0")))
+        nurbs.OutputType = "Shell"
+        self.doc.recompute()
+        self.assertEqual(nurbs.Shape.ShapeType, "Shell")
+        self.assertTrue(nurbs.Shape.isClosed())
+
+    def test_save_reopen_recompute(self):
+        cage = s2n.make_cage(corpus("catmark_cube_creases1"), doc=self.doc)
+        nurbs = s2n.make_nurbs(cage, level=1, progress=False)
+        faces, area = len(nurbs.Shape.Faces), nurbs.Shape.Area
+        nurbs_name, cage_name = nurbs.Name, cage.Name
+        path = os.path.join(self.tmp, "saved.FCStd")
+        self.doc.saveAs(path)
+        App.closeDocument(self.doc.Name)
+        self.doc = App.openDocument(path)
+        nurbs = self.doc.getObject(nurbs_name)
+        cage = self.doc.getObject(cage_name)
+        self.assertIsInstance(nurbs.Proxy, features.NurbsFeature)
+        self.assertIsInstance(cage.Proxy, features.CageFeature)
+        self.assertEqual(nurbs.Level, 1)
+        self.assertIs(nurbs.Source, cage)
+        cage.touch()
+        self.doc.recompute()
+        self.assertSolid(nurbs.Shape, faces)
+        self.assertAlmostEqual(nurbs.Shape.Area, area, delta=1e-9 * area)
+        report = s2n.check_quality(nurbs)  # the result is rebuilt after a reload
+        self.assertEqual(report["faces"], faces)
+
+    def test_bad_cage_leaves_the_document_unchanged(self):
+        s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
+        before = self.names()
+        bad = os.path.join(self.tmp, "nonmanifold.obj")
+        with open(bad, "w") as f:  # edge 1-2 shared by three faces
+            f.write("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 1 0 1\nv 2 1 0\n"
+                    "f 1 2 3 4\nf 2 5 3\nf 2 3 6\n")
+        with self.assertRaises(subd2nurbs.CageError) as cm:
+            s2n.make_cage(bad, doc=self.doc)
+        self.assertIn("nonmanifold.obj", str(cm.exception))
+        self.assertEqual(self.names(), before)
+        # A non-manifold triangle mesh is refused by make_nurbs, again without a trace.
+        mesh = self.doc.addObject("Mesh::Feature", "BadMesh")
+        mesh.Mesh = Mesh.Mesh([[(0, 0, 0), (1, 0, 0), (1, 1, 0)], [(1, 0, 0), (0, 0, 0), (0, 0, 1)],
+                               [(0, 0, 0), (1, 0, 0), (0, -1, 0)]])
+        self.doc.recompute()
+        before = self.names()
+        with self.assertRaises(Exception):
+            s2n.make_nurbs(mesh, progress=False)
+        self.assertEqual(self.names(), before)
+        # Settings errors too.
+        cage = self.doc.getObject(before[0]) if features.is_cage(self.doc.getObject(before[0])) else \
+            [o for o in self.doc.Objects if features.is_cage(o)][0]
+        with self.assertRaises(ValueError):
+            s2n.make_nurbs(cage, level=-1, progress=False)
+        with self.assertRaises(ValueError):
+            s2n.make_nurbs(cage, polar="Polar caps", progress=False)
+        self.assertEqual(self.names(), before)
+
+    def test_failed_recompute_keeps_the_last_shape(self):
+        cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
+        nurbs = s2n.make_nurbs(cage, progress=False)
+        area = nurbs.Shape.Area
+        nurbs.Level = -1  # refused by the converter
+        self.doc.recompute()
+        self.assertFalse(nurbs.isValid())
+        self.assertAlmostEqual(nurbs.Shape.Area, area, delta=1e-12 * area)
+        nurbs.Level = 0
+        self.doc.recompute()
+        self.assertTrue(nurbs.isValid())
+
+    def test_triangulated_mesh_feature_gives_the_cage_faces(self):
+        for name, closed in (("catmark_cube", True), ("catmark_torus", True), ("catmark_helmet", False)):
+            with self.subTest(name):
+                path = corpus(name)
+                mesh = self.doc.addObject("Mesh::Feature", name + "_mesh")
+                mesh.Mesh = Mesh.read(path)  # FreeCAD's reader: triangles
+                self.assertEqual(mesh.Mesh.CountFacets, 2 * len(face_sizes(path)))
+                self.doc.recompute()
+                nurbs = s2n.make_nurbs(mesh, progress=False)
+                self.assertEqual(nurbs.RecoveredQuads, len(face_sizes(path)))
+                self.assertEqual(nurbs.KeptTriangles, 0)
+                if closed:
+                    self.assertSolid(nurbs.Shape, expected_faces(path))
+                else:  # an open surface: a shell with the cage's face count
+                    self.assertTrue(nurbs.Shape.isValid())
+                    self.assertEqual(len(nurbs.Shape.Solids), 0)
+                    self.assertEqual(len(nurbs.Shape.Faces), expected_faces(path))
+
+    def test_same_solid_as_the_cli_step(self):
+        self.assertTrue(CLI, "S2N_CLI is not set")
+        for name in ("catmark_cube_creases0", "catmark_pyramid_creases0"):
+            with self.subTest(name):
+                path = corpus(name)
+                step = os.path.join(self.tmp, name + ".step")
+                subprocess.run([CLI, "convert", path, "-o", step, "--quiet"], check=True)
+                from_cli = Part.read(step)
+                nurbs = s2n.make_nurbs(s2n.make_cage(path, doc=self.doc), progress=False)
+                self.assertEqual(len(nurbs.Shape.Faces), len(from_cli.Faces))
+                self.assertEqual(len(nurbs.Shape.Edges), len(from_cli.Edges))
+                self.assertLessEqual(abs(nurbs.Shape.Area - from_cli.Area), 1e-9 * from_cli.Area)
+                self.assertLessEqual(abs(nurbs.Shape.Volume - from_cli.Volume), 1e-9 * from_cli.Volume)
+
+    def test_check_quality_reports_and_names_edges(self):
+        nurbs = s2n.make_nurbs(s2n.make_cage(corpus("catmark_cube_creases0"), doc=self.doc), progress=False)
+        report = s2n.check_quality(nurbs, count=3)
+        self.assertTrue(report["valid"])
+        self.assertEqual(report["faces"], 6)
+        self.assertEqual(len(report["worst_edges"]), 3)
+        for edge, angle, gap in report["worst_edges"]:
+            index = int(edge[4:])
+            self.assertTrue(1 <= index <= len(nurbs.Shape.Edges))
+            self.assertGreaterEqual(angle, 0)
+        self.assertLess(report["max_gap"], 1e-9 * 10)
+
+    def test_undo_removes_the_conversion(self):
+        self.doc.UndoMode = 1
+        cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
+        before = self.names()
+        s2n.make_nurbs(cage, progress=False)
+        self.assertEqual(len(self.names()), len(before) + 1)
+        self.doc.undo()
+        self.assertEqual(self.names(), before)
