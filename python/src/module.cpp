@@ -428,6 +428,24 @@ py::dict brep_summary(const std::string& text) {
   return d;
 }
 
+/// Writes BREP text as STEP / IGES / BREP (by extension), atomically, as the CLI does.
+void write_shape_file(const std::string& text, const std::string& path, const std::string& schema) {
+  if (schema != "ap214" && schema != "ap242") throw pipeline::SettingsError("schema must be ap214 or ap242");
+  occt::Format format;
+  try {
+    format = occt::format_from_path(path);
+  } catch (const std::invalid_argument&) {
+    throw pipeline::SettingsError("cannot tell the output format from '" + path + "': use .step, .stp, .iges, .igs or .brep");
+  }
+  occt::write_shape(occt::read_brep_text(text), path, format,
+                    schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214);
+}
+
+/// OCCT's measurement of a STEP / IGES / BREP file.
+py::dict file_summary(const std::string& path) {
+  return brep_summary(occt::brep_text(occt::read_shape(path)));
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_subd2nurbs, m) {
@@ -442,4 +460,6 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.def("refine", &refine);
   m.def("convert", &convert);
   m.def("brep_summary", &brep_summary, py::arg("text"));
+  m.def("write_shape", &write_shape_file);
+  m.def("file_summary", &file_summary, py::arg("path"));
 }

@@ -34,6 +34,7 @@ OCC_VERSION = _subd2nurbs.OCC_VERSION
 
 __all__ = [
     "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "brep_summary",
+    "file_summary",
     "occt_compatible", "CageError", "SettingsError", "ConversionError", "WriteError",
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
 ]
@@ -263,7 +264,8 @@ def info(cage):
 
 def refine(cage, levels=1):
     """Refines a cage uniformly `levels` times (Catmull-Clark, tags honoured); returns the last
-    level as a new Cage (without tags: its sharpness is in its positions)."""
+    level's vertices and faces as a new Cage. Unlike `subd2nurbs refine`, the refined level's
+    (decayed) crease and corner sharpness is not carried over: the returned Cage has no tags."""
     cage = _cage(cage)
     if not _is_int(levels) or levels < 0:
         raise SettingsError("levels must be an integer >= 0, not %r" % (levels,))
@@ -306,6 +308,13 @@ class ConversionResult:
         self.warnings = d["warnings"]
         self.model_size = d["model_size"]
         self.closed = d["closed"]
+
+    def write(self, path, schema="ap214"):
+        """Writes the B-rep as STEP (.step/.stp, schema "ap214" or "ap242"), IGES (.iges/.igs)
+        or BREP (.brep), atomically, with the CLI's writer. Raises WriteError naming the file."""
+        if self.brep_text is None:
+            raise ConversionError("no B-rep to write: converted with brep=False")
+        _subd2nurbs.write_shape(self.brep_text, str(path), schema)
 
     @property
     def num_patches(self):
@@ -368,6 +377,11 @@ def brep_summary(text):
     if not isinstance(text, str):
         raise TypeError("expected BREP text (str)")
     return _subd2nurbs.brep_summary(text)
+
+
+def file_summary(path):
+    """OCCT's measurement of a STEP / IGES / BREP file (as brep_summary)."""
+    return _subd2nurbs.file_summary(str(path))
 
 
 def occt_compatible(version):

@@ -277,6 +277,30 @@ class Triangles(unittest.TestCase):
         self.assertEqual(cage.num_faces, n)
 
 
+class Writing(unittest.TestCase):
+    def test_write_step_iges_brep_like_the_cli(self):
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        r = s2n.convert(s2n.read_cage(corpus("catmark_cube_creases0")))
+        with tempfile.TemporaryDirectory() as d:
+            subprocess.run([CLI, "convert", corpus("catmark_cube_creases0"), "-o", os.path.join(d, "cli.step"), "-q"],
+                           check=True)
+            cli = s2n.file_summary(os.path.join(d, "cli.step"))
+            for name in ("a.step", "a.stp", "a.iges", "a.brep"):
+                r.write(os.path.join(d, name), schema="ap242" if name == "a.stp" else "ap214")
+                m = s2n.file_summary(os.path.join(d, name))
+                self.assertTrue(m["valid"], name)
+                self.assertEqual(m["faces"], cli["faces"], name)
+                self.assertLessEqual(abs(m["area"] - cli["area"]), 1e-9 * cli["area"], name)
+            with open(os.path.join(d, "a.stp")) as fh:
+                self.assertIn("AP242", fh.read(2000).upper())
+            with self.assertRaises(s2n.SettingsError):
+                r.write(os.path.join(d, "a.obj"))
+            with self.assertRaises(s2n.WriteError) as cm:
+                r.write(os.path.join(d, "no", "such", "dir.step"))
+            self.assertIn("dir.step", str(cm.exception))
+            self.assertEqual(sorted(os.listdir(d)), ["a.brep", "a.iges", "a.step", "a.stp", "cli.step"])
+
+
 class Versions(unittest.TestCase):
     def test_occt_version(self):
         self.assertRegex(s2n.OCC_VERSION, r"^\d+\.\d+\.\d+")
