@@ -78,15 +78,15 @@ def make_cage(source, doc=None, name="Cage"):
     return obj
 
 
-def make_nurbs(source, level=0, tolerance=0.0, polar="Catmull-Clark", shell=False, doc=None, name="NURBS",
+def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, doc=None, name="NURBS",
                progress=True):
     """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
     Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around
     high-valence vertices are kept; the object's RecoveredQuads says how many).
 
     level: extra refinement levels (>= 0); tolerance > 0: choose the level for this deviation
-    (relative to the model size); polar: "Catmull-Clark" (polar caps when subd2nurbs has
-    them); shell: a shell instead of a solid. It recomputes when the source or one of these
+    (relative to the model size); polar: "Polar caps" (polar structures become singular polar
+    caps, the default as in the CLI) or "Catmull-Clark"; shell: a shell instead of a solid. It recomputes when the source or one of these
     properties changes. Raises (document unchanged) when the conversion fails."""
     check_occt()
     if source is None or not hasattr(source, "Document"):

@@ -15,7 +15,7 @@ ICONS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BOUNDARY = ["edge-and-corner", "edge-only", "none"]
 CREASE_METHOD = ["uniform", "chaikin"]
 TRIANGLES = ["catmark", "smooth"]
-POLAR = ["Catmull-Clark", "Polar caps"]
+POLAR = ["Polar caps", "Catmull-Clark"]
 OUTPUT = ["Solid", "Shell"]
 
 
@@ -202,6 +202,7 @@ def convert_cage(cage, level, tolerance, polar, progress=True):
     if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
         raise subd2nurbs.SettingsError("polar caps are not available in this subd2nurbs build: use Catmull-Clark")
     kwargs = {"tolerance": tolerance} if tolerance and tolerance > 0 else {"level": int(level)}
+    kwargs["polar"] = polar == "Polar caps"
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
         return subd2nurbs.convert(cage, progress=indicator, **kwargs)
@@ -230,7 +231,8 @@ class NurbsFeature:
              "(relative to the model size); Level is then ignored")
         if "PolarHandling" not in obj.PropertiesList:
             _add(obj, "App::PropertyEnumeration", "PolarHandling", g,
-                 "Triangle fans around poles: Catmull-Clark patches, or polar caps (when available)")
+                 "Polar structures (triangle fans around a pole): one singular polar cap each, or "
+                 "Catmull-Clark patches like every other vertex")
             obj.PolarHandling = POLAR
         if "OutputType" not in obj.PropertiesList:
             _add(obj, "App::PropertyEnumeration", "OutputType", g, "A solid (closed cages) or a shell")

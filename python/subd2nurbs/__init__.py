@@ -39,6 +39,9 @@ __all__ = [
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
 ]
 
+#: Polar structures can become singular polar caps (convert(polar=True)).
+HAS_POLAR = True
+
 #: Sharpness at or above this is infinitely sharp (OpenSubdiv's convention).
 INFINITE_SHARPNESS = 10.0
 
@@ -338,13 +341,16 @@ class ConversionResult:
 
 
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
-            progress=None):
+            progress=None, polar=True, radial_steps=1, polar_lambda=0.75):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
     level: extra refinement levels beyond the minimum (>= 0; default 0), as --level.
     tolerance: choose the level so that the deviation from the limit surface is at most this
         (relative to the bounding-box diagonal, or in model units with absolute=True), as
         --tolerance / --absolute. Excludes level.
+    polar: polar structures (triangle fans around a pole, MATH.md 3.1) become one singular
+        polar cap each (as --polar on, the default); False: Catmull-Clark everywhere.
+    radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
     progress: a callable(stage: str, fraction: float) called as the stages run.
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
     """
@@ -361,10 +367,15 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
             raise SettingsError("tolerance must be a positive number, not %r" % (tolerance,))
     elif absolute:
         raise SettingsError("absolute needs a tolerance")
+    if radial_steps not in (1, 2) or isinstance(radial_steps, bool):
+        raise SettingsError("radial_steps must be 1 or 2, not %r" % (radial_steps,))
+    if isinstance(polar_lambda, bool) or not isinstance(polar_lambda, numbers.Real) \
+            or not math.isfinite(polar_lambda) or polar_lambda <= 0:
+        raise SettingsError("polar_lambda must be a positive number, not %r" % (polar_lambda,))
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
     d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
-                            cage.name, cage.warnings, progress)
+                            bool(polar), int(radial_steps), float(polar_lambda), cage.name, cage.warnings, progress)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")

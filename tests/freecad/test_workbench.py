@@ -23,6 +23,7 @@ from s2n_freecad import features
 
 CORPUS = os.environ.get("S2N_CORPUS", "")
 CLI = os.environ.get("S2N_CLI", "")
+SAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "samples")
 
 
 def corpus(name):
@@ -159,7 +160,7 @@ class Workbench(unittest.TestCase):
         with self.assertRaises(ValueError):
             s2n.make_nurbs(cage, level=-1, progress=False)
         with self.assertRaises(ValueError):
-            s2n.make_nurbs(cage, polar="Polar caps", progress=False)
+            s2n.make_nurbs(cage, polar="Sometimes", progress=False)
         self.assertEqual(self.names(), before)
 
     def test_failed_recompute_keeps_the_last_shape(self):
@@ -191,6 +192,35 @@ class Workbench(unittest.TestCase):
                     self.assertTrue(nurbs.Shape.isValid())
                     self.assertEqual(len(nurbs.Shape.Solids), 0)
                     self.assertEqual(len(nurbs.Shape.Faces), expected_faces(path))
+
+    def test_polar_handling_and_a_triangulated_pole(self):
+        """samples/capped_cylinder.obj: two 16-triangle fans (poles) and 112 quads."""
+        path = os.path.join(SAMPLES, "capped_cylinder.obj")
+        sizes = face_sizes(path)
+        cage = s2n.make_cage(path, doc=self.doc)
+        caps = s2n.make_nurbs(cage, progress=False)  # polar caps, the default
+        self.assertEqual(caps.PolarHandling, "Polar caps")
+        self.assertTrue(caps.Shape.isValid())
+        self.assertEqual(len(caps.Shape.Solids), 1)
+        cap_faces = len(caps.Shape.Faces)
+        caps.PolarHandling = "Catmull-Clark"
+        self.doc.recompute()
+        self.assertSolid(caps.Shape, sum(sizes))  # triangles present: one face per face corner
+        self.assertLess(cap_faces, sum(sizes))
+        # The same cage triangulated by FreeCAD's OBJ reader: quads come back, the fans stay
+        # triangles and become the same polar caps.
+        mesh = self.doc.addObject("Mesh::Feature", "cylinder_mesh")
+        mesh.Mesh = Mesh.read(path)
+        self.doc.recompute()
+        from_mesh = s2n.make_nurbs(mesh, progress=False)
+        self.assertEqual(from_mesh.RecoveredQuads, sizes.count(4))
+        self.assertEqual(from_mesh.KeptTriangles, sizes.count(3))
+        self.assertEqual(len(from_mesh.Shape.Faces), cap_faces)
+        self.assertTrue(from_mesh.Shape.isValid())
+        if CLI:
+            step = os.path.join(self.tmp, "cylinder.step")
+            subprocess.run([CLI, "convert", path, "-o", step, "--quiet"], check=True)
+            self.assertEqual(len(Part.read(step).Faces), cap_faces)
 
     def test_same_solid_as_the_cli_step(self):
         self.assertTrue(CLI, "S2N_CLI is not set")

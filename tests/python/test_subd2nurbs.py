@@ -267,6 +267,21 @@ class Triangles(unittest.TestCase):
         r = s2n.convert(cage)
         self.assertEqual(s2n.brep_summary(r.brep_text)["faces"], 6)
 
+    def test_triangulated_polar_sample_recovers_its_cage_and_caps(self):
+        samples = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "samples")
+        cage = s2n.read_cage(os.path.join(samples, "capped_cylinder.obj"))
+        tris = [[f[0], f[k], f[k + 1]] for f in cage.faces for k in range(1, len(f) - 1)]
+        rebuilt = s2n.from_triangles(cage.vertices, tris)
+        self.assertEqual(sorted(map(sorted, rebuilt.faces)), sorted(map(sorted, cage.faces)))
+        self.assertEqual(rebuilt.quad_recovery["fan_vertices"], 2)
+        self.assertEqual(s2n.convert(rebuilt).brep["faces"], s2n.convert(cage).brep["faces"])
+        with self.assertRaises(s2n.SettingsError):
+            s2n.convert(cage, radial_steps=3)
+        with self.assertRaises(s2n.SettingsError):
+            s2n.convert(cage, polar_lambda=0)
+        off = s2n.convert(cage, polar=False, brep=False)
+        self.assertEqual(off.num_patches, int(cage.face_sizes.sum()))  # one patch per face corner
+
     def test_from_triangles_keeps_a_pole_fan(self):
         n = 8
         v = [[0, 0, 0]] + [[math.cos(2 * math.pi * k / n), math.sin(2 * math.pi * k / n), 0] for k in range(n)]
