@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "converter/cli/convert.h"
+#include "converter/cli/limit_cmd.h"
 #include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/polar/polar_refine.h"
@@ -322,6 +323,9 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress and no summary on stderr (warnings are still printed)");
 
+  LimitOptions limit;
+  CLI::App* limit_command = add_limit_command(app, limit);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -332,6 +336,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   try {
     if (*info_command) run_info(info, out);
     if (*refine_command) run_refine(refine, err);
+    if (*limit_command) run_limit(limit, std::cin, out, err);
     if (*convert_command) {
       convert.level_given = level_option->count() > 0;
       convert.tolerance_given = tolerance_option->count() > 0;

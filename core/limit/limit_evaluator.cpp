@@ -1,0 +1,761 @@
+#include "core/limit/limit_evaluator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "core/limit/stam_eigen.h"
+
+namespace subd2nurbs {
+
+namespace {
+
+constexpr float kInfSharp = static_cast<float>(kInfiniteSharpness);
+constexpr int kMaxDepth = 100;       // refinement levels before a point is taken as its corner
+constexpr int kNudgeExponent = 20;   // fallback derivatives: 2^-20 inside the face
+
+bool infinite(float s) { return s >= kInfSharp; }
+bool semi(float s) { return s > 0.0f && s < kInfSharp; }
+
+// ---------------------------------------------------------------------------------------------
+// Local derivatives and the affine parameter maps
+
+struct Derivs {
+  Point3 p{}, ds{}, dt{}, dss{}, dst{}, dtt{};
+};
+
+/// (s, t)_local = M (u, v) + c.
+struct Affine {
+  double m00 = 1, m01 = 0, m10 = 0, m11 = 1, c0 = 0, c1 = 0;
+  /// Composition: first this, then `r` (a corner frame or a child map).
+  Affine then(const Affine& r) const {
+    Affine o;
+    o.m00 = r.m00 * m00 + r.m01 * m10;
+    o.m01 = r.m00 * m01 + r.m01 * m11;
+    o.m10 = r.m10 * m00 + r.m11 * m10;
+    o.m11 = r.m10 * m01 + r.m11 * m11;
+    o.c0 = r.m00 * c0 + r.m01 * c1 + r.c0;
+    o.c1 = r.m10 * c0 + r.m11 * c1 + r.c1;
+    return o;
+  }
+  void apply(double s, double t, double& a, double& b) const {
+    a = m00 * s + m01 * t + c0;
+    b = m10 * s + m11 * t + c1;
+  }
+};
+
+/// Frame of face corner k: (a, b) with a along the corner's outgoing edge and b towards the
+/// previous corner, (0,0) at the corner. Face coordinates are those of corner 0.
+Affine corner_frame(int k) {
+  switch (k & 3) {
+    case 0: return {1, 0, 0, 1, 0, 0};
+    case 1: return {0, 1, -1, 0, 0, 1};   // a = t, b = 1 - s
+    case 2: return {-1, 0, 0, -1, 1, 1};  // a = 1 - s, b = 1 - t
+    default: return {0, -1, 1, 0, 1, 0};  // a = 1 - t, b = s
+  }
+}
+/// Child quad at corner k of a quad: its coordinates are twice the corner frame's.
+Affine child_map(int k) {
+  Affine a = corner_frame(k);
+  a.m00 *= 2; a.m01 *= 2; a.m10 *= 2; a.m11 *= 2; a.c0 *= 2; a.c1 *= 2;
+  return a;
+}
+/// Face grid point (i, j) of corner-k-frame point (a, b).
+void corner_to_grid(int k, int a, int b, int& i, int& j) {
+  switch (k & 3) {
+    case 0: i = a; j = b; return;
+    case 1: i = 1 - b; j = a; return;
+    case 2: i = 1 - a; j = 1 - b; return;
+    default: i = b; j = 1 - a; return;
+  }
+}
+
+void axpy(Point3& y, double a, const Point3& x) {
+  y[0] += a * x[0];
+  y[1] += a * x[1];
+  y[2] += a * x[2];
+}
+
+/// Derivatives with respect to (u, v) from those with respect to local (s, t) = M (u, v) + c.
+LimitSample to_ptex(const Derivs& d, const Affine& A) {
+  LimitSample o;
+  o.p = d.p;
+  axpy(o.du, A.m00, d.ds);
+  axpy(o.du, A.m10, d.dt);
+  axpy(o.dv, A.m01, d.ds);
+  axpy(o.dv, A.m11, d.dt);
+  axpy(o.duu, A.m00 * A.m00, d.dss);
+  axpy(o.duu, 2 * A.m00 * A.m10, d.dst);
+  axpy(o.duu, A.m10 * A.m10, d.dtt);
+  axpy(o.duv, A.m00 * A.m01, d.dss);
+  axpy(o.duv, A.m00 * A.m11 + A.m10 * A.m01, d.dst);
+  axpy(o.duv, A.m10 * A.m11, d.dtt);
+  axpy(o.dvv, A.m01 * A.m01, d.dss);
+  axpy(o.dvv, 2 * A.m01 * A.m11, d.dst);
+  axpy(o.dvv, A.m11 * A.m11, d.dtt);
+  return o;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Uniform cubic B-spline patch of 16 points P[4a + b] (a along s)
+
+void basis(double x, double N[4], double D[4], double DD[4]) {
+  const double x2 = x * x, x3 = x2 * x, y = 1 - x;
+  N[0] = y * y * y / 6;
+  N[1] = (3 * x3 - 6 * x2 + 4) / 6;
+  N[2] = (-3 * x3 + 3 * x2 + 3 * x + 1) / 6;
+  N[3] = x3 / 6;
+  D[0] = -y * y / 2;
+  D[1] = (9 * x2 - 12 * x) / 6;
+  D[2] = (-9 * x2 + 6 * x + 3) / 6;
+  D[3] = x2 / 2;
+  DD[0] = y;
+  DD[1] = 3 * x - 2;
+  DD[2] = -3 * x + 1;
+  DD[3] = x;
+}
+
+template <class Pt>
+Derivs bspline16(const Pt* P, double s, double t) {
+  double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
+  basis(s, Ns, Ds, DDs);
+  basis(t, Nt, Dt, DDt);
+  Derivs d;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      const auto& q = P[4 * a + b];
+      for (int k = 0; k < 3; ++k) {
+        const double c = q[k];
+        d.p[k] += Ns[a] * Nt[b] * c;
+        d.ds[k] += Ds[a] * Nt[b] * c;
+        d.dt[k] += Ns[a] * Dt[b] * c;
+        d.dss[k] += DDs[a] * Nt[b] * c;
+        d.dst[k] += Ds[a] * Dt[b] * c;
+        d.dtt[k] += Ns[a] * DDt[b] * c;
+      }
+    }
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Corner classification
+
+enum class CornerKind : unsigned char { Regular, CreaseSide, CornerSide, SmoothEV, Other };
+
+/// Every edge at v and v itself either smooth or infinitely sharp.
+bool no_semi_sharp_at(const SubdivLevel& L, int v) {
+  if (semi(L.vertex_sharpness[v])) return false;
+  bool ok = true;
+  for_each_vertex_edge(L.mesh, v, [&](int e, int) { ok = ok && !semi(L.edge_sharpness[e]); });
+  return ok;
+}
+
+/// v interior, not sharp, no sharp incident edge, all faces quads (any valence).
+bool smooth_quad_vertex(const SubdivLevel& L, int v) {
+  const PolyMesh& m = L.mesh;
+  if (m.is_boundary_vertex(v) || m.vertex_face_count(v) == 0 || L.vertex_sharpness[v] != 0.0f) return false;
+  const int* c = m.vertex_corners(v);
+  for (int i = 0, n = m.vertex_face_count(v); i < n; ++i) {
+    if (m.face_size(m.corner_face(c[i])) != 4) return false;
+    if (L.edge_sharpness[m.corner_edge(c[i])] != 0.0f) return false;
+  }
+  return true;
+}
+
+/// Kind of corner h (a halfedge of quad face f leaving the corner vertex).
+CornerKind classify_corner(const SubdivLevel& L, int h) {
+  const PolyMesh& m = L.mesh;
+  const int v = m.corner_vertex(h);
+  const int hp = m.prev(h);
+  const float s_out = L.edge_sharpness[m.corner_edge(h)];
+  const float s_in = L.edge_sharpness[m.corner_edge(hp)];
+  if (s_out == 0.0f && s_in == 0.0f) {
+    if (!smooth_quad_vertex(L, v)) return CornerKind::Other;
+    const int n = m.vertex_face_count(v);
+    if (n == 4) return CornerKind::Regular;
+    return n >= 3 ? CornerKind::SmoothEV : CornerKind::Other;
+  }
+  if (!no_semi_sharp_at(L, v)) return CornerKind::Other;
+  if (infinite(s_out) && infinite(s_in)) {
+    return vertex_rule(L, v) == VertexRule::Corner ? CornerKind::CornerSide : CornerKind::Other;
+  }
+  // One face edge infinitely sharp, the other smooth: a crease (or boundary) vertex with two
+  // faces on this side, both quads.
+  if (L.vertex_sharpness[v] != 0.0f) return CornerKind::Other;
+  int sharp = 0;
+  for_each_vertex_edge(m, v, [&](int e, int) { sharp += infinite(L.edge_sharpness[e]) ? 1 : 0; });
+  if (sharp != 2) return CornerKind::Other;
+  int other;  // the other face's edge at v, across the smooth face edge
+  if (s_out == 0.0f) {
+    const int t = m.twin(h);  // runs into v in the neighbouring face
+    if (t < 0 || m.face_size(m.corner_face(t)) != 4) return CornerKind::Other;
+    other = m.corner_edge(m.next(t));
+  } else {
+    const int t = m.twin(hp);  // leaves v in the neighbouring face
+    if (t < 0 || m.face_size(m.corner_face(t)) != 4) return CornerKind::Other;
+    other = m.corner_edge(m.prev(t));
+  }
+  return infinite(L.edge_sharpness[other]) ? CornerKind::CreaseSide : CornerKind::Other;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The 4x4 grid of a quad (face grid coordinates i, j in -1..2; index (i+1)*4 + (j+1))
+
+struct Grid {
+  Point3 P[16];
+  bool have[16] = {};
+  Point3& at(int i, int j) { return P[(i + 1) * 4 + (j + 1)]; }
+  bool& has(int i, int j) { return have[(i + 1) * 4 + (j + 1)]; }
+  void set(int i, int j, const Point3& p) { at(i, j) = p; has(i, j) = true; }
+};
+
+/// Gathers real points: the face, the rows across smooth sides, the diagonal points at
+/// corners of kind Regular; then phantom points (MATH.md 1.2) across infinitely sharp sides.
+void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, const CornerKind kind[4],
+                 Grid& g) {
+  const PolyMesh& m = L.mesh;
+  const int h0 = m.face_begin(f);
+  const int hk[4] = {h0, h0 + 1, h0 + 2, h0 + 3};
+  auto put = [&](int k, int a, int b, int vertex) {
+    int i, j;
+    corner_to_grid(k, a, b, i, j);
+    g.set(i, j, P[vertex]);
+  };
+  bool sharp_side[4];
+  for (int k = 0; k < 4; ++k) {
+    const int h = hk[k];
+    put(k, 0, 0, m.corner_vertex(h));
+    sharp_side[k] = L.edge_sharpness[m.corner_edge(h)] != 0.0f;
+    if (sharp_side[k]) continue;
+    const int t = m.twin(h);  // across side k: quad (to, from, x, y)
+    put(k, 0, -1, m.to_vertex(m.next(t)));
+    put(k, 1, -1, m.corner_vertex(m.prev(t)));
+    if (kind[k] == CornerKind::Regular) {
+      const int q = m.twin(m.next(t));
+      put(k, -1, -1, m.corner_vertex(m.prev(q)));
+    }
+  }
+  // Side k of the face in grid terms: 0 is j = -1 (v = 0), 1 is i = 2, 2 is j = 2, 3 is i = -1.
+  // Phantoms across sharp u-sides (i = -1 / i = 2) first, then v-sides for every i.
+  if (sharp_side[3] || sharp_side[1]) {
+    for (int j = -1; j <= 2; ++j) {
+      if (sharp_side[3] && g.has(0, j) && g.has(1, j)) {
+        Point3 q;
+        for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(0, j)[c] - g.at(1, j)[c];
+        g.set(-1, j, q);
+      }
+      if (sharp_side[1] && g.has(1, j) && g.has(0, j)) {
+        Point3 q;
+        for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(1, j)[c] - g.at(0, j)[c];
+        g.set(2, j, q);
+      }
+    }
+  }
+  for (int i = -1; i <= 2; ++i) {
+    if (sharp_side[0] && g.has(i, 0) && g.has(i, 1)) {
+      Point3 q;
+      for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(i, 0)[c] - g.at(i, 1)[c];
+      g.set(i, -1, q);
+    }
+    if (sharp_side[2] && g.has(i, 1) && g.has(i, 0)) {
+      Point3 q;
+      for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(i, 1)[c] - g.at(i, 0)[c];
+      g.set(i, 2, q);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Per-face evaluation data (cached for base faces)
+
+struct Prepared {
+  LimitMethod method = LimitMethod::Refined;  // Regular, Stam, or Refined (= not prepared)
+  std::array<Point3, 16> grid{};              // Regular: B-spline points, index 4a + b
+  int corner = 0;                             // Stam: the EV's corner of the face
+  std::shared_ptr<const StamEigen> eig;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> ring;  // Stam: ring points in sector order
+  Eigen::Matrix<double, Eigen::Dynamic, 3> chat;  // V^-1 ring
+  Eigen::Matrix<double, 7, 3> outer;             // Stam: outer points
+  Point3 limit{};                                 // Stam: limit position of the EV; ring, chat
+                                                  // and outer are relative to it
+};
+
+Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
+  Prepared out;
+  const PolyMesh& m = L.mesh;
+  if (m.face_size(f) != 4) return out;
+  CornerKind kind[4];
+  int ev = -1, bad = 0;
+  for (int k = 0; k < 4; ++k) {
+    kind[k] = classify_corner(L, m.face_begin(f) + k);
+    if (kind[k] == CornerKind::SmoothEV) ev = ev < 0 ? k : 4;
+    if (kind[k] == CornerKind::Other) ++bad;
+  }
+  if (bad > 0 || ev == 4) return out;
+  Grid g;
+  gather_grid(L, P, f, kind, g);
+  if (ev < 0) {
+    for (int i = 0; i < 16; ++i)
+      if (!g.have[i]) throw std::logic_error("limit: regular grid incomplete");
+    out.method = LimitMethod::Regular;
+    std::copy(g.P, g.P + 16, out.grid.begin());
+    return out;
+  }
+  for (int k = 0; k < 4; ++k)
+    if (k != ev && kind[k] != CornerKind::Regular) return out;  // Stam needs three regular corners
+  const int h = m.face_begin(f) + ev;
+  const int v = m.corner_vertex(h);
+  const int n = m.vertex_face_count(v);
+  const int* fan = m.vertex_corners(v);
+  int s0 = -1;
+  for (int r = 0; r < n; ++r)
+    if (fan[r] == h) s0 = r;
+  if (s0 < 0) throw std::logic_error("limit: face corner not in its vertex fan");
+  out.method = LimitMethod::Stam;
+  out.corner = ev;
+  out.eig = stam_eigen(n);
+  out.ring.resize(2 * n + 1, 3);
+  for (int c = 0; c < 3; ++c) out.ring(0, c) = P[v][c];
+  for (int r = 0; r < n; ++r) {
+    const int cr = fan[(s0 + r) % n];
+    const Point3& e = P[m.to_vertex(cr)];
+    const Point3& d = P[m.to_vertex(m.next(cr))];
+    for (int c = 0; c < 3; ++c) {
+      out.ring(1 + r, c) = e[c];
+      out.ring(1 + n + r, c) = d[c];
+    }
+  }
+  static const int kOuter[7][2] = {{2, -1}, {2, 0}, {2, 1}, {2, 2}, {1, 2}, {0, 2}, {-1, 2}};
+  for (int o = 0; o < 7; ++o) {
+    int i, j;
+    corner_to_grid(ev, kOuter[o][0], kOuter[o][1], i, j);
+    if (!g.has(i, j)) throw std::logic_error("limit: Stam configuration incomplete");
+    for (int c = 0; c < 3; ++c) out.outer(o, c) = g.at(i, j)[c];
+  }
+  // Work relative to the EV's limit point and drop the eigenvalue-1 component exactly: the
+  // derivatives are scaled by 2^m (m up to ~1000 for tiny u, v), and a rounding-level constant
+  // left in the points would be amplified by that.
+  const std::vector<double>& w = out.eig->limit_weights;
+  for (int i = 0; i < 2 * n + 1; ++i)
+    for (int c = 0; c < 3; ++c) out.limit[c] += w[i] * out.ring(i, c);
+  for (int c = 0; c < 3; ++c) {
+    out.ring.col(c).array() -= out.limit[c];
+    out.outer.col(c).array() -= out.limit[c];
+  }
+  out.chat = out.eig->Vinv * out.ring;
+  out.chat.row(0).setZero();  // stam_eigen puts eigenvalue 1 first
+  return out;
+}
+
+/// Stam evaluation at corner-frame (a, b) != (0, 0); derivatives w.r.t. (a, b).
+Derivs stam_eval(const Prepared& pr, double a, double b) {
+  const StamEigen& E = *pr.eig;
+  const double mx = std::max(a, b);
+  int e;
+  std::frexp(mx, &e);
+  const int mlev = std::max(1, 1 - e);  // 2^m max(a, b) in [1, 2)
+  const double X = std::ldexp(a, mlev), Y = std::ldexp(b, mlev);
+  int tile;
+  double x, y;
+  if (Y < 1) { tile = 0; x = X - 1; y = Y; }
+  else if (X < 1) { tile = 2; x = X; y = Y - 1; }
+  else { tile = 1; x = X - 1; y = Y - 1; }
+  // Level m-1 configuration: ring in the eigenbasis, outer points by the recurrence.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> cj = pr.chat;
+  Eigen::Matrix<double, 7, 3> o = pr.outer;
+  for (int j = 0; j + 1 < mlev; ++j) {
+    o = E.W * cj + E.S12 * o;
+    cj = E.lambda.asDiagonal() * cj;
+  }
+  const Eigen::Matrix<double, 16, 3> T = E.tile_ring_V[tile] * cj + E.tile_outer[tile] * o;
+  std::array<Point3, 16> Pt;
+  for (int i = 0; i < 16; ++i) Pt[i] = {T(i, 0), T(i, 1), T(i, 2)};
+  Derivs d = bspline16(Pt.data(), x, y);
+  for (int k = 0; k < 3; ++k) d.p[k] += pr.limit[k];
+  const double s1 = std::ldexp(1.0, mlev), s2 = s1 * s1;
+  for (int k = 0; k < 3; ++k) {
+    d.ds[k] *= s1; d.dt[k] *= s1;
+    d.dss[k] *= s2; d.dst[k] *= s2; d.dtt[k] *= s2;
+  }
+  return d;
+}
+
+/// At the extraordinary vertex itself: limit position and edge-ray tangents (MATH.md 1.4).
+Derivs stam_at_vertex(const Prepared& pr) {
+  const int n = pr.eig->n;
+  Derivs d;
+  const double pi = std::acos(-1.0);
+  const double cn = std::cos(2 * pi / n);
+  const double An = 1 + cn + std::cos(pi / n) * std::sqrt(2 * (9 + cn));
+  Point3 T1{}, T2{};
+  for (int r = 0; r < n; ++r) {
+    const double th = 2 * pi * r / n, th1 = 2 * pi * (r + 1) / n;
+    for (int c = 0; c < 3; ++c) {
+      T1[c] += An * std::cos(th) * pr.ring(1 + r, c) + (std::cos(th) + std::cos(th1)) * pr.ring(1 + n + r, c);
+      T2[c] += An * std::sin(th) * pr.ring(1 + r, c) + (std::sin(th) + std::sin(th1)) * pr.ring(1 + n + r, c);
+    }
+  }
+  d.p = pr.limit;
+  const double ca = std::cos(2 * pi / n), sa = std::sin(2 * pi / n), sc = 1.0 / (3 * n);
+  for (int c = 0; c < 3; ++c) {
+    d.ds[c] = sc * T1[c];
+    d.dt[c] = sc * (ca * T1[c] + sa * T2[c]);
+  }
+  return d;
+}
+
+void finish_sample_local(LimitSample& o);
+
+/// Next to a valence-3 vertex the derivatives vanish like (2 lambda)^m and underflow for
+/// u, v below about 1e-250: then the normal is the vertex's limit normal (its limit).
+void stam_normal_fallback(const Prepared& pr, LimitSample& out) {
+  if (out.normal[0] != 0 || out.normal[1] != 0 || out.normal[2] != 0) return;
+  const Derivs at = stam_at_vertex(pr);
+  LimitSample t;
+  t.du = at.ds;
+  t.dv = at.dt;
+  finish_sample_local(t);
+  out.normal = t.normal;
+  out.exact_derivatives = false;
+}
+
+Derivs eval_prepared(const Prepared& pr, double s, double t, bool* singular) {
+  if (pr.method == LimitMethod::Regular) return bspline16(pr.grid.data(), s, t);
+  double a, b;
+  corner_frame(pr.corner).apply(s, t, a, b);
+  if (a <= 0 && b <= 0) {
+    *singular = true;
+    return stam_at_vertex(pr);
+  }
+  return stam_eval(pr, std::max(a, 0.0), std::max(b, 0.0));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Local refinement: the 2-ring of a face, refined once
+
+/// The 2-ring cannot be cut out as a mesh of its own (degenerate topology such as two edges
+/// joining the same two vertices next to folded valence-2 vertices).
+struct CannotCutOut {};
+
+struct LocalLevel {
+  SubdivLevel level;
+  std::vector<Point3> pos;
+};
+
+LocalLevel extract_two_ring_impl(const SubdivLevel& L, const std::vector<Point3>& P, int f);
+
+/// Cuts out every face touching a vertex of a face touching f (f becomes local face 0, same
+/// corner order). Outer vertices whose local faces form several fans are split, one copy per
+/// fan; their values are wrong after refinement anyway and are never used for f's children.
+LocalLevel extract_two_ring(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
+  try {
+    return extract_two_ring_impl(L, P, f);
+  } catch (const InvalidMeshError&) {
+    throw CannotCutOut{};
+  }
+}
+
+LocalLevel extract_two_ring_impl(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
+  const PolyMesh& m = L.mesh;
+  std::unordered_map<int, int> face_local;
+  std::vector<int> faces;
+  auto add_face = [&](int g) {
+    if (face_local.emplace(g, static_cast<int>(faces.size())).second) faces.push_back(g);
+  };
+  auto faces_at = [&](int v, auto&& fn) {
+    const int* c = m.vertex_corners(v);
+    for (int i = 0, n = m.vertex_face_count(v); i < n; ++i) fn(m.corner_face(c[i]));
+  };
+  add_face(f);
+  std::unordered_map<int, char> inner;  // V1: vertices of faces touching f
+  for (int h = m.face_begin(f); h < m.face_end(f); ++h)
+    faces_at(m.corner_vertex(h), [&](int g) {
+      for (int k = m.face_begin(g); k < m.face_end(g); ++k) inner[m.corner_vertex(k)] = 1;
+    });
+  for (const auto& kv : inner) faces_at(kv.first, add_face);
+
+  // Local vertices: inner vertices once; outer vertices once per fan of local faces.
+  std::unordered_map<int, int> inner_local;
+  std::vector<int> local_orig;
+  std::vector<int> sizes, idx;
+  struct Occ { int face_pos; int orig; int prev, next; };
+  std::unordered_map<int, std::vector<int>> outer_occ;  // orig -> occurrence ids
+  std::vector<Occ> occ;
+  for (int lf = 0; lf < static_cast<int>(faces.size()); ++lf) {
+    const int g = faces[lf];
+    sizes.push_back(m.face_size(g));
+    for (int h = m.face_begin(g); h < m.face_end(g); ++h) {
+      const int v = m.corner_vertex(h);
+      if (inner.count(v)) {
+        auto it = inner_local.find(v);
+        if (it == inner_local.end()) {
+          it = inner_local.emplace(v, static_cast<int>(local_orig.size())).first;
+          local_orig.push_back(v);
+        }
+        idx.push_back(it->second);
+      } else {
+        outer_occ[v].push_back(static_cast<int>(occ.size()));
+        occ.push_back({static_cast<int>(idx.size()), v, m.corner_vertex(m.prev(h)), m.to_vertex(h)});
+        idx.push_back(-1);
+      }
+    }
+  }
+  for (auto& kv : outer_occ) {
+    const std::vector<int>& list = kv.second;
+    const int k = static_cast<int>(list.size());
+    std::vector<int> parent(k);
+    for (int i = 0; i < k; ++i) parent[i] = i;
+    auto find = [&](int i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    for (int i = 0; i < k; ++i)
+      for (int j = i + 1; j < k; ++j) {
+        const Occ& a = occ[list[i]];
+        const Occ& b = occ[list[j]];
+        if (a.prev == b.next || a.next == b.prev || a.prev == b.prev || a.next == b.next)
+          parent[find(i)] = find(j);
+      }
+    std::unordered_map<int, int> comp_local;
+    for (int i = 0; i < k; ++i) {
+      auto it = comp_local.find(find(i));
+      if (it == comp_local.end()) {
+        it = comp_local.emplace(find(i), static_cast<int>(local_orig.size())).first;
+        local_orig.push_back(kv.first);
+      }
+      idx[occ[list[i]].face_pos] = it->second;
+    }
+  }
+  LocalLevel out;
+  const int nv = static_cast<int>(local_orig.size());
+  out.level.mesh = PolyMesh::build(nv, sizes, idx);
+  const PolyMesh& lm = out.level.mesh;
+  out.level.options = L.options;
+  out.level.vertex_sharpness.resize(nv);
+  out.pos.resize(nv);
+  for (int v = 0; v < nv; ++v) {
+    out.level.vertex_sharpness[v] = L.vertex_sharpness[local_orig[v]];
+    out.pos[v] = P[local_orig[v]];
+  }
+  out.level.face_hole.resize(faces.size());
+  for (size_t lf = 0; lf < faces.size(); ++lf) out.level.face_hole[lf] = L.face_hole[faces[lf]];
+  out.level.edge_sharpness.resize(lm.num_edges());
+  for (int e = 0; e < lm.num_edges(); ++e) {
+    const int a = local_orig[lm.edge_vertex(e, 0)], b = local_orig[lm.edge_vertex(e, 1)];
+    const int oe = m.find_edge(a, b);
+    if (oe < 0) throw CannotCutOut{};
+    out.level.edge_sharpness[e] = lm.is_boundary_edge(e) ? kInfSharp : L.edge_sharpness[oe];
+  }
+  return out;
+}
+
+/// One refinement step around face f: its 2-ring cut out and refined. `first_child` is the
+/// child face of f's corner 0 (its corner k child is first_child + k). Where the 2-ring cannot
+/// be cut out as a mesh of its own (two edges joining the same two vertices, as next to folded
+/// valence-2 vertices) the whole level is refined instead.
+LocalLevel refine_local(const SubdivLevel& L, const std::vector<Point3>& P, int f, int& first_child) {
+  LocalLevel out;
+  RefinementStep step;
+  std::vector<Point3> src;
+  try {
+    LocalLevel sub = extract_two_ring(L, P, f);
+    step = refine_once(sub.level);
+    src = std::move(sub.pos);
+    first_child = 0;
+  } catch (const CannotCutOut&) {
+    step = refine_once(L);
+    src = P;
+    first_child = L.mesh.face_begin(f);
+  }
+  step.stencils.apply(src, out.pos);
+  out.level = std::move(step.child);
+  return out;
+}
+
+/// The general driver: face f of level L, local face coordinates (s, t) = A (u, v) + c.
+LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, int f0, double s0,
+                         double t0, Affine A, LimitMethod* method, int depth = 0) {
+  const SubdivLevel* L = &L0;
+  const std::vector<Point3>* P = &P0;
+  LocalLevel cur;
+  int f = f0;
+  double s = s0, t = t0;
+  for (;; ++depth) {
+    if (L->face_hole[f]) throw std::domain_error("limit: the point lies on a hole (no limit surface)");
+    Prepared pr = prepare(*L, *P, f);
+    if (pr.method != LimitMethod::Refined) {
+      bool singular = false;
+      const Derivs d = eval_prepared(pr, s, t, &singular);
+      LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? A.then(corner_frame(pr.corner)) : A);
+      if (method) *method = depth == 0 ? pr.method : LimitMethod::Refined;
+      if (singular) {
+        // Exact position and normal; curvature undefined.
+        const Point3 n = {out.du[1] * out.dv[2] - out.du[2] * out.dv[1],
+                          out.du[2] * out.dv[0] - out.du[0] * out.dv[2],
+                          out.du[0] * out.dv[1] - out.du[1] * out.dv[0]};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int c = 0; c < 3; ++c) out.normal[c] = len > 0 ? n[c] / len : 0.0;
+        out.duu = out.duv = out.dvv = Point3{};
+        out.k1 = out.k2 = out.mean = out.gauss = std::numeric_limits<double>::quiet_NaN();
+        out.exact_derivatives = false;
+        return out;
+      }
+      finish_sample(out);
+      if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
+      return out;
+    }
+    const PolyMesh& m = L->mesh;
+    // Quad: which corner's child holds (s, t)? (n-gons only occur at the base, handled by the caller.)
+    const int k = s < 0.5 ? (t < 0.5 ? 0 : 3) : (t < 0.5 ? 1 : 2);
+    double a, b;
+    corner_frame(k).apply(s, t, a, b);
+    const bool at_corner = a <= 0 && b <= 0;
+    // A corner stays irregular under refinement only if no semi-sharp tag is left to decay.
+    const int corner_v = m.corner_vertex(m.face_begin(f) + k);
+    if ((at_corner && classify_corner(*L, m.face_begin(f) + k) == CornerKind::Other &&
+         no_semi_sharp_at(*L, corner_v)) ||
+        depth >= kMaxDepth) {
+      // At (or within 2^-kMaxDepth of) a corner that refinement never makes regular: the
+      // documented fallback. Derivatives from the point 2^-40 inside the face along the corner's
+      // diagonal (its descent ends after about 20 more levels), position exact.
+      const Affine fr = corner_frame(k);  // orthogonal: (s, t) = R^T ((a, b) - c)
+      Affine inv{fr.m00, fr.m10, fr.m01, fr.m11, 0, 0};
+      double cx, cy;
+      inv.apply(-fr.c0, -fr.c1, cx, cy);
+      inv.c0 = cx;
+      inv.c1 = cy;
+      const double da = std::ldexp(1.0, -kNudgeExponent);
+      double ns, nt;
+      inv.apply(da, da, ns, nt);
+      LimitSample out = eval_general(*L, *P, f, ns, nt, A, nullptr, 1);
+      // Limit stencils of the face's 2-ring only (exact for its vertices: see extract_two_ring).
+      LocalLevel ring;
+      int v;
+      try {
+        ring = extract_two_ring(*L, *P, f);
+        v = ring.level.mesh.corner_vertex(k);  // local face 0 keeps f's corner order
+      } catch (const CannotCutOut&) {  // see refine_local
+        ring.level = *L;
+        ring.pos = *P;
+        v = m.corner_vertex(m.face_begin(f) + k);
+      }
+      const StencilTable lim = limit_stencils(ring.level);
+      Point3 p{};
+      for (int q = lim.offsets[v]; q < lim.offsets[v + 1]; ++q) axpy(p, lim.weights[q], ring.pos[lim.indices[q]]);
+      out.p = p;
+      out.exact_derivatives = false;
+      if (method) *method = LimitMethod::Fallback;
+      return out;
+    }
+    int first_child = 0;
+    LocalLevel next = refine_local(*L, *P, f, first_child);
+    cur = std::move(next);
+    L = &cur.level;
+    P = &cur.pos;
+    f = first_child + k;
+    A = A.then(child_map(k));
+    s = 2 * a;
+    t = 2 * b;
+  }
+}
+
+void finish_sample_local(LimitSample& o) { finish_sample(o); }
+
+}  // namespace
+
+void finish_sample(LimitSample& o) {
+  const Point3& a = o.du;
+  const Point3& b = o.dv;
+  Point3 n = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  auto dot = [](const Point3& x, const Point3& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+  if (!(len > 0)) {
+    o.normal = {0, 0, 0};
+    o.k1 = o.k2 = o.mean = o.gauss = std::numeric_limits<double>::quiet_NaN();
+    return;
+  }
+  for (int c = 0; c < 3; ++c) o.normal[c] = n[c] / len;
+  const double E = dot(a, a), F = dot(a, b), G = dot(b, b);
+  const double Ls = dot(o.duu, o.normal), Ms = dot(o.duv, o.normal), Ns = dot(o.dvv, o.normal);
+  const double det = E * G - F * F;
+  o.gauss = (Ls * Ns - Ms * Ms) / det;
+  o.mean = (E * Ns - 2 * F * Ms + G * Ls) / (2 * det);
+  const double disc = std::sqrt(std::max(0.0, o.mean * o.mean - o.gauss));
+  o.k1 = o.mean + disc;
+  o.k2 = o.mean - disc;
+}
+
+struct LimitEvaluator::FaceCache {
+  Prepared prepared;
+};
+
+LimitEvaluator::LimitEvaluator(SubdivLevel base, std::vector<Point3> positions)
+    : base_(std::move(base)), positions_(std::move(positions)) {
+  const PolyMesh& m = base_.mesh;
+  if (static_cast<int>(positions_.size()) != m.num_vertices())
+    throw std::invalid_argument("LimitEvaluator: one position per vertex expected");
+  face_ptex_.resize(m.num_faces());
+  face_cache_.assign(m.num_faces(), -1);
+  for (int f = 0; f < m.num_faces(); ++f) {
+    face_ptex_[f] = static_cast<int>(ptex_face_.size());
+    const int n = m.face_size(f) == 4 ? 1 : m.face_size(f);
+    for (int i = 0; i < n; ++i) ptex_face_.push_back(f);
+    if (m.face_size(f) == 4 && !base_.face_hole[f]) {
+      Prepared pr = prepare(base_, positions_, f);
+      if (pr.method != LimitMethod::Refined) {
+        face_cache_[f] = static_cast<int>(cache_.size());
+        cache_.push_back(FaceCache{std::move(pr)});
+      }
+    }
+  }
+}
+
+LimitEvaluator::~LimitEvaluator() = default;
+LimitEvaluator::LimitEvaluator(LimitEvaluator&&) noexcept = default;
+
+LimitSample LimitEvaluator::evaluate_ptex(int ptex, double u, double v, LimitMethod* method) const {
+  if (ptex < 0 || ptex >= num_ptex_faces())
+    throw std::out_of_range("no ptex face " + std::to_string(ptex) + " (the mesh has " +
+                            std::to_string(num_ptex_faces()) + ")");
+  const int f = ptex_face_[ptex];
+  return evaluate(f, ptex - face_ptex_[f], u, v, method);
+}
+
+LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMethod* method) const {
+  const PolyMesh& m = base_.mesh;
+  if (f < 0 || f >= m.num_faces()) throw std::out_of_range("no face " + std::to_string(f));
+  const int size = m.face_size(f);
+  if (size == 4 ? sub != 0 : (sub < 0 || sub >= size))
+    throw std::out_of_range("face " + std::to_string(f) + " has no sub-face " + std::to_string(sub));
+  if (!(u >= 0 && u <= 1 && v >= 0 && v <= 1))
+    throw std::out_of_range("parameters (" + std::to_string(u) + ", " + std::to_string(v) +
+                            ") outside [0,1]^2");
+  if (base_.face_hole[f]) throw std::domain_error("face " + std::to_string(f) + " is a hole (no limit surface)");
+  if (size == 4) {
+    const int c = face_cache_[f];
+    if (c >= 0) {
+      const Prepared& pr = cache_[c].prepared;
+      bool singular = false;
+      const Derivs d = eval_prepared(pr, u, v, &singular);
+      if (!singular) {
+        LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? corner_frame(pr.corner) : Affine{});
+        finish_sample(out);
+        if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
+        if (method) *method = pr.method;
+        return out;
+      }
+    }
+    return eval_general(base_, positions_, f, u, v, Affine{}, method);
+  }
+  // n-gon: sub-face `sub` is the level-1 child quad at corner `sub` of the local copy.
+  int first_child = 0;
+  LocalLevel lvl = refine_local(base_, positions_, f, first_child);
+  LimitSample out = eval_general(lvl.level, lvl.pos, first_child + sub, u, v, Affine{}, method, 1);
+  if (method && *method != LimitMethod::Fallback) *method = LimitMethod::Refined;
+  return out;
+}
+
+}  // namespace subd2nurbs

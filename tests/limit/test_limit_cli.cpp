@@ -1,0 +1,142 @@
+// `subd2nurbs limit` end to end: output format and values (compared with the library, whose
+// values are checked against OpenSubdiv in test_limit_vs_osd.cpp), bad query lines, exit codes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "io/temp_dir.h"
+#include "limit_test_util.h"
+
+using namespace subd2nurbs;
+using namespace subd2nurbs::testing;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+/// Runs `subd2nurbs limit MESH [file]` with `queries` on stdin (or in a file).
+Result run_limit(const std::string& mesh, const std::string& queries, bool as_file) {
+  TempDir dir;
+  {
+    std::ofstream q(dir.file("q.txt"));
+    q << queries;
+  }
+  const std::string command = quote(SUBD2NURBS_EXE) + " limit " + quote(mesh) +
+                              (as_file ? " " + quote(dir.file("q.txt")) : " <" + quote(dir.file("q.txt"))) +
+                              " >" + quote(dir.file("out")) + " 2>" + quote(dir.file("err"));
+  const int status = std::system(command.c_str());
+  Result r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = read_text(dir.file("out"));
+  r.err = read_text(dir.file("err"));
+  return r;
+}
+
+}  // namespace
+
+TEST(LimitCli, PrintsOneLinePerQueryWithTheLibraryValues) {
+  const std::string mesh = limit_corpus_path("catmark_nonquads");
+  const LoadedCage cage = read_obj(mesh);
+  const LimitEvaluator ev(load_and_validate(cage), positions_of(cage.input));
+  // A quad face and an n-gon's sub-faces, with comments and blank lines in between.
+  int quad = -1, ngon = -1;
+  for (int f = 0; f < ev.base().mesh.num_faces(); ++f)
+    (ev.base().mesh.face_size(f) == 4 ? quad : ngon) = f;
+  ASSERT_GE(quad, 0);
+  ASSERT_GE(ngon, 0);
+  std::ostringstream q;
+  q << "# queries\n" << quad << " 0.25 0.5\n\n" << ngon << " 1 0.3 0.6\n" << quad << " 0 1 0\n";
+  for (bool as_file : {false, true}) {
+    const Result r = run_limit(mesh, q.str(), as_file);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::istringstream lines(r.out);
+    const LimitSample want[3] = {ev.evaluate(quad, 0, 0.25, 0.5), ev.evaluate(ngon, 1, 0.3, 0.6),
+                                 ev.evaluate(quad, 0, 1, 0)};
+    std::string line;
+    int n = 0;
+    while (std::getline(lines, line)) {
+      ASSERT_LT(n, 3);
+      std::istringstream fields(line);
+      std::vector<double> x;
+      for (double d; fields >> d;) x.push_back(d);
+      ASSERT_EQ(x.size(), 12u) << line;
+      const LimitSample& w = want[n];
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(x[k], w.p[k]);  // %.17g round-trips doubles exactly
+        EXPECT_EQ(x[3 + k], w.normal[k]);
+        EXPECT_EQ(x[6 + k], w.du[k]);
+        EXPECT_EQ(x[9 + k], w.dv[k]);
+      }
+      ++n;
+    }
+    EXPECT_EQ(n, 3);
+  }
+}
+
+TEST(LimitCli, BadQueryLinesNameTheLineAndExitWith2) {
+  const std::string mesh = limit_corpus_path("catmark_nonquads");
+  const LoadedCage cage = read_obj(mesh);
+  const SubdivLevel level = load_and_validate(cage);
+  int quad = -1, ngon = -1;
+  for (int f = 0; f < level.mesh.num_faces(); ++f) (level.mesh.face_size(f) == 4 ? quad : ngon) = f;
+  const std::string ok = std::to_string(quad) + " 0.5 0.5\n";
+  const std::string n = std::to_string(ngon), qd = std::to_string(quad);
+  const std::pair<std::string, std::string> bad[] = {
+      {"0 0.5\n", "expected"},
+      {"x 0.5 0.5\n", "face index"},
+      {qd + " 0.5 nan\n", "outside"},
+      {qd + " 1.5 0.5\n", "outside"},
+      {qd + " 0.5 abc\n", "not numbers"},
+      {"99999 0.5 0.5\n", "no face 99999"},
+      {n + " 0.5 0.5\n", "sub-face"},
+      {n + " 17 0.5 0.5\n", "no sub-face 17"},
+      {qd + " 1 0.5 0.5\n", "no sub-face 1"},
+      {"-1 0.5 0.5\n", "face index"},
+  };
+  for (const auto& [line, why] : bad) {
+    SCOPED_TRACE(line);
+    const Result r = run_limit(mesh, ok + "# comment\n" + line, true);
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("q.txt:3: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(why), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "");  // nothing printed before every query is known to be good
+    const Result s = run_limit(mesh, ok + line, false);
+    EXPECT_EQ(s.exit_code, 2);
+    EXPECT_NE(s.err.find("<stdin>:2: error:"), std::string::npos) << s.err;
+  }
+}
+
+TEST(LimitCli, HolesMissingFilesAndUsage) {
+  // A face that is a hole has no limit surface: an input error naming the query line.
+  const Result hole = run_limit(limit_corpus_path("catmark_hole_test1"), "", false);
+  EXPECT_EQ(hole.exit_code, 0);
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_hole_test1"));
+  ASSERT_FALSE(cage.input.holes.empty());
+  const Result r = run_limit(limit_corpus_path("catmark_hole_test1"),
+                             std::to_string(cage.input.holes[0]) + " 0.5 0.5\n", false);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("<stdin>:1: error:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("hole"), std::string::npos) << r.err;
+  // Missing mesh, missing query file, missing argument.
+  EXPECT_EQ(run_limit("/nonexistent.obj", "0 0.5 0.5\n", false).exit_code, 2);
+  TempDir dir;
+  const std::string cmd = quote(SUBD2NURBS_EXE) + " limit " + quote(limit_corpus_path("catmark_cube")) +
+                          " /nonexistent_queries.txt >/dev/null 2>" + quote(dir.file("err"));
+  int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  EXPECT_NE(read_text(dir.file("err")).find("/nonexistent_queries.txt"), std::string::npos);
+  status = std::system((quote(SUBD2NURBS_EXE) + " limit >/dev/null 2>&1").c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+}

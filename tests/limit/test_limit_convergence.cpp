@@ -1,0 +1,86 @@
+// Extraordinary vertices of valence 3..12: our limit evaluation against uniform refinement.
+//  - Exact: at the parameters of a level-L vertex the limit surface is that vertex's limit
+//    position (limit masks, MATH.md 1.4, checked against OpenSubdiv in tests/oracle).
+//  - Rate: the level-L control points converge to our limit values, 4x per level at a regular
+//    vertex and mu_n per level at the extraordinary vertex itself (MATH.md 7.2, l = 0 block).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "limit_test_util.h"
+
+using namespace subd2nurbs;
+using namespace subd2nurbs::testing;
+
+namespace {
+
+/// Level-L vertex at dyadic parameters (u, v) = (i, j) / 2^L of base quad f.
+int vertex_at(const Refinement& r, int f, int L, int i, int j) {
+  double s = std::ldexp(i, -L), t = std::ldexp(j, -L);
+  for (int l = 0; l < L; ++l) {
+    const PolyMesh& m = r.levels[l].mesh;
+    const int k = s < 0.5 ? (t < 0.5 ? 0 : 3) : (t < 0.5 ? 1 : 2);
+    double a, b;  // corner frame of corner k, as in the evaluator
+    switch (k) {
+      case 0: a = s; b = t; break;
+      case 1: a = t; b = 1 - s; break;
+      case 2: a = 1 - s; b = 1 - t; break;
+      default: a = 1 - t; b = s; break;
+    }
+    f = m.face_begin(f) + k;  // child face index = parent corner
+    s = 2 * a;
+    t = 2 * b;
+  }
+  const PolyMesh& m = r.levels[L].mesh;
+  const int corner = s == 0 ? (t == 0 ? 0 : 3) : (t == 0 ? 1 : 2);
+  return m.face_vertices(f)[corner];
+}
+
+}  // namespace
+
+TEST(LimitConvergence, ExactAtRefinedVerticesAndTheRightRatesAtValence3To12) {
+  const int L = 5;
+  for (int n = 3; n <= 12; ++n) {
+    SCOPED_TRACE("valence " + std::to_string(n));
+    const MeshInput in = ev_disc(n, 100u + n);
+    const SubdivLevel base = SubdivLevel::from_input(in);
+    const std::vector<Point3> pos = positions_of(in);
+    const double diag = diagonal(pos);
+    const LimitEvaluator ev(base, pos);
+    const Refinement r = refine_uniform(base, L);
+    const std::vector<std::vector<Point3>> lp = r.positions(pos);
+    LimitMethod method;
+    ev.evaluate(0, 0, 0.3, 0.2, &method);
+    EXPECT_EQ(method, n == 4 ? LimitMethod::Regular : LimitMethod::Stam);
+
+    // Exact: every level-L vertex of face 0 (EV at its corner (0,0)) and of a face of sector 1.
+    std::vector<Point3> limit_L;
+    StencilTable lim = limit_stencils(r.levels[L]);
+    lim.apply(lp[L], limit_L);
+    double worst = 0;
+    for (int f : {0, kRings * kRings + 1})
+      for (int i = 0; i <= (1 << L); ++i)
+        for (int j = 0; j <= (1 << L); ++j) {
+          const double u = std::ldexp(i, -L), v = std::ldexp(j, -L);
+          const LimitSample s = ev.evaluate(f, 0, u, v);
+          worst = std::max(worst, dist(s.p, limit_L[vertex_at(r, f, L, i, j)]) / diag);
+        }
+    EXPECT_LT(worst, 1e-13);
+
+    // Rates. A point of the EV's face that is a vertex from level 2 on: ratio 1/4.
+    const LimitSample q = ev.evaluate(0, 0, 0.25, 0.5);
+    std::vector<double> err;
+    for (int l = 2; l <= L; ++l)
+      err.push_back(dist(lp[l][vertex_at(r, 0, l, 1 << (l - 2), 1 << (l - 1))], q.p));
+    EXPECT_NEAR(err.back() / err[err.size() - 2], 0.25, 0.01);
+    // The EV itself: ratio mu_n.
+    const LimitSample c = ev.evaluate(0, 0, 0.0, 0.0);
+    const double mu = (3.0 * n - 7 + std::sqrt(5.0 * n * n - 30.0 * n + 49.0)) / (8.0 * n);
+    std::vector<double> ev_err;
+    for (int l = 1; l <= L; ++l) ev_err.push_back(dist(lp[l][0], c.p));
+    // Asymptotic: the last ratio (the other l = 0 mode, mu_minus <= 1/6 mu, has died out).
+    EXPECT_NEAR(ev_err.back() / ev_err[ev_err.size() - 2], mu, 0.01 * mu);
+    std::printf("n=%2d exact %.2e, rate at EV %.4f (mu %.4f)\n", n, worst,
+                ev_err.back() / ev_err[ev_err.size() - 2], mu);
+  }
+}

@@ -1,0 +1,129 @@
+// Derivatives and curvatures of the limit evaluation against finite differences of its own
+// positions and normals, on every evaluation path (regular, Stam, refined near creases,
+// boundaries, semi-sharp tags and n-gons).
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "limit_test_util.h"
+
+using namespace subd2nurbs;
+using namespace subd2nurbs::testing;
+
+namespace {
+
+Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Point3 scale(const Point3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
+double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
+
+struct Case {
+  const char* shape;
+};
+
+}  // namespace
+
+TEST(LimitDerivatives, MatchCentralDifferencesOnEveryPath) {
+  const char* shapes[] = {"catmark_cube",       "catmark_pyramid_creases1", "catmark_cubes_semisharp",
+                          "catmark_edgecorner", "catmark_nonquads",         "catmark_helmet",
+                          "catmark_chaikin1",   "catmark_tent_creases1",    "catmark_dart_edgecorner",
+                          "catmark_bishop",     "catmark_pawn",             "catmark_xord_interior"};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> param(0.1, 0.9);
+  std::map<LimitMethod, int> seen;
+  std::vector<std::string> names(std::begin(shapes), std::end(shapes));
+  for (int n : {3, 5, 6, 9, 12}) names.push_back("disc" + std::to_string(n));
+  for (const std::string& name : names) {
+    SCOPED_TRACE(name);
+    MeshInput input;
+    if (name.rfind("disc", 0) == 0) {
+      input = ev_disc(std::stoi(name.substr(4)), 11);
+    } else {
+      input = read_obj(limit_corpus_path(name)).input;
+    }
+    const std::vector<Point3> pos = positions_of(input);
+    const LimitEvaluator ev(SubdivLevel::from_input(input), pos);
+    const double diag = diagonal(pos);
+    int checked = 0;
+    for (int ptex = 0; ptex < ev.num_ptex_faces() && checked < 60; ++ptex) {
+      const double u = param(rng), v = param(rng);
+      LimitMethod method;
+      LimitSample s;
+      try {
+        s = ev.evaluate_ptex(ptex, u, v, &method);
+      } catch (const std::domain_error&) {
+        continue;  // hole
+      }
+      ++seen[method];
+      ++checked;
+      const double h = 1e-5;
+      auto at = [&](double du, double dv) { return ev.evaluate_ptex(ptex, u + du, v + dv); };
+      const LimitSample up = at(h, 0), um = at(-h, 0), vp = at(0, h), vm = at(0, -h);
+      const Point3 fu = scale(sub(up.p, um.p), 0.5 / h), fv = scale(sub(vp.p, vm.p), 0.5 / h);
+      EXPECT_LT(norm(sub(fu, s.du)), 1e-7 * diag) << "ptex " << ptex;
+      EXPECT_LT(norm(sub(fv, s.dv)), 1e-7 * diag) << "ptex " << ptex;
+      const Point3 fuu = scale(sub(up.du, um.du), 0.5 / h), fuv = scale(sub(vp.du, vm.du), 0.5 / h);
+      const Point3 fvv = scale(sub(vp.dv, vm.dv), 0.5 / h);
+      EXPECT_LT(norm(sub(fuu, s.duu)), 1e-5 * diag) << "ptex " << ptex;
+      EXPECT_LT(norm(sub(fuv, s.duv)), 1e-5 * diag) << "ptex " << ptex;
+      EXPECT_LT(norm(sub(fvv, s.dvv)), 1e-5 * diag) << "ptex " << ptex;
+      // Weingarten: II = -(dN . dX); principal curvatures from finite differences of normals.
+      const Point3 nu = scale(sub(up.normal, um.normal), 0.5 / h);
+      const Point3 nv = scale(sub(vp.normal, vm.normal), 0.5 / h);
+      const double E = dot(s.du, s.du), F = dot(s.du, s.dv), G = dot(s.dv, s.dv);
+      const double L = -dot(nu, s.du), M = -0.5 * (dot(nu, s.dv) + dot(nv, s.du)), N = -dot(nv, s.dv);
+      const double K = (L * N - M * M) / (E * G - F * F);
+      const double H = (E * N - 2 * F * M + G * L) / (2 * (E * G - F * F));
+      const double tol = 1e-5 * (std::abs(s.k1) + std::abs(s.k2) + 1 / diag);
+      EXPECT_NEAR(H, s.mean, tol) << "ptex " << ptex;
+      EXPECT_NEAR(K, s.gauss, tol * (std::abs(s.k1) + std::abs(s.k2) + 1 / diag)) << "ptex " << ptex;
+      EXPECT_NEAR(s.k1 + s.k2, 2 * s.mean, 1e-12 * (std::abs(s.k1) + std::abs(s.k2) + 1));
+    }
+  }
+  EXPECT_GT(seen[LimitMethod::Regular], 20);
+  EXPECT_GT(seen[LimitMethod::Stam], 30);
+  EXPECT_GT(seen[LimitMethod::Refined], 20);
+}
+
+TEST(LimitCurvature, SphereLikeSignConvention) {
+  // The limit of a cube is convex: with outward normals both principal curvatures are
+  // negative everywhere (MATH.md 8.3: a sphere with outward normal has k = -1/R).
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_cube"));
+  const LimitEvaluator ev(load_and_validate(cage), positions_of(cage.input));
+  for (int f = 0; f < 6; ++f)
+    for (double u : {0.1, 0.5, 0.8})
+      for (double v : {0.2, 0.5, 0.9}) {
+        const LimitSample s = ev.evaluate(f, 0, u, v);
+        EXPECT_LT(s.k1, 0);
+        EXPECT_LE(s.k2, s.k1);
+        EXPECT_GT(dot(s.normal, s.p), 0);  // outward: the cube is centred at the origin
+      }
+}
+
+TEST(LimitCurvature, TubeMatchesTheClosedFormOfItsBSplineCircle) {
+  // A tube of 16 x 6 quads around z (open ends): exact curvatures at a vertex row.
+  MeshInput m;
+  const int segs = 16, rows = 6;
+  const double pi = std::acos(-1.0), R = 2.0;
+  for (int j = 0; j <= rows; ++j)
+    for (int i = 0; i < segs; ++i)
+      m.positions.push_back({R * std::cos(2 * pi * i / segs), R * std::sin(2 * pi * i / segs), 0.5 * j});
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < segs; ++i) {
+      const int a = j * segs + i, b = j * segs + (i + 1) % segs;
+      m.face_sizes.push_back(4);
+      for (int q : {a, b, b + segs, a + segs}) m.face_indices.push_back(q);
+    }
+  const LimitEvaluator ev(SubdivLevel::from_input(m), positions_of(m));
+  // Around z the limit is the uniform cubic B-spline of a regular 16-gon; at a vertex its
+  // position and curvature follow from x' = (P1 - P-1)/2 and x'' = P-1 - 2 P0 + P1:
+  // radius R (2 + cos t) / 3 and curvature 2 (1 - cos t) / (R sin^2 t), t = 2 pi / segs.
+  // Along z the limit is a straight line (curvature 0).
+  const double th = 2 * pi / segs;
+  const double r_lim = R * (2 + std::cos(th)) / 3;
+  const double kappa = 2 * (1 - std::cos(th)) / (R * std::sin(th) * std::sin(th));
+  const LimitSample s = ev.evaluate(3 * segs, 0, 0.0, 0.5);
+  EXPECT_NEAR(std::hypot(s.p[0], s.p[1]), r_lim, 1e-12);
+  EXPECT_NEAR(s.k2, -kappa, 1e-10);
+  EXPECT_NEAR(s.k1, 0, 1e-9);
+}
