@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the benchmarks and writes docs/benchmarks.md with medians and ratios:
 #   bench_refine   uniform refinement, ours vs OpenSubdiv (100k-quad torus)
+#   bench_limit    exact limit evaluation throughput, ours vs OpenSubdiv's PatchTable + PatchMap
 #   bench_convert  the conversion pipeline on 10k-quad cages: cage -> patches (vs OpenSubdiv's
 #                  patch tables), PatchSet -> B-rep (and BRepCheck alone), STEP (ours vs OCCT's
 #                  plain STEPControl_Writer)
@@ -16,17 +17,19 @@ if [ "$build" = build ]; then
   scripts/bootstrap.sh
 else
   cmake -S . -B "$build" -DSUBD2NURBS_BUILD_TESTS=OFF -DSUBD2NURBS_BUILD_BENCH=ON >&2
-  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert >&2
+  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit >&2
 fi
 refine_json=$(mktemp)
 convert_json=$(mktemp)
-trap 'rm -f "$refine_json" "$convert_json" docs/benchmarks.md.tmp' EXIT
+limit_json=$(mktemp)
+trap 'rm -f "$refine_json" "$convert_json" "$limit_json" docs/benchmarks.md.tmp' EXIT
 # JSON goes to files: OCCT's plain STEP writer (the reference in bench_convert) prints its
 # statistics on stdout. The console output goes to stderr as progress.
 common=(--benchmark_repetitions="$reps" --benchmark_enable_random_interleaving=true
         --benchmark_out_format=json)
 "$build"/bench/bench_refine "${common[@]}" --benchmark_out="$refine_json" >&2
 "$build"/bench/bench_convert "${common[@]}" --benchmark_out="$convert_json" >&2
-python3 scripts/bench_table.py "$refine_json" "$reps" "$convert_json" > docs/benchmarks.md.tmp
+"$build"/bench/bench_limit "${common[@]}" --benchmark_out="$limit_json" >&2
+python3 scripts/bench_table.py "$refine_json" "$reps" "$convert_json" "$limit_json" > docs/benchmarks.md.tmp
 mv docs/benchmarks.md.tmp docs/benchmarks.md
 cat docs/benchmarks.md

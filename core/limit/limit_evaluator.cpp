@@ -140,6 +140,30 @@ Derivs bspline16(const Pt* P, double s, double t) {
   return d;
 }
 
+/// Position and first derivatives only.
+LimitPoint bspline16_first(const Point3* P, double s, double t) {
+  double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
+  basis(s, Ns, Ds, DDs);
+  basis(t, Nt, Dt, DDt);
+  LimitPoint d;
+  for (int a = 0; a < 4; ++a) {
+    double rp[3] = {0, 0, 0}, rt[3] = {0, 0, 0};
+    for (int b = 0; b < 4; ++b) {
+      const Point3& q = P[4 * a + b];
+      for (int k = 0; k < 3; ++k) {
+        rp[k] += Nt[b] * q[k];
+        rt[k] += Dt[b] * q[k];
+      }
+    }
+    for (int k = 0; k < 3; ++k) {
+      d.p[k] += Ns[a] * rp[k];
+      d.du[k] += Ds[a] * rp[k];
+      d.dv[k] += Ns[a] * rt[k];
+    }
+  }
+  return d;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Corner classification
 
@@ -688,9 +712,19 @@ void finish_sample(LimitSample& o) {
   o.k2 = o.mean - disc;
 }
 
+/// Per base face: its own preparation (regular / Stam), or, for a face that needs refining,
+/// the preparations of its level-1 children and (if some child still needs refining, up to
+/// kMaxStoredLevels faces) its refined 2-ring, so that no query repeats the first refinement.
 struct LimitEvaluator::FaceCache {
   Prepared prepared;
+  std::vector<Prepared> children;
+  std::shared_ptr<const LocalLevel> level1;
+  int first_child = 0;
 };
+
+namespace {
+constexpr int kMaxStoredLevels = 4096;
+}
 
 LimitEvaluator::LimitEvaluator(SubdivLevel base, std::vector<Point3> positions)
     : base_(std::move(base)), positions_(std::move(positions)) {
@@ -699,17 +733,28 @@ LimitEvaluator::LimitEvaluator(SubdivLevel base, std::vector<Point3> positions)
     throw std::invalid_argument("LimitEvaluator: one position per vertex expected");
   face_ptex_.resize(m.num_faces());
   face_cache_.assign(m.num_faces(), -1);
+  int stored = 0;
   for (int f = 0; f < m.num_faces(); ++f) {
     face_ptex_[f] = static_cast<int>(ptex_face_.size());
-    const int n = m.face_size(f) == 4 ? 1 : m.face_size(f);
-    for (int i = 0; i < n; ++i) ptex_face_.push_back(f);
-    if (m.face_size(f) == 4 && !base_.face_hole[f]) {
-      Prepared pr = prepare(base_, positions_, f);
-      if (pr.method != LimitMethod::Refined) {
-        face_cache_[f] = static_cast<int>(cache_.size());
-        cache_.push_back(FaceCache{std::move(pr)});
+    const int size = m.face_size(f);
+    for (int i = 0; i < (size == 4 ? 1 : size); ++i) ptex_face_.push_back(f);
+    if (base_.face_hole[f]) continue;
+    FaceCache fc;
+    if (size == 4) fc.prepared = prepare(base_, positions_, f);
+    if (fc.prepared.method == LimitMethod::Refined) {
+      auto lvl = std::make_shared<LocalLevel>(refine_local(base_, positions_, f, fc.first_child));
+      bool all = true;
+      for (int k = 0; k < size; ++k) {
+        fc.children.push_back(prepare(lvl->level, lvl->pos, fc.first_child + k));
+        all = all && fc.children.back().method != LimitMethod::Refined;
+      }
+      if (!all && stored < kMaxStoredLevels) {
+        fc.level1 = std::move(lvl);
+        ++stored;
       }
     }
+    face_cache_[f] = static_cast<int>(cache_.size());
+    cache_.push_back(std::move(fc));
   }
 }
 
@@ -724,6 +769,17 @@ LimitSample LimitEvaluator::evaluate_ptex(int ptex, double u, double v, LimitMet
   return evaluate(f, ptex - face_ptex_[f], u, v, method);
 }
 
+LimitPoint LimitEvaluator::evaluate_point(int f, int sub, double u, double v) const {
+  if (f >= 0 && f < static_cast<int>(face_cache_.size()) && sub == 0 && u >= 0 && u <= 1 && v >= 0 &&
+      v <= 1) {
+    const int c = face_cache_[f];
+    if (c >= 0 && cache_[c].prepared.method == LimitMethod::Regular)
+      return bspline16_first(cache_[c].prepared.grid.data(), u, v);
+  }
+  const LimitSample s = evaluate(f, sub, u, v);
+  return LimitPoint{s.p, s.du, s.dv};
+}
+
 LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMethod* method) const {
   const PolyMesh& m = base_.mesh;
   if (f < 0 || f >= m.num_faces()) throw std::out_of_range("no face " + std::to_string(f));
@@ -734,9 +790,42 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
     throw std::out_of_range("parameters (" + std::to_string(u) + ", " + std::to_string(v) +
                             ") outside [0,1]^2");
   if (base_.face_hole[f]) throw std::domain_error("face " + std::to_string(f) + " is a hole (no limit surface)");
+  const int cache_index = face_cache_[f];
+  if (cache_index >= 0 && !cache_[cache_index].children.empty()) {
+    const FaceCache& fc = cache_[cache_index];
+    int k;
+    double s, t;
+    Affine A;
+    if (size == 4) {
+      k = u < 0.5 ? (v < 0.5 ? 0 : 3) : (v < 0.5 ? 1 : 2);
+      A = child_map(k);
+      A.apply(u, v, s, t);
+    } else {
+      k = sub;
+      s = u;
+      t = v;
+    }
+    const Prepared& cp = fc.children[k];
+    if (cp.method != LimitMethod::Refined) {
+      bool singular = false;
+      const Derivs d = eval_prepared(cp, s, t, &singular);
+      if (!singular) {
+        LimitSample out = to_ptex(d, cp.method == LimitMethod::Stam ? A.then(corner_frame(cp.corner)) : A);
+        finish_sample(out);
+        if (cp.method == LimitMethod::Stam) stam_normal_fallback(cp, out);
+        if (method) *method = LimitMethod::Refined;
+        return out;
+      }
+    }
+    if (fc.level1) {
+      LimitSample out = eval_general(fc.level1->level, fc.level1->pos, fc.first_child + k, s, t, A, method, 1);
+      if (method && *method != LimitMethod::Fallback) *method = LimitMethod::Refined;
+      return out;
+    }
+  }
   if (size == 4) {
-    const int c = face_cache_[f];
-    if (c >= 0) {
+    const int c = cache_index;
+    if (c >= 0 && cache_[c].prepared.method != LimitMethod::Refined) {
       const Prepared& pr = cache_[c].prepared;
       bool singular = false;
       const Derivs d = eval_prepared(pr, u, v, &singular);

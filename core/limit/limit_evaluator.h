@@ -42,6 +42,11 @@ struct LimitSample {
   bool exact_derivatives = true;    ///< false at the documented fallback points
 };
 
+/// Position and first derivatives only (what OpenSubdiv's patch evaluation returns).
+struct LimitPoint {
+  Point3 p{}, du{}, dv{};
+};
+
 enum class LimitMethod : unsigned char { Regular, Stam, Refined, Fallback };
 
 class LimitEvaluator {
@@ -63,6 +68,9 @@ class LimitEvaluator {
   LimitSample evaluate_ptex(int ptex, double u, double v, LimitMethod* method = nullptr) const;
   /// Quad face f (sub = 0) or sub-face `sub` of n-gon f.
   LimitSample evaluate(int face, int sub, double u, double v, LimitMethod* method = nullptr) const;
+  /// The same values of p, du, dv as evaluate(), without second derivatives and curvature
+  /// (faster on regular faces).
+  LimitPoint evaluate_point(int face, int sub, double u, double v) const;
 
  private:
   struct FaceCache;

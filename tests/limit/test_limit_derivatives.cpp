@@ -56,6 +56,10 @@ TEST(LimitDerivatives, MatchCentralDifferencesOnEveryPath) {
       }
       ++seen[method];
       ++checked;
+      // The light entry point returns the same p, du, dv.
+      const int face = ev.ptex_to_face(ptex);
+      const LimitPoint lp = ev.evaluate_point(face, ptex - ev.first_ptex(face), u, v);
+      EXPECT_LT(norm(sub(lp.p, s.p)) + norm(sub(lp.du, s.du)) + norm(sub(lp.dv, s.dv)), 1e-13 * diag);
       const double h = 1e-5;
       auto at = [&](double du, double dv) { return ev.evaluate_ptex(ptex, u + du, v + dv); };
       const LimitSample up = at(h, 0), um = at(-h, 0), vp = at(0, h), vm = at(0, -h);
