@@ -12,6 +12,7 @@
 
 #include "converter/cli/convert.h"
 #include "converter/cli/limit_cmd.h"
+#include "converter/cli/check_cmd.h"
 #include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/polar/polar_refine.h"
@@ -325,6 +326,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
 
   LimitOptions limit;
   CLI::App* limit_command = add_limit_command(app, limit);
+  CheckOptions check;
+  CLI::App* check_command = add_check_command(app, check);
 
   try {
     app.parse(argc, argv);
@@ -337,6 +340,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
     if (*info_command) run_info(info, out);
     if (*refine_command) run_refine(refine, err);
     if (*limit_command) run_limit(limit, std::cin, out, err);
+    if (*check_command) run_check(check, err);
     if (*convert_command) {
       convert.level_given = level_option->count() > 0;
       convert.tolerance_given = tolerance_option->count() > 0;

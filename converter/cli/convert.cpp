@@ -1,4 +1,5 @@
 #include "converter/cli/convert.h"
+#include "converter/cli/quality_json.h"
 
 #include <unistd.h>
 
@@ -278,7 +279,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   }
 
   if (!options.report.empty()) {
-    const std::string text = pipeline::report_json(c);
+    const std::string text = report_with_quality(pipeline::report_json(c), base, positions, c, err, options.quiet);
     write_file_atomically(options.report, [&](std::ostream& out) { out << text; });
   }
   if (!options.quiet) print_summary(err, c, kind, schema);

@@ -140,3 +140,40 @@ TEST(LimitCli, HolesMissingFilesAndUsage) {
   status = std::system((quote(SUBD2NURBS_EXE) + " limit >/dev/null 2>&1").c_str());
   EXPECT_EQ(WEXITSTATUS(status), 1);
 }
+
+TEST(CheckCli, WritesTheQualityReportAndUsesTheDocumentedExitCodes) {
+  TempDir dir;
+  const std::string cube = limit_corpus_path("catmark_cube");
+  auto sh = [&](const std::string& args) {
+    const int status = std::system((quote(SUBD2NURBS_EXE) + " " + args + " >" + quote(dir.file("out")) +
+                                    " 2>" + quote(dir.file("err")))
+                                       .c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  ASSERT_EQ(sh("check " + quote(cube) + " --json " + quote(dir.file("q.json"))), 0) << read_text(dir.file("err"));
+  EXPECT_NE(read_text(dir.file("err")).find("quality: deviation from the exact limit max"), std::string::npos);
+  // Python reads it; the cube has irregular vertices, so the deviation is positive but small,
+  // every shared edge is smooth, and the samples cover every patch.
+  const std::string py =
+      "import json,sys; r=json.load(open(sys.argv[1])); q=r['quality']; d=q['deviation'];"
+      "assert r['format']=='subd2nurbs-quality' and r['version']==1;"
+      "assert 0 < d['max'] < 0.05*r['model_size'] and d['max'] <= d['parametric_max'];"
+      "assert d['samples']==r['patches']*q['samples_per_side']**2 and len(q['patch_max'])==r['patches'];"
+      "assert q['edges_summary']['crease']==0 and len(q['edges'])==q['edges_summary']['smooth'];"
+      "assert q['curvature']['max_k'] < 0";
+  EXPECT_EQ(std::system(("python3 -c " + quote(py) + " " + quote(dir.file("q.json"))).c_str()), 0);
+  // convert --report carries the same object.
+  ASSERT_EQ(sh("convert " + quote(cube) + " -o " + quote(dir.file("c.step")) + " --report " +
+               quote(dir.file("r.json")) + " -q"),
+            0);
+  const std::string same =
+      "import json,sys; a=json.load(open(sys.argv[1]))['quality']; b=json.load(open(sys.argv[2]))['quality'];"
+      "assert a['deviation']==b['deviation'] and a['edges']==b['edges'], 'differ'";
+  EXPECT_EQ(std::system(("python3 -c " + quote(same) + " " + quote(dir.file("q.json")) + " " +
+                         quote(dir.file("r.json")))
+                            .c_str()),
+            0);
+  EXPECT_EQ(sh("check /nonexistent.obj"), 2);
+  EXPECT_EQ(sh("check " + quote(cube) + " --samples 1"), 1);
+  EXPECT_EQ(sh("check " + quote(cube) + " --json /nonexistent_dir/q.json"), 3);
+}

@@ -1,0 +1,90 @@
+#include "converter/cli/check_cmd.h"
+
+#include <CLI/CLI.hpp>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+
+#include "converter/cli/commands.h"
+#include "converter/cli/quality_json.h"
+#include "converter/pipeline/conversion.h"
+#include "core/eval/quality.h"
+#include "io/atomic_file.h"
+#include "io/input_error.h"
+#include "io/obj_reader.h"
+
+namespace subd2nurbs::cli {
+
+namespace {
+
+/// Fails early (before the work) when a file cannot be created in `path`'s directory.
+void check_output_directory(const std::string& path) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw WriteError(path, "the directory " + dir.string() + " does not exist");
+  if (::access(dir.c_str(), W_OK) != 0) throw WriteError(path, "the directory " + dir.string() + " is not writable");
+}
+
+}  // namespace
+
+CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
+  CLI::App* c = app.add_subcommand(
+      "check",
+      "Measure the conversion's patches against the exact limit surface: deviation, gaps and "
+      "normal jumps per edge with the class each edge should have, curvature");
+  c->add_option("MESH", o.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
+  c->add_option("--level", o.level, "Refinement levels beyond the minimum (as convert --level)")
+      ->check(CLI::Range(0, 12));
+  c->add_option("--json", o.json, "Write the quality report as JSON");
+  c->add_option("--samples", o.samples, "Samples per patch side (default 9)")->check(CLI::Range(2, 64));
+  c->add_flag("-q,--quiet", o.quiet, "No progress and no summary (warnings are still printed)");
+  return c;
+}
+
+void run_check(const CheckOptions& o, std::ostream& err) {
+  using Clock = std::chrono::steady_clock;
+  if (!o.json.empty()) check_output_directory(o.json);
+  if (!o.quiet) err << "subd2nurbs: reading " << o.mesh << "\n";
+  const LoadedCage cage = read_obj(o.mesh);
+  Diagnostics validation;
+  const SubdivLevel base = load_and_validate(cage, &validation);
+  std::vector<std::string> warnings;
+  for (const Diagnostic& d : cage.diagnostics) warnings.push_back(format_diagnostic(cage, d));
+  for (const Diagnostic& d : validation) warnings.push_back(format_diagnostic(cage, d));
+  for (const std::string& w : warnings) err << w << "\n";
+  const std::vector<Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
+  if (pipeline::level_faces(base, o.level) > pipeline::kMaxLevelFaces)
+    throw UsageError("--level " + std::to_string(o.level) + " would refine " + o.mesh + " too far");
+
+  pipeline::ConversionSettings settings;
+  settings.level = o.level;
+  settings.build_brep = false;
+  pipeline::ConversionProgress progress;
+  if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
+  progress.warning = [&](const std::string& w) { err << w << "\n"; };
+  const pipeline::ConversionResult c = pipeline::convert(base, positions, settings, progress, warnings);
+
+  if (!o.quiet) err << "subd2nurbs: measuring against the exact limit surface...\n";
+  const auto t = Clock::now();
+  const QualityReport q = measure_conversion_quality(base, positions, c, o.samples);
+  const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+  const double size = c.build.set.model_size;
+
+  if (!o.json.empty()) {
+    std::string text = "{\n  \"format\": \"subd2nurbs-quality\",\n  \"version\": 1,\n  \"input\": " +
+                       pipeline::json_string(o.mesh) + ",\n  \"model_size\": " + pipeline::json_number(size) +
+                       ",\n  \"coarse_level\": " + std::to_string(c.build.info.coarse_level) +
+                       ",\n  \"level\": " + std::to_string(c.build.info.level) +
+                       ",\n  \"patches\": " + std::to_string(c.build.set.patches.size()) +
+                       ",\n  \"quality_ms\": " + pipeline::json_number(ms) + "\n}\n";
+    text = add_quality_member(text, quality_json(q, size, 2));
+    write_file_atomically(o.json, [&](std::ostream& out) { out << text; });
+  }
+  if (!o.quiet) print_quality_summary(err, q, size);
+}
+
+}  // namespace subd2nurbs::cli

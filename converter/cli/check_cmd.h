@@ -1,0 +1,29 @@
+// `subd2nurbs check MESH [--level N] [--json R.json] [--samples N]`: the conversion's patches
+// (no B-rep) measured against the exact limit surface (core/eval/quality.h): deviation, joins
+// against the class each edge should have, curvature. Summary on stderr, JSON on request
+// (docs/formats.md, "Quality report").
+#pragma once
+
+#include <ostream>
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace subd2nurbs::cli {
+
+struct CheckOptions {
+  std::string mesh;
+  int level = 0;
+  std::string json;  ///< output path, empty for none
+  int samples = 9;   ///< per patch side
+  bool quiet = false;
+};
+
+CLI::App* add_check_command(CLI::App& app, CheckOptions& options);
+
+/// \throw InputError, WriteError, UsageError
+void run_check(const CheckOptions& options, std::ostream& err);
+
+}  // namespace subd2nurbs::cli

@@ -1,0 +1,186 @@
+#include "core/eval/quality.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/eval/nurbs_eval.h"
+
+namespace subd2nurbs {
+
+namespace {
+
+double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
+
+double angle_deg(const Point3& a, const Point3& b) {
+  const double na = norm(a), nb = norm(b);
+  if (!(na > 0 && nb > 0)) return 0;
+  // atan2 of |a x b| and a.b: accurate for small angles too.
+  const Point3 c = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  return std::atan2(norm(c), dot(a, b)) * 180.0 / std::acos(-1.0);
+}
+
+/// Level-a face of a patch (from its first level-k quad, climbing the child -> corner chain).
+int coarse_face(const PatchBuild& b, int patch) {
+  const int a = b.info.coarse_level, k = b.info.level;
+  const std::vector<int>& sc = b.info.sub_corners.at(static_cast<size_t>(patch));
+  int f = b.refinement.levels[k].mesh.corner_face(sc.at(0));
+  for (int j = k; j > a; --j) f = b.refinement.levels[j - 1].mesh.corner_face(f);
+  return f;
+}
+
+/// Closest point on the limit surface near `start` (Gauss-Newton in the start's face,
+/// parameters clamped to [0,1]^2).
+double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x) {
+  LimitPoint q = L.evaluate_point(p.face, p.sub, p.u, p.v);
+  double best = norm(sub(q.p, x));
+  for (int it = 0; it < 12 && best > 0; ++it) {
+    const Point3 r = sub(q.p, x);
+    const double a11 = dot(q.du, q.du), a12 = dot(q.du, q.dv), a22 = dot(q.dv, q.dv);
+    const double b1 = -dot(q.du, r), b2 = -dot(q.dv, r);
+    const double det = a11 * a22 - a12 * a12;
+    if (!(std::abs(det) > 0)) break;
+    const double du = (b1 * a22 - b2 * a12) / det, dv = (a11 * b2 - a12 * b1) / det;
+    const double nu = std::clamp(p.u + du, 0.0, 1.0), nv = std::clamp(p.v + dv, 0.0, 1.0);
+    if (nu == p.u && nv == p.v) break;
+    p.u = nu;
+    p.v = nv;
+    q = L.evaluate_point(p.face, p.sub, p.u, p.v);
+    const double d = norm(sub(q.p, x));
+    if (d >= best) {
+      if (std::abs(du) + std::abs(dv) < 1e-14) break;
+    }
+    best = std::min(best, d);
+    if (std::abs(du) + std::abs(dv) < 1e-14) break;
+  }
+  return best;
+}
+
+}  // namespace
+
+LimitParam patch_to_limit(const PatchBuild& b, int patch, double s, double t) {
+  if (patch < 0 || patch >= static_cast<int>(b.set.patches.size()))
+    throw std::out_of_range("patch_to_limit: no patch " + std::to_string(patch));
+  const int F = coarse_face(b, patch);
+  if (b.info.coarse_level == 0) return {F, 0, s, t};
+  const PolyMesh& m0 = b.refinement.levels[0].mesh;
+  const int g = m0.corner_face(F);  // level-1 face F is the child of base corner F
+  const int k = F - m0.face_begin(g);
+  if (m0.face_size(g) != 4) return {g, k, s, t};
+  // A quarter of a quad: the child frame at corner k (docs/limit.md, refiner.h layout).
+  switch (k) {
+    case 0: return {g, 0, s / 2, t / 2};
+    case 1: return {g, 0, 1 - t / 2, s / 2};
+    case 2: return {g, 0, 1 - s / 2, 1 - t / 2};
+    default: return {g, 0, t / 2, 1 - s / 2};
+  }
+}
+
+QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
+                              const ContinuityReport& continuity, int n) {
+  if (n < 2) throw std::invalid_argument("measure_quality: at least 2 samples per side");
+  QualityReport q;
+  q.samples_per_side = n;
+  const PatchSet& ps = b.set;
+  q.patch_max.assign(ps.patches.size(), 0.0);
+  double sum = 0, psum = 0, hsum = 0, h2sum = 0;
+  CurvatureSummary& cs = q.curvature;
+  cs.min_k = HUGE_VAL;
+  cs.max_k = -HUGE_VAL;
+  for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
+    const NurbsPatch& patch = ps.patches[pi];
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        DeviationSample d;
+        d.patch = static_cast<int>(pi);
+        d.s = static_cast<double>(i) / (n - 1);
+        d.t = static_cast<double>(j) / (n - 1);
+        d.limit = patch_to_limit(b, d.patch, d.s, d.t);
+        d.point = evaluate(patch, d.s, d.t).p;
+        const LimitSample L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
+        d.parametric = norm(sub(d.point, L.p));
+        d.distance = d.parametric > 0 ? std::min(d.parametric, closest_distance(limit, d.limit, d.point)) : 0;
+        ++q.deviation_samples;
+        sum += d.distance;
+        psum += d.parametric;
+        q.parametric_max = std::max(q.parametric_max, d.parametric);
+        q.patch_max[pi] = std::max(q.patch_max[pi], d.distance);
+        if (d.distance > q.deviation_max || q.worst.patch < 0) {
+          q.deviation_max = std::max(q.deviation_max, d.distance);
+          if (d.distance >= q.deviation_max) q.worst = d;
+        }
+        if (L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2)) {
+          ++cs.samples;
+          cs.min_k = std::min(cs.min_k, L.k2);
+          cs.max_k = std::max(cs.max_k, L.k1);
+          cs.max_abs_gauss = std::max(cs.max_abs_gauss, std::abs(L.gauss));
+          if (std::abs(L.mean) >= cs.max_abs_mean) {
+            cs.max_abs_mean = std::abs(L.mean);
+            cs.where_max_abs_mean = d;
+            cs.where_max_abs_mean.point = L.p;
+          }
+          hsum += std::abs(L.mean);
+          h2sum += L.mean * L.mean;
+        }
+      }
+  }
+  if (q.deviation_samples > 0) {
+    q.deviation_mean = sum / q.deviation_samples;
+    q.parametric_mean = psum / q.deviation_samples;
+  }
+  if (cs.samples > 0) {
+    cs.mean_abs_mean = hsum / cs.samples;
+    cs.rms_mean = std::sqrt(h2sum / cs.samples);
+  } else {
+    cs.min_k = cs.max_k = 0;
+  }
+
+  // Edges: the patches' joins against the limit's behaviour across the same edges.
+  const int a = b.info.coarse_level;
+  const SubdivLevel& La = b.refinement.levels[a];
+  for (const BoundaryCurve& c : ps.curves)
+    if (c.uses.size() == 1) ++q.boundary_edges;
+  const int m = 24;
+  for (const CurveMeasure& cm : continuity.curves) {
+    const BoundaryCurve& c = ps.curves[cm.curve];
+    if (c.uses.size() != 2) continue;
+    EdgeQuality e;
+    e.curve = cm.curve;
+    e.claimed = cm.claimed;
+    e.gap = cm.gap;
+    e.normal_jump_deg = cm.normal_angle_deg;
+    const CurveUse& u0 = c.uses[0];
+    const int F = coarse_face(b, u0.patch);
+    const int edge = La.mesh.corner_edge(La.mesh.face_begin(F) + u0.side);
+    const bool crease = La.edge_sharpness[edge] >= static_cast<float>(kInfiniteSharpness);
+    e.expected = crease ? "crease" : "smooth";
+    (crease ? q.crease_edges : q.smooth_edges)++;
+    for (int i = 0; i < m; ++i) {
+      const double s = (i + 0.5) / m;  // interior samples: the curve's ends may be singular
+      Point3 pn[2], ln[2];
+      for (int w = 0; w < 2; ++w) {
+        const CurveUse& use = c.uses[w];
+        double pu, pv;
+        side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
+        pn[w] = unit_normal(evaluate(ps.patches[use.patch], pu, pv));
+        const LimitParam lp = patch_to_limit(b, use.patch, pu, pv);
+        ln[w] = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).normal;
+      }
+      const double pj = angle_deg(pn[0], pn[1]), lj = angle_deg(ln[0], ln[1]);
+      e.limit_normal_jump_deg = std::max(e.limit_normal_jump_deg, lj);
+      e.normal_jump_error_deg = std::max(e.normal_jump_error_deg, std::abs(pj - lj));
+    }
+    q.max_gap = std::max(q.max_gap, e.gap);
+    if (!crease) q.max_smooth_normal_jump_deg = std::max(q.max_smooth_normal_jump_deg, e.normal_jump_deg);
+    q.max_normal_jump_error_deg = std::max(q.max_normal_jump_error_deg, e.normal_jump_error_deg);
+    if ((crease && cm.claimed != Continuity::C0) || (!crease && cm.claimed == Continuity::C0))
+      ++q.class_mismatches;
+    q.edges.push_back(e);
+  }
+  return q;
+}
+
+}  // namespace subd2nurbs

@@ -1,0 +1,79 @@
+// Quality of a conversion measured against the exact limit surface (core/limit): how far the
+// NURBS patches are from the limit, how the joins behave compared with what the limit surface
+// does across the same edges, and the curvature of the limit.
+#pragma once
+
+#include <vector>
+
+#include "core/eval/continuity.h"
+#include "core/limit/limit_evaluator.h"
+#include "core/patch/patch_builder.h"
+
+namespace subd2nurbs {
+
+/// Where a patch point lies on the limit surface's parametrisation (ptex, docs/limit.md).
+struct LimitParam {
+  int face = -1, sub = 0;  ///< cage face and sub-face (0 for a quad)
+  double u = 0, v = 0;
+};
+
+/// Maps patch parameters to limit parameters: patches are built on the level-a faces
+/// (a = PatchBuildInfo::coarse_level); a level-1 face is a ptex sub-face of an n-gon or a
+/// quarter of a quad. \throw std::out_of_range for a bad patch index.
+LimitParam patch_to_limit(const PatchBuild& build, int patch, double s, double t);
+
+struct DeviationSample {
+  int patch = -1;
+  double s = 0, t = 0;      ///< patch parameters
+  LimitParam limit;         ///< the same point's limit parameters
+  Point3 point{};           ///< on the patch
+  double parametric = 0;    ///< |X(s,t) - L(u,v)|
+  double distance = 0;      ///< to the closest limit point found from there (<= parametric)
+};
+
+struct EdgeQuality {
+  int curve = -1;
+  Continuity claimed = Continuity::Boundary;
+  /// What the limit surface has across this edge: "boundary", "crease" (infinitely sharp:
+  /// a normal jump is expected) or "smooth" (the limit is tangent continuous here).
+  const char* expected = "smooth";
+  double gap = 0;                  ///< max |X1 - X2| of the patches (from measure_continuity)
+  double normal_jump_deg = 0;      ///< max angle between the patches' normals (idem)
+  double limit_normal_jump_deg = 0;  ///< max angle between the limit's normals on both sides
+  /// Max over the samples of |patch normal jump - limit normal jump| (degrees).
+  double normal_jump_error_deg = 0;
+};
+
+struct CurvatureSummary {
+  int samples = 0;                 ///< finite curvature samples
+  double min_k = 0, max_k = 0;     ///< over k2 and k1 (signed, docs/limit.md)
+  double max_abs_mean = 0, max_abs_gauss = 0;
+  double mean_abs_mean = 0;
+  double rms_mean = 0;
+  DeviationSample where_max_abs_mean;  ///< where |H| is largest (its point and parameters)
+};
+
+struct QualityReport {
+  int samples_per_side = 0;
+  int deviation_samples = 0;
+  double deviation_max = 0, deviation_mean = 0;        ///< closest-point distance
+  double parametric_max = 0, parametric_mean = 0;      ///< same-parameter distance
+  DeviationSample worst;                               ///< largest closest-point distance
+  std::vector<double> patch_max;                       ///< per patch, closest-point distance
+  std::vector<EdgeQuality> edges;                      ///< one per shared curve
+  double max_gap = 0;
+  double max_smooth_normal_jump_deg = 0;    ///< patches, over edges expected smooth
+  double max_normal_jump_error_deg = 0;     ///< over every shared curve
+  int smooth_edges = 0, crease_edges = 0, boundary_edges = 0;
+  /// Edges claimed smoother than C0 whose limit has a normal jump, or expected smooth but
+  /// claimed C0 (other than sharpened semi-sharp creases): disagreements of class.
+  int class_mismatches = 0;
+  CurvatureSummary curvature;
+};
+
+/// Samples every patch on an n x n grid (n = samples_per_side, endpoints included) against the
+/// exact limit, and every shared curve (from `continuity`) on both sides.
+QualityReport measure_quality(const PatchBuild& build, const LimitEvaluator& limit,
+                              const ContinuityReport& continuity, int samples_per_side = 9);
+
+}  // namespace subd2nurbs

@@ -1,0 +1,135 @@
+// The quality report (core/eval/quality.h) against OCCT's independent measurement of the STEP
+// file the conversion writes: the read-back surfaces sampled at the same parameters give the
+// same same-parameter deviation from the exact limit, and OCCT's normal angle across the shared
+// edges matches the report's normal jumps. Small shapes only (STEP read-back is slow).
+#include <gtest/gtest.h>
+
+#include <BRep_Tool.hxx>
+#include <Geom_Surface.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+#include <gp_Pnt.hxx>
+
+#include "converter/occt/shape_check.h"
+#include "converter/occt/writers.h"
+#include "converter/pipeline/conversion.h"
+#include "core/eval/nurbs_eval.h"
+#include "core/eval/quality.h"
+#include "io/temp_dir.h"
+#include "limit_test_util.h"
+
+using namespace subd2nurbs;
+using namespace subd2nurbs::testing;
+
+namespace {
+
+struct Converted {
+  SubdivLevel base;
+  std::vector<Point3> pos;
+  pipeline::ConversionResult result;
+};
+
+Converted convert_shape(const std::string& name) {
+  Converted c;
+  const LoadedCage cage = read_obj(limit_corpus_path(name));
+  c.base = load_and_validate(cage);
+  c.pos = positions_of(cage.input);
+  c.result = pipeline::convert(c.base, c.pos, pipeline::ConversionSettings{});
+  return c;
+}
+
+}  // namespace
+
+class QualityVsOcct : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(QualityVsOcct, DeviationAndNormalJumpsAgreeWithTheReadBackStep) {
+  const Converted c = convert_shape(GetParam());
+  ASSERT_TRUE(c.result.brep.valid);
+  const LimitEvaluator limit(c.base, c.pos);
+  const int n = 7;  // steps of 1/6: not at the level-k vertices, where Construction Q interpolates
+  const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, n);
+  const double size = c.result.build.set.model_size;
+
+  TempDir dir;
+  const std::string step = dir.file("out.step");
+  occt::write_shape(c.result.brep.shape, step, occt::Format::Step);
+  const TopoDS_Shape back = occt::read_shape(step);
+
+  // Faces of the read-back shape, matched to patches by their centre point.
+  const PatchSet& ps = c.result.build.set;
+  std::vector<Handle(Geom_Surface)> surfaces;
+  for (TopExp_Explorer ex(back, TopAbs_FACE); ex.More(); ex.Next())
+    surfaces.push_back(BRep_Tool::Surface(TopoDS::Face(ex.Current())));
+  ASSERT_EQ(surfaces.size(), ps.patches.size());
+  double occt_parametric_max = 0;
+  for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
+    const Point3 centre = evaluate(ps.patches[pi], 0.5, 0.5).p;
+    size_t best = 0;
+    double best_d = HUGE_VAL;
+    for (size_t k = 0; k < surfaces.size(); ++k) {
+      const gp_Pnt x = surfaces[k]->Value(0.5, 0.5);
+      const double d = dist({x.X(), x.Y(), x.Z()}, centre);
+      if (d < best_d) best_d = d, best = k;
+    }
+    ASSERT_LT(best_d, 1e-9 * size) << "no read-back face has patch " << pi << "'s parametrisation";
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const double s = static_cast<double>(i) / (n - 1), t = static_cast<double>(j) / (n - 1);
+        const gp_Pnt x = surfaces[best]->Value(s, t);
+        const LimitParam lp = patch_to_limit(c.result.build, static_cast<int>(pi), s, t);
+        const LimitSample L = limit.evaluate(lp.face, lp.sub, lp.u, lp.v);
+        occt_parametric_max = std::max(occt_parametric_max, dist({x.X(), x.Y(), x.Z()}, L.p));
+      }
+  }
+  EXPECT_NEAR(q.parametric_max, occt_parametric_max, 1e-9 * size);
+  if (c.result.build.info.pccm_patches > 0)
+    EXPECT_GT(q.parametric_max, 1e-6 * size);  // patches at irregular vertices approximate
+  else
+    EXPECT_LT(q.parametric_max, 1e-12 * size);  // every patch is the limit itself
+  EXPECT_LE(q.deviation_max, q.parametric_max + 1e-15 * size);
+
+  // Normal jumps: OCCT's angle between the faces across every shared edge vs the report's.
+  const occt::ShapeSummary summary = occt::summarize(back, 24, false);
+  double ours = 0, limit_max = 0;
+  for (const EdgeQuality& e : q.edges) {
+    ours = std::max(ours, e.normal_jump_deg);
+    limit_max = std::max(limit_max, e.limit_normal_jump_deg);
+  }
+  EXPECT_NEAR(summary.max_normal_angle_deg, ours, 1e-3) << "largest normal jump over the shared edges";
+  EXPECT_NEAR(summary.max_normal_angle_deg, limit_max, q.max_normal_jump_error_deg + 1e-3);
+  EXPECT_LE(summary.max_gap, q.max_gap + 1e-7 * size);  // OCCT also counts its edge tolerance
+  std::printf("%s: parametric max %.3g (OCCT %.3g), distance max %.3g, normal jump %.4g deg (OCCT %.4g, limit %.4g)\n",
+              GetParam(), q.parametric_max, occt_parametric_max, q.deviation_max, ours,
+              summary.max_normal_angle_deg, limit_max);
+}
+
+INSTANTIATE_TEST_SUITE_P(Small, QualityVsOcct,
+                         ::testing::Values("catmark_cube", "catmark_pyramid", "catmark_edgecorner",
+                                           "catmark_cubes_infsharp", "catmark_tent_creases0"),
+                         [](const ::testing::TestParamInfo<const char*>& i) { return std::string(i.param); });
+
+TEST(Quality, RegularPatchesAreTheLimitAndCreasesAreExpected) {
+  // catmark_torus: every vertex regular, so every patch is the limit itself.
+  {
+    const Converted c = convert_shape("catmark_torus");
+    const LimitEvaluator limit(c.base, c.pos);
+    const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, 5);
+    EXPECT_LT(q.parametric_max, 1e-12 * c.result.build.set.model_size);
+    EXPECT_EQ(q.crease_edges, 0);
+    EXPECT_EQ(q.class_mismatches, 0);
+    EXPECT_LT(q.max_normal_jump_error_deg, 1e-6);
+    EXPECT_GT(q.curvature.samples, 0);
+  }
+  // catmark_cube_creases1 has infinitely sharp edges: expected creases with a limit normal jump.
+  {
+    const Converted c = convert_shape("catmark_cubes_infsharp");
+    const LimitEvaluator limit(c.base, c.pos);
+    const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, 3);
+    EXPECT_GT(q.crease_edges, 0);
+    double crease_jump = 0;
+    for (const EdgeQuality& e : q.edges)
+      if (std::string(e.expected) == "crease") crease_jump = std::max(crease_jump, e.limit_normal_jump_deg);
+    EXPECT_GT(crease_jump, 1.0);
+  }
+}
