@@ -321,6 +321,14 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       ->check(CLI::IsMember({"ap214", "ap242"}));
   convert_command->add_option("--report", convert.report,
                               "Also write a JSON report (counts, continuity, deviation, timings)");
+  convert_command->add_option("--preview", convert.preview,
+                              "Also write a GLB preview of the patches with per-vertex colours");
+  convert_command->add_option("--color", convert.preview_color,
+                              "Preview colouring: deviation (from the exact limit), curvature (mean), zebra")
+      ->check(CLI::IsMember({"deviation", "curvature", "zebra"}));
+  convert_command->add_option("--preview-samples", convert.preview_samples,
+                              "Preview vertices per patch side (default 12)")
+      ->check(CLI::Range(2, 64));
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress and no summary on stderr (warnings are still printed)");
 

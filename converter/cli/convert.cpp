@@ -195,6 +195,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
   check_directory(options.output);
   if (!options.report.empty()) check_directory(options.report);
+  if (!options.preview.empty()) check_directory(options.preview);
 
   Progress progress(err, options.quiet, options.progress_tty);
   std::vector<std::string> load_warnings;
@@ -282,6 +283,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     const std::string text = report_with_quality(pipeline::report_json(c), base, positions, c, err, options.quiet);
     write_file_atomically(options.report, [&](std::ostream& out) { out << text; });
   }
+  if (!options.preview.empty()) write_preview(options, base, positions, c, err);
   if (!options.quiet) print_summary(err, c, kind, schema);
 }
 

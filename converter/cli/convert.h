@@ -24,6 +24,9 @@ struct ConvertOptions {
   int radial_steps = 1;       ///< radial BP pre-steps of a polar cap (1 or 2)
   double lambda = 0.75;       ///< polar cap's 1-link scale (MATH.md 4.1 (iv)), > 0
   bool quiet = false;         ///< no progress and no summary (warnings are still printed)
+  std::string preview;        ///< GLB preview path, empty for none
+  std::string preview_color = "curvature";  ///< deviation, curvature or zebra
+  int preview_samples = 12;   ///< per patch side
   bool progress_tty = false;  ///< stderr is a terminal: show the B-rep percentage in place
 };
 

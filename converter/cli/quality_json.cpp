@@ -1,10 +1,14 @@
 #include "converter/cli/quality_json.h"
 
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <stdexcept>
 
+#include "converter/cli/convert.h"
 #include "converter/pipeline/conversion.h"
+#include "core/eval/preview_mesh.h"
+#include "io/gltf_preview.h"
 
 namespace subd2nurbs::cli {
 
@@ -40,6 +44,7 @@ std::string quality_json(const QualityReport& q, double size, int indent) {
   std::string j = "{\n";
   auto line = [&](const std::string& s, bool last = false) { j += p + "  " + s + (last ? "\n" : ",\n"); };
   line("\"samples_per_side\": " + std::to_string(q.samples_per_side));
+  line("\"polar_patches_skipped\": " + std::to_string(q.polar_patches));
   line("\"deviation\": {\"samples\": " + std::to_string(q.deviation_samples) +
        ", \"max\": " + json_number(q.deviation_max) + ", \"max_rel\": " + rel(q.deviation_max) +
        ", \"mean\": " + json_number(q.deviation_mean) + ", \"parametric_max\": " +
@@ -98,6 +103,19 @@ std::string report_with_quality(const std::string& report, const SubdivLevel& ba
   const double size = c.build.set.model_size;
   if (!quiet) print_quality_summary(err, q, size);
   return add_quality_member(report, quality_json(q, size, 2));
+}
+
+void write_preview(const ConvertOptions& o, const SubdivLevel& base, const std::vector<Point3>& positions,
+                   const pipeline::ConversionResult& c, std::ostream& err) {
+  const PreviewColor color = preview_color_from_string(o.preview_color);
+  if (!o.quiet) err << "subd2nurbs: writing the preview " << o.preview << " (" << o.preview_color << ")\n";
+  std::unique_ptr<LimitEvaluator> limit;
+  if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, positions);
+  const PreviewMesh mesh = build_preview(c.build, limit.get(), color, o.preview_samples);
+  write_preview_glb(o.preview, mesh, o.mesh + " (" + o.preview_color + ")");
+  if (!o.quiet)
+    err << "  preview    " << mesh.indices.size() / 3 << " triangles, " << o.preview_color << " from "
+        << g(mesh.value_min) << " to " << g(mesh.value_max) << "\n";
 }
 
 void print_quality_summary(std::ostream& err, const QualityReport& q, double size) {

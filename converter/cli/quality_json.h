@@ -27,6 +27,11 @@ std::string report_with_quality(const std::string& report, const SubdivLevel& ba
                                 const std::vector<Point3>& positions, const pipeline::ConversionResult& c,
                                 std::ostream& err, bool quiet);
 
+/// `convert --preview`: the GLB preview of the patches (core/eval/preview_mesh.h).
+struct ConvertOptions;
+void write_preview(const ConvertOptions& options, const SubdivLevel& base, const std::vector<Point3>& positions,
+                   const pipeline::ConversionResult& c, std::ostream& err);
+
 /// Three lines for stderr.
 void print_quality_summary(std::ostream& err, const QualityReport& q, double model_size);
 

@@ -64,6 +64,9 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x) 
 LimitParam patch_to_limit(const PatchBuild& b, int patch, double s, double t) {
   if (patch < 0 || patch >= static_cast<int>(b.set.patches.size()))
     throw std::out_of_range("patch_to_limit: no patch " + std::to_string(patch));
+  if (b.set.patches[static_cast<size_t>(patch)].kind == PatchKind::PolarCap)
+    throw std::invalid_argument("patch_to_limit: patch " + std::to_string(patch) +
+                                " is a polar cap (not a piece of the Catmull-Clark limit)");
   const int F = coarse_face(b, patch);
   if (b.info.coarse_level == 0) return {F, 0, s, t};
   const PolyMesh& m0 = b.refinement.levels[0].mesh;
@@ -79,6 +82,12 @@ LimitParam patch_to_limit(const PatchBuild& b, int patch, double s, double t) {
   }
 }
 
+double limit_distance(const PatchBuild& b, const LimitEvaluator& limit, int patch, double s, double t) {
+  const LimitParam lp = patch_to_limit(b, patch, s, t);
+  const Point3 x = evaluate(b.set.patches[static_cast<size_t>(patch)], s, t).p;
+  return closest_distance(limit, lp, x);
+}
+
 QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
                               const ContinuityReport& continuity, int n) {
   if (n < 2) throw std::invalid_argument("measure_quality: at least 2 samples per side");
@@ -92,6 +101,10 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   cs.max_k = -HUGE_VAL;
   for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
     const NurbsPatch& patch = ps.patches[pi];
+    if (patch.kind == PatchKind::PolarCap) {  // Bi-cubic polar, not Catmull-Clark: not measured
+      ++q.polar_patches;
+      continue;
+    }
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         DeviationSample d;
@@ -147,6 +160,9 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   for (const CurveMeasure& cm : continuity.curves) {
     const BoundaryCurve& c = ps.curves[cm.curve];
     if (c.uses.size() != 2) continue;
+    if (ps.patches[c.uses[0].patch].kind == PatchKind::PolarCap ||
+        ps.patches[c.uses[1].patch].kind == PatchKind::PolarCap)
+      continue;  // a polar cap's side: the limit there is BP subdivision's
     EdgeQuality e;
     e.curve = cm.curve;
     e.claimed = cm.claimed;

@@ -65,11 +65,18 @@ struct QualityReport {
   double max_smooth_normal_jump_deg = 0;    ///< patches, over edges expected smooth
   double max_normal_jump_error_deg = 0;     ///< over every shared curve
   int smooth_edges = 0, crease_edges = 0, boundary_edges = 0;
+  /// Polar caps (PatchKind::PolarCap) follow Bi-cubic polar subdivision, not Catmull-Clark:
+  /// they and the curves on their sides are not measured here (patch_max is 0 for them).
+  int polar_patches = 0;
   /// Edges claimed smoother than C0 whose limit has a normal jump, or expected smooth but
   /// claimed C0 (other than sharpened semi-sharp creases): disagreements of class.
   int class_mismatches = 0;
   CurvatureSummary curvature;
 };
+
+/// Distance from patch point (s, t) to the closest limit point found by Gauss-Newton from the
+/// same parameters within the same face (an upper bound of the true distance).
+double limit_distance(const PatchBuild& build, const LimitEvaluator& limit, int patch, double s, double t);
 
 /// Samples every patch on an n x n grid (n = samples_per_side, endpoints included) against the
 /// exact limit, and every shared curve (from `continuity`) on both sides.

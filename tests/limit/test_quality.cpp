@@ -11,6 +11,8 @@
 #include <TopoDS_Face.hxx>
 #include <gp_Pnt.hxx>
 
+#include <cstring>
+
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
@@ -83,10 +85,11 @@ TEST_P(QualityVsOcct, DeviationAndNormalJumpsAgreeWithTheReadBackStep) {
       }
   }
   EXPECT_NEAR(q.parametric_max, occt_parametric_max, 1e-9 * size);
-  if (c.result.build.info.pccm_patches > 0)
+  if (c.result.build.info.pccm_patches > 0) {
     EXPECT_GT(q.parametric_max, 1e-6 * size);  // patches at irregular vertices approximate
-  else
+  } else {
     EXPECT_LT(q.parametric_max, 1e-12 * size);  // every patch is the limit itself
+  }
   EXPECT_LE(q.deviation_max, q.parametric_max + 1e-15 * size);
 
   // Normal jumps: OCCT's angle between the faces across every shared edge vs the report's.
@@ -131,5 +134,77 @@ TEST(Quality, RegularPatchesAreTheLimitAndCreasesAreExpected) {
     for (const EdgeQuality& e : q.edges)
       if (std::string(e.expected) == "crease") crease_jump = std::max(crease_jump, e.limit_normal_jump_deg);
     EXPECT_GT(crease_jump, 1.0);
+  }
+}
+
+// --- the GLB preview, read back with tinygltf ------------------------------------------------
+
+#include <tiny_gltf.h>
+
+#include "core/eval/preview_mesh.h"
+#include "io/gltf_preview.h"
+
+namespace {
+
+/// The float vec3 data of an accessor.
+std::vector<float> vec3s(const tinygltf::Model& m, int accessor) {
+  const tinygltf::Accessor& a = m.accessors.at(static_cast<size_t>(accessor));
+  EXPECT_EQ(a.componentType, TINYGLTF_COMPONENT_TYPE_FLOAT);
+  EXPECT_EQ(a.type, TINYGLTF_TYPE_VEC3);
+  const tinygltf::BufferView& v = m.bufferViews.at(static_cast<size_t>(a.bufferView));
+  const unsigned char* p = m.buffers.at(static_cast<size_t>(v.buffer)).data.data() + v.byteOffset + a.byteOffset;
+  std::vector<float> out(a.count * 3);
+  std::memcpy(out.data(), p, out.size() * sizeof(float));
+  return out;
+}
+
+}  // namespace
+
+TEST(Preview, GlbReadsBackWithTinygltfWithThePatchesAndTheirColours) {
+  const Converted c = convert_shape("catmark_cube");
+  const LimitEvaluator limit(c.base, c.pos);
+  const int n = 6;
+  const size_t patches = c.result.build.set.patches.size();
+  for (PreviewColor mode : {PreviewColor::Deviation, PreviewColor::Curvature, PreviewColor::Zebra}) {
+    const PreviewMesh mesh = build_preview(c.result.build, &limit, mode, n);
+    TempDir dir;
+    const std::string path = dir.file("p.glb");
+    write_preview_glb(path, mesh, "cube");
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    std::string error, warning;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, path)) << error;
+    ASSERT_EQ(model.meshes.size(), 1u);
+    const tinygltf::Primitive& prim = model.meshes[0].primitives.at(0);
+    const std::vector<float> pos = vec3s(model, prim.attributes.at("POSITION"));
+    const std::vector<float> nrm = vec3s(model, prim.attributes.at("NORMAL"));
+    const std::vector<float> col = vec3s(model, prim.attributes.at("COLOR_0"));
+    ASSERT_EQ(pos.size(), 3 * patches * n * n);
+    ASSERT_EQ(nrm.size(), pos.size());
+    ASSERT_EQ(col.size(), pos.size());
+    EXPECT_EQ(model.accessors.at(static_cast<size_t>(prim.indices)).count, patches * (n - 1) * (n - 1) * 6);
+    // Vertex (patch p, i, j) is the patch at (i, j) / (n - 1).
+    for (size_t p = 0; p < patches; ++p) {
+      const size_t v = (p * n + 2) * n + 3;
+      const Point3 x = evaluate(c.result.build.set.patches[p], 2.0 / (n - 1), 3.0 / (n - 1)).p;
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(pos[3 * v + k], x[k], 1e-6);
+    }
+    for (float x : col) {
+      EXPECT_GE(x, 0.0f);
+      EXPECT_LE(x, 1.0f);
+    }
+    if (mode == PreviewColor::Curvature) {
+      // The limit of a cube is convex: H < 0 everywhere, so every colour is on the blue side.
+      for (size_t v = 0; v < col.size() / 3; ++v) EXPECT_EQ(col[3 * v + 2], 1.0f);
+      EXPECT_LT(mesh.value_min, 0);
+    }
+    if (mode == PreviewColor::Zebra) {
+      for (float x : col) EXPECT_TRUE(x == 0.0f || x == 1.0f);
+    }
+    if (mode == PreviewColor::Deviation) {
+      // The largest value is the quality report's largest distance on the same grid.
+      const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, n);
+      EXPECT_NEAR(mesh.value_max, q.deviation_max, 1e-6 * q.deviation_max);  // stored as float
+    }
   }
 }
