@@ -234,6 +234,8 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   settings.patch.polar = options.polar == "on";
   settings.patch.cap.radial_steps = options.radial_steps;
   settings.patch.cap.lambda = options.lambda;
+  settings.patch.separate_poles = options.separate_poles;
+  if (options.separate_poles && options.polar == "off") throw UsageError("--separate-poles needs --polar on");
   pipeline::ConversionProgress callbacks;
   std::function<void(double)> brep_percent;  // started with the B-rep stage (percent() times it)
   callbacks.stage = [&](const std::string& what) {

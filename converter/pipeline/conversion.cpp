@@ -210,10 +210,16 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   measure_caps(c);
   c.polar = settings.patch.polar;
   c.cap_options = settings.patch.cap;
-  for (const RejectedPole& r : info.rejected_poles)
-    if (settings.patch.polar && r.valence >= kMinPolarValence)
+  for (const RejectedPole& r : info.rejected_poles) {
+    const bool separable = r.kind != RejectedPole::Kind::Structure && !settings.patch.separate_poles;
+    if (settings.patch.polar && (r.valence >= kMinPolarValence || separable))
       warn("subd2nurbs: note: vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
-           ") is not a polar structure, Catmull-Clark is used there: " + r.reason);
+           ") is not a polar structure, Catmull-Clark is used there: " + r.reason +
+           (separable ? " (--separate-poles may make it a polar cap)" : ""));
+  }
+  if (!info.separated_poles.empty())
+    warn("subd2nurbs: note: separating first step at " + std::to_string(info.separated_poles.size()) +
+         " pole(s); the patches are built from that level-1 cage");
 
   if (settings.build_brep) {
     t = Clock::now();
@@ -279,7 +285,10 @@ std::string report_json(const ConversionResult& c) {
              ", \"bp_distance_relative\": " + relative(m.bp_distance) +
              ", \"pole_normal_angle_deg\": " + json_number(m.pole_normal_angle_deg) + "}";
   }
-  polar += std::string(c.caps.empty() ? "]" : "\n    ]") + ",\n    \"not_polar\": [";
+  polar += std::string(c.caps.empty() ? "]" : "\n    ]") + ",\n    \"separated_poles\": [";
+  for (size_t i = 0; i < info.separated_poles.size(); ++i)
+    polar += (i ? ", " : "") + std::to_string(info.separated_poles[i]);
+  polar += "],\n    \"not_polar\": [";
   for (size_t i = 0; i < info.rejected_poles.size(); ++i) {
     const RejectedPole& r = info.rejected_poles[i];
     polar += std::string(i ? ",\n      " : "\n      ") + "{\"vertex\": " + std::to_string(r.vertex) +

@@ -1,4 +1,6 @@
 #include "core/patch/patch_builder.h"
+
+#include "core/polar/polar_separation.h"
 #include "core/patch/quad_frames.h"
 
 #include <algorithm>
@@ -558,12 +560,54 @@ KnotVector reversed(const KnotVector& kv) {
   return r;
 }
 
+/// PatchOptions::separate_poles: the separating first step at the poles that need it, then
+/// the ordinary build of that level-1 cage. False (and `out` untouched) if no pole needs it.
+bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point3>& positions,
+                                const PatchOptions& options, PatchBuild& out) {
+  const PolyMesh& m = base.mesh;
+  const PolarDetection polar = detect_polar_structures(base);
+  std::vector<int> chosen;
+  std::vector<RejectedPole> left;
+  std::vector<char> taken(m.num_vertices(), 0);
+  for (const RejectedPole& r : polar.rejected) {
+    bool ok = (r.kind == RejectedPole::Kind::LowValence || r.kind == RejectedPole::Kind::TooClose) &&
+              separation_obstacle(base, r.vertex).empty();
+    for (int i = 0; ok && i < m.vertex_face_count(r.vertex); ++i) ok = !taken[m.to_vertex(m.vertex_corners(r.vertex)[i])];
+    if (ok) {
+      chosen.push_back(r.vertex);
+      taken[r.vertex] = 1;
+    } else {
+      left.push_back(r);
+    }
+  }
+  if (chosen.empty()) return false;
+  const SeparatedLevel sl = separate_poles(base, positions, chosen);
+  PatchOptions once = options;
+  once.separate_poles = false;
+  out = build_patches(sl.level, sl.positions, once);
+  for (NurbsPatch& p : out.set.patches) {
+    for (int& f : p.base_faces) f = sl.cage_face[f];
+    std::sort(p.base_faces.begin(), p.base_faces.end());
+    p.base_faces.erase(std::unique(p.base_faces.begin(), p.base_faces.end()), p.base_faces.end());
+  }
+  out.info.separated_poles = chosen;
+  out.info.rejected_poles = left;  // the level-1 cage has no other all-triangle vertices
+  V3 lo = v3(positions[0]), hi = lo;  // model size of the cage, not of its level 1
+  for (const Point3& q : positions) { lo = lo.cwiseMin(v3(q)); hi = hi.cwiseMax(v3(q)); }
+  out.set.model_size = (hi - lo).norm();
+  return true;
+}
+
 }  // namespace
 
 PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const PatchOptions& options) {
   if (static_cast<int>(positions.size()) != base.mesh.num_vertices())
     throw std::invalid_argument("build_patches: one position per cage vertex expected");
+  if (options.polar && options.separate_poles) {
+    PatchBuild separated;
+    if (build_with_separated_poles(base, positions, options, separated)) return separated;
+  }
   PatchBuild out;
   PatchBuildInfo& info = out.info;
   // Polar structures: their cap faces make no Catmull-Clark patch.

@@ -49,6 +49,10 @@ struct PatchOptions {
   /// 4); off: every vertex goes through Catmull-Clark, poles included.
   bool polar = true;
   PolarCapOptions cap;
+  /// With `polar`: poles rejected only for a valence below 6 or for being too close to
+  /// another structure get the separating first step (MATH.md 3.4, polar_separation.h) and
+  /// become caps of twice the valence; the patches are then built from that level-1 cage.
+  bool separate_poles = false;
 };
 
 /// How the quads around one irregular vertex (one fan between sharp edges) were built.
@@ -98,6 +102,9 @@ struct PatchBuildInfo {
   std::vector<IrregularFan> fans;
   std::vector<CapInfo> caps;             ///< polar caps (PatchOptions::polar)
   std::vector<RejectedPole> rejected_poles;  ///< pole-like vertices left to Catmull-Clark
+  /// Cage vertices given the separating first step (PatchOptions::separate_poles). When not
+  /// empty, `refinement.levels[0]` is the separated level-1 cage and levels count from it.
+  std::vector<int> separated_poles;
   std::vector<RayCurve> rays;
   /// For each patch, its (2^(k-a))^2 level-k quads, row-major [y][x] with x along u, each as
   /// the level-k corner at the quad's patch-frame origin (its x axis runs along u).

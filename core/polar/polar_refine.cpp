@@ -66,6 +66,29 @@ std::vector<Label> ring_labels(const Refinement& ref, const PolarStructure& s, i
 
 }  // namespace
 
+SubdivLevel rebuild_level(const SubdivLevel& source, const std::vector<int>& index, int num_vertices,
+                          const std::vector<int>& sizes, const std::vector<int>& faces,
+                          const std::vector<int>& face_source) {
+  const PolyMesh& ms = source.mesh;
+  SubdivLevel level;
+  level.mesh = PolyMesh::build(num_vertices, sizes, faces);
+  level.options = source.options;
+  level.edge_sharpness.assign(level.mesh.num_edges(), 0.0f);
+  level.vertex_sharpness.assign(num_vertices, 0.0f);
+  level.face_hole.assign(level.mesh.num_faces(), 0);
+  for (int e = 0; e < ms.num_edges(); ++e) {
+    if (source.edge_sharpness[e] <= 0) continue;
+    const int a = index[ms.edge_vertex(e, 0)], b = index[ms.edge_vertex(e, 1)];
+    const int ne = a >= 0 && b >= 0 ? level.mesh.find_edge(a, b) : -1;
+    if (ne >= 0) level.edge_sharpness[ne] = source.edge_sharpness[e];
+  }
+  for (int v = 0; v < ms.num_vertices(); ++v)
+    if (index[v] >= 0) level.vertex_sharpness[index[v]] = source.vertex_sharpness[v];
+  for (int f = 0; f < level.mesh.num_faces(); ++f)
+    if (face_source[f] >= 0) level.face_hole[f] = source.face_hole[face_source[f]];
+  return level;
+}
+
 PolarRefinement refine_with_polar(const SubdivLevel& base, const std::vector<Point3>& positions, int levels,
                                   const std::vector<PolarStructure>& structures) {
   if (levels < 0) throw std::invalid_argument("refine_with_polar: levels must be >= 0");
@@ -155,23 +178,11 @@ PolarRefinement refine_with_polar(const SubdivLevel& base, const std::vector<Poi
     ++out.structures;
   }
   // The merged level with Catmull-Clark's tags on the kept elements.
-  SubdivLevel& level = out.level;
-  level.mesh = PolyMesh::build(count, sizes, faces);
-  level.options = lk.options;
-  level.edge_sharpness.assign(level.mesh.num_edges(), 0.0f);
-  level.vertex_sharpness.assign(count, 0.0f);
-  level.face_hole.assign(level.mesh.num_faces(), 0);
-  for (int e = 0; e < mk.num_edges(); ++e) {
-    if (lk.edge_sharpness[e] <= 0) continue;
-    const int a = index[mk.edge_vertex(e, 0)], b = index[mk.edge_vertex(e, 1)];
-    const int ne = a >= 0 && b >= 0 ? level.mesh.find_edge(a, b) : -1;
-    if (ne >= 0) level.edge_sharpness[ne] = lk.edge_sharpness[e];
-  }
-  for (int v = 0; v < mk.num_vertices(); ++v)
-    if (index[v] >= 0) level.vertex_sharpness[index[v]] = lk.vertex_sharpness[v];
-  int kept = 0;
+  std::vector<int> face_source;
   for (int f = 0; f < mk.num_faces(); ++f)
-    if (!removed[f]) level.face_hole[kept++] = lk.face_hole[f];
+    if (!removed[f]) face_source.push_back(f);
+  face_source.resize(sizes.size(), -1);
+  out.level = rebuild_level(lk, index, count, sizes, faces, face_source);
   out.positions = std::move(merged);
   return out;
 }

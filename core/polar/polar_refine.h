@@ -29,6 +29,16 @@ struct PolarRefinement {
   double max_overlap_difference = 0;
 };
 
+/// A level with new faces over (some of) `source`'s vertices, keeping `source`'s tags:
+/// vertex v of `source` is vertex `index[v]` (-1: dropped), new vertices follow up to
+/// `num_vertices`; faces are given as sizes + indices, and `face_source[f]` is the `source`
+/// face whose hole flag face f takes (-1: not a hole). Edge sharpness is carried over for
+/// edges whose two ends are kept and still joined; new edges are smooth.
+/// \throw InvalidMeshError if the faces do not form a valid mesh
+SubdivLevel rebuild_level(const SubdivLevel& source, const std::vector<int>& index, int num_vertices,
+                          const std::vector<int>& sizes, const std::vector<int>& faces,
+                          const std::vector<int>& face_source);
+
 /// Refines `base` by `levels` (>= 0) levels, BP at the given structures (from
 /// detect_polar_structures on `base`), Catmull-Clark elsewhere.
 PolarRefinement refine_with_polar(const SubdivLevel& base, const std::vector<Point3>& positions, int levels,

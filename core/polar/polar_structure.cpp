@@ -108,8 +108,10 @@ PolarDetection detect_polar_structures(const SubdivLevel& level, int min_valence
     for (int i = 0; i < n && triangles; ++i) triangles = m.face_size(m.corner_face(m.vertex_corners(v)[i])) == 3;
     if (!triangles) continue;
     if (n < min_valence) {
-      rejected.push_back({v, n, "valence " + std::to_string(n) + " is below " + std::to_string(min_valence) +
-                                    " (BP subdivision needs n >= 6, MATH.md 2.3)"});
+      rejected.push_back({v, n,
+                          "valence " + std::to_string(n) + " is below " + std::to_string(min_valence) +
+                              " (BP subdivision needs n >= 6, MATH.md 2.3)",
+                          RejectedPole::Kind::LowValence});
       continue;
     }
     PolarStructure s;
@@ -137,7 +139,8 @@ PolarDetection detect_polar_structures(const SubdivLevel& level, int min_valence
     else
       rejected.push_back({found[i].pole, found[i].valence,
                           "its rings 0..3 overlap those of the polar structure at " + vtx(clash[i]) +
-                              " (too close)"});
+                              " (too close)",
+                          RejectedPole::Kind::TooClose});
   }
   std::sort(rejected.begin(), rejected.end(), [](const RejectedPole& a, const RejectedPole& b) { return a.vertex < b.vertex; });
   out.rejected = std::move(rejected);

@@ -38,9 +38,13 @@ struct PolarStructure {
 /// A vertex that looks like a pole (interior, all incident faces triangles, valence >= 3)
 /// but is not a polar structure.
 struct RejectedPole {
+  /// Why: the two cases the separating first step (MATH.md 3.4, polar_separation.h) can
+  /// mend, or anything else about the rings.
+  enum class Kind : unsigned char { LowValence, TooClose, Structure };
   int vertex = -1;
   int valence = 0;
   std::string reason;  ///< e.g. "ring-2 vertex 17 has valence 5, polar structures need 4"
+  Kind kind = Kind::Structure;
 };
 
 struct PolarDetection {

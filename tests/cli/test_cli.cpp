@@ -147,7 +147,8 @@ TEST(CliPolar, ConvertMakesCapsUnlessOffAndChecksItsOptions) {
                          " --report " + quote(dir.file("two.json")));
   ASSERT_EQ(two.exit_code, 0) << two.err;
   EXPECT_EQ(python_json_check(dir.file("two.json"), "r['polar']['radial_steps'] == 2 and r['polar']['lambda'] == 0.9"), 0);
-  for (const char* bad : {"--radial-steps 3", "--radial-steps 0", "--lambda 0", "--lambda -1", "--polar yes"}) {
+  for (const char* bad : {"--radial-steps 3", "--radial-steps 0", "--lambda 0", "--lambda -1", "--polar yes",
+                          "--polar off --separate-poles"}) {
     const Result r = run("convert " + in + " " + bad + " -o " + quote(dir.file("bad.step")));
     EXPECT_EQ(r.exit_code, 1) << bad;
   }

@@ -80,5 +80,26 @@ TEST(PolarCorpus, OneRingPolesConvertThroughCatmullClark) {
   }
 }
 
+// Poles of valence 3..5 and poles too close to each other, with the separating first step
+// (PatchOptions::separate_poles): valid smooth solids after a STEP round trip as well.
+TEST(PolarBrepSeparated, LowValenceAndTooClosePoles) {
+  for (const MeshInput& in : {capped_cylinder(3, 0.1, 0.02), capped_cylinder(4, 0.1, 0.02), mushroom(5, 0.1, 0.02),
+                              revolved(8, {{0, 1}, {0.3, 1}, {0.7, 0.8}, {1, 0}, {0.7, -0.8}, {0.3, -1}, {0, -1}})}) {
+    PatchOptions o;
+    o.separate_poles = true;
+    const PatchBuild b = build_patches(SubdivLevel::from_input(in), in.positions, o);
+    ASSERT_EQ(b.info.caps.size(), 2u);
+    const occt::BrepResult brep = occt::build_brep(b.set);
+    ASSERT_TRUE(brep.valid) << brep.check_message;
+    TempDir dir;
+    occt::write_shape(brep.shape, dir.file("s.step"), occt::Format::Step);
+    const occt::ShapeSummary s = occt::summarize(occt::read_shape(dir.file("s.step")), 9, false);
+    EXPECT_TRUE(s.valid) << s.check_message;
+    EXPECT_EQ(s.solids, 1);
+    EXPECT_EQ(s.free_edges, 0);
+    EXPECT_LE(s.max_normal_angle_deg, 1e-6);
+  }
+}
+
 }  // namespace
 }  // namespace subd2nurbs::testing
