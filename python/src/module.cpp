@@ -330,7 +330,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
                  const std::vector<std::tuple<int, int, double>>& creases,
                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                  const py::dict& options, int level, double tolerance, bool absolute, bool build_brep,
-                 bool polar, int radial_steps, double polar_lambda,
+                 bool polar, int radial_steps, double polar_lambda, bool separate_poles,
                  const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
                  const std::function<void(const std::string&, double)>& progress) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
@@ -347,6 +347,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   settings.patch.polar = polar;
   settings.patch.cap.radial_steps = radial_steps;
   settings.patch.cap.lambda = polar_lambda;
+  settings.patch.separate_poles = separate_poles;
   pipeline::ConversionProgress callbacks;
   std::string current;
   if (progress) {

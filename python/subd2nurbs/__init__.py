@@ -341,7 +341,7 @@ class ConversionResult:
 
 
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
-            progress=None, polar=True, radial_steps=1, polar_lambda=0.75):
+            progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
     level: extra refinement levels beyond the minimum (>= 0; default 0), as --level.
@@ -351,6 +351,8 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     polar: polar structures (triangle fans around a pole, MATH.md 3.1) become one singular
         polar cap each (as --polar on, the default); False: Catmull-Clark everywhere.
     radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
+    separate_poles: poles of valence 3..5 or too close to another get the separating first
+        step and become caps too (as --separate-poles; needs polar).
     progress: a callable(stage: str, fraction: float) called as the stages run.
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
     """
@@ -372,10 +374,13 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     if isinstance(polar_lambda, bool) or not isinstance(polar_lambda, numbers.Real) \
             or not math.isfinite(polar_lambda) or polar_lambda <= 0:
         raise SettingsError("polar_lambda must be a positive number, not %r" % (polar_lambda,))
+    if separate_poles and not polar:
+        raise SettingsError("separate_poles needs polar")
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
     d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
-                            bool(polar), int(radial_steps), float(polar_lambda), cage.name, cage.warnings, progress)
+                            bool(polar), int(radial_steps), float(polar_lambda), bool(separate_poles),
+                            cage.name, cage.warnings, progress)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")

@@ -282,6 +282,26 @@ class Triangles(unittest.TestCase):
         off = s2n.convert(cage, polar=False, brep=False)
         self.assertEqual(off.num_patches, int(cage.face_sizes.sum()))  # one patch per face corner
 
+    def test_separate_poles_makes_caps_of_low_valence_poles(self):
+        n = 5  # a capped prism whose valence-5 poles BP cannot take directly
+        prof = [(1 / 3, 1.2), (2 / 3, 1.1), (1, 1), (1, 0), (1, -1), (2 / 3, -1.1), (1 / 3, -1.2)]
+        v = [[0, 0, 1.25]] + [[r * math.cos(2 * math.pi * j / n), r * math.sin(2 * math.pi * j / n), z]
+                              for r, z in prof for j in range(n)] + [[0, 0, -1.25]]
+        ring = lambda i, j: 1 + i * n + j % n
+        f = [[0, ring(0, j), ring(0, j + 1)] for j in range(n)]
+        f += [[ring(i, j + 1), ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)] for i in range(len(prof) - 1) for j in range(n)]
+        f += [[len(v) - 1, ring(len(prof) - 1, j + 1), ring(len(prof) - 1, j)] for j in range(n)]
+        cage = s2n.Cage(v, f)
+        plain = s2n.convert(cage, brep=False)
+        self.assertEqual(plain.report["patches"]["polar_caps"], 0)
+        sep = s2n.convert(cage, separate_poles=True)
+        self.assertEqual(sep.report["patches"]["polar_caps"], 2)
+        self.assertEqual(sorted(sep.report["polar"]["separated_poles"]), [0, len(v) - 1])
+        self.assertTrue(sep.brep["valid"])
+        self.assertEqual(sep.report["brep"]["type"], "solid")
+        with self.assertRaises(s2n.SettingsError):
+            s2n.convert(cage, polar=False, separate_poles=True)
+
     def test_from_triangles_keeps_a_pole_fan(self):
         n = 8
         v = [[0, 0, 0]] + [[math.cos(2 * math.pi * k / n), math.sin(2 * math.pi * k / n), 0] for k in range(n)]
