@@ -76,6 +76,13 @@ std::string quality_json(const QualityReport& q, double size, int indent) {
            json_number(c.max_abs_mean) + ", \"mean_abs_mean\": " + json_number(c.mean_abs_mean) +
            ", \"rms_mean\": " + json_number(c.rms_mean) + ", \"max_abs_gauss\": " +
            json_number(c.max_abs_gauss) + ", \"where_max_abs_mean\": " + sample(c.where_max_abs_mean) + "}",
+       false);
+  const VertexCurvatureComparison& v = q.quadric;
+  line("\"quadric_fit\": {\"vertices\": " + std::to_string(v.vertices) + ", \"max_abs_H\": " +
+           json_number(v.max_abs_H) + ", \"cage_max_abs_H_error\": " + json_number(v.max_abs_H_error_cage) +
+           ", \"cage_mean_abs_H_error\": " + json_number(v.mean_abs_H_error_cage) +
+           ", \"limit_points_max_abs_H_error\": " + json_number(v.max_abs_H_error_limit) +
+           ", \"limit_points_mean_abs_H_error\": " + json_number(v.mean_abs_H_error_limit) + "}",
        true);
   return j + p + "}";
 }
@@ -136,6 +143,10 @@ void print_quality_summary(std::ostream& err, const QualityReport& q, double siz
   err << "quality: limit curvature k in [" << g(c.min_k) << ", " << g(c.max_k) << "], max |H| "
       << g(c.max_abs_mean) << ", mean |H| " << g(c.mean_abs_mean) << ", max |K| " << g(c.max_abs_gauss)
       << "\n";
+  if (q.quadric.vertices > 0)
+    err << "quality: quadric-fit H at " << q.quadric.vertices << " cage vertices vs exact: mean error "
+        << g(q.quadric.mean_abs_H_error_cage) << " (cage points), " << g(q.quadric.mean_abs_H_error_limit)
+        << " (limit points)\n";
 }
 
 }  // namespace subd2nurbs::cli

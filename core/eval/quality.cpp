@@ -196,6 +196,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       ++q.class_mismatches;
     q.edges.push_back(e);
   }
+  q.quadric = compare_vertex_curvature(limit);
   return q;
 }
 

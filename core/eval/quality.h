@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/eval/continuity.h"
+#include "core/eval/quadric_fit.h"
 #include "core/limit/limit_evaluator.h"
 #include "core/patch/patch_builder.h"
 
@@ -72,6 +73,9 @@ struct QualityReport {
   /// claimed C0 (other than sharpened semi-sharp creases): disagreements of class.
   int class_mismatches = 0;
   CurvatureSummary curvature;
+  /// The cage's own curvature by implicit-quadric fits at its smooth vertices (seed 001,
+  /// MATH.md 8.3) against the exact limit curvature there.
+  VertexCurvatureComparison quadric;
 };
 
 /// Distance from patch point (s, t) to the closest limit point found by Gauss-Newton from the

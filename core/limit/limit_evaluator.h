@@ -62,6 +62,7 @@ class LimitEvaluator {
   /// Base face of a ptex face.
   int ptex_to_face(int ptex) const { return ptex_face_[ptex]; }
   const SubdivLevel& base() const { return base_; }
+  const std::vector<Point3>& positions() const { return positions_; }
 
   /// Evaluation at a ptex face. \throw std::out_of_range for a bad ptex index or (u, v)
   /// outside [0,1]^2, std::domain_error on a hole (no limit surface).

@@ -1,0 +1,138 @@
+#include "core/eval/quadric_fit.h"
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <set>
+
+namespace subd2nurbs {
+
+QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Point3& tn) {
+  QuadricFit out;
+  if (nb.size() < 8) return out;
+  // Unknowns (a, b, c, d, e, g, gx, gy, gz); the gradient coefficient of the largest
+  // component of the tentative normal is fixed to 1 and moves to the right-hand side.
+  int fixed = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::abs(tn[k]) > std::abs(tn[fixed])) fixed = k;
+  const int rows = static_cast<int>(nb.size());
+  // Coordinates scaled by the RMS neighbour distance rho (conditioning); curvatures of the
+  // scaled fit are rescaled at the end (K / rho^2, H / rho).
+  double rho = 0;
+  for (const Point3& q : nb)
+    for (int k = 0; k < 3; ++k) rho += (q[k] - p0[k]) * (q[k] - p0[k]);
+  rho = std::sqrt(rho / rows);
+  if (!(rho > 0)) return out;
+  Eigen::MatrixXd A(rows, 8);
+  Eigen::VectorXd rhs(rows);
+  for (int r = 0; r < rows; ++r) {
+    const double x = (nb[r][0] - p0[0]) / rho, y = (nb[r][1] - p0[1]) / rho, z = (nb[r][2] - p0[2]) / rho;
+    const double full[9] = {x * x, y * y, z * z, x * y, y * z, z * x, x, y, z};
+    int c = 0;
+    for (int k = 0; k < 9; ++k)
+      if (k != 6 + fixed) A(r, c++) = full[k];
+    rhs(r) = -full[6 + fixed];
+  }
+  // Least squares (the normal equations A^T A d = A^T c of MATH.md 8.3, solved through the SVD
+  // of A, which is the same solution with the rank visible).
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  if (!(sv(7) > 1e-9 * sv(0))) return out;  // rank-deficient: e.g. neighbours on a few lines
+  const Eigen::VectorXd d = svd.solve(rhs);
+  double coef[9];
+  for (int k = 0, c = 0; k < 9; ++k) coef[k] = k == 6 + fixed ? 1.0 : d(c++);
+  Eigen::Vector3d grad(coef[6], coef[7], coef[8]);
+  Eigen::Matrix3d M;
+  M << 2 * coef[0], coef[3], coef[5], coef[3], 2 * coef[1], coef[4], coef[5], coef[4], 2 * coef[2];
+  if (grad.dot(Eigen::Vector3d(tn[0], tn[1], tn[2])) < 0) {  // orient f so that grad f is on tn's side
+    grad = -grad;
+    M = -M;
+  }
+  const double D = grad.norm();
+  if (!(D > 0)) return out;
+  const Eigen::Vector3d n = grad / D;
+  // adj(M) for a symmetric 3x3 matrix: the cofactor matrix.
+  Eigen::Matrix3d adj;
+  adj(0, 0) = M(1, 1) * M(2, 2) - M(1, 2) * M(2, 1);
+  adj(0, 1) = M(0, 2) * M(2, 1) - M(0, 1) * M(2, 2);
+  adj(0, 2) = M(0, 1) * M(1, 2) - M(0, 2) * M(1, 1);
+  adj(1, 0) = M(1, 2) * M(2, 0) - M(1, 0) * M(2, 2);
+  adj(1, 1) = M(0, 0) * M(2, 2) - M(0, 2) * M(2, 0);
+  adj(1, 2) = M(0, 2) * M(1, 0) - M(0, 0) * M(1, 2);
+  adj(2, 0) = M(1, 0) * M(2, 1) - M(1, 1) * M(2, 0);
+  adj(2, 1) = M(0, 1) * M(2, 0) - M(0, 0) * M(2, 1);
+  adj(2, 2) = M(0, 0) * M(1, 1) - M(0, 1) * M(1, 0);
+  out.K = n.dot(adj * n) / (D * D) / (rho * rho);
+  out.H = n.dot((M - M.trace() * Eigen::Matrix3d::Identity()) * n) / (2 * D) / rho;
+  out.normal = {n(0), n(1), n(2)};
+  out.ok = true;
+  return out;
+}
+
+VertexCurvatureComparison compare_vertex_curvature(const LimitEvaluator& limit) {
+  VertexCurvatureComparison r;
+  const SubdivLevel& L = limit.base();
+  const PolyMesh& m = L.mesh;
+  const std::vector<Point3>& P = limit.positions();
+  double sum_cage = 0, sum_limit = 0;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    if (m.is_unused_vertex(v) || m.is_boundary_vertex(v) || L.vertex_sharpness[v] != 0.0f) continue;
+    const int n = m.vertex_face_count(v);
+    const int* c = m.vertex_corners(v);
+    bool smooth = true;
+    for (int i = 0; i < n && smooth; ++i) {
+      const int f = m.corner_face(c[i]);
+      smooth = m.face_size(f) == 4 && !L.face_hole[f] && L.edge_sharpness[m.corner_edge(c[i])] == 0.0f;
+    }
+    if (!smooth) continue;
+    // 2-ring: every vertex of every face touching a vertex of v's faces.
+    std::set<int> ring1, ring2;
+    for (int i = 0; i < n; ++i) {
+      const int f = m.corner_face(c[i]);
+      for (int h = m.face_begin(f); h < m.face_end(f); ++h) ring1.insert(m.corner_vertex(h));
+    }
+    for (int w : ring1) {
+      const int* cw = m.vertex_corners(w);
+      for (int i = 0; i < m.vertex_face_count(w); ++i) {
+        const int f = m.corner_face(cw[i]);
+        for (int h = m.face_begin(f); h < m.face_end(f); ++h) ring2.insert(m.corner_vertex(h));
+      }
+    }
+    ring2.erase(v);
+    // Exact: the limit at v (corner 0 of the face whose first... any face corner at v).
+    const int h0 = c[0];
+    const int f0 = m.corner_face(h0);
+    const int k = h0 - m.face_begin(f0);
+    const double u = (k == 1 || k == 2) ? 1.0 : 0.0, w = (k == 2 || k == 3) ? 1.0 : 0.0;
+    const LimitSample exact = limit.evaluate(f0, 0, u, w);
+    if (!exact.exact_derivatives || !std::isfinite(exact.mean)) continue;  // an EV: no curvature
+    std::vector<Point3> cage_pts, limit_pts;
+    for (int x : ring2) cage_pts.push_back(P[x]);
+    // Limit points of the 2-ring vertices: the limit at a face corner of each.
+    for (int x : ring2) {
+      const int hx = m.vertex_corners(x)[0];
+      const int fx = m.corner_face(hx);
+      if (m.face_size(fx) != 4 || L.face_hole[fx]) continue;
+      const int kx = hx - m.face_begin(fx);
+      limit_pts.push_back(limit.evaluate(fx, 0, (kx == 1 || kx == 2) ? 1.0 : 0.0,
+                                         (kx == 2 || kx == 3) ? 1.0 : 0.0).p);
+    }
+    const QuadricFit fc = fit_quadric(P[v], cage_pts, exact.normal);
+    const QuadricFit fl = fit_quadric(exact.p, limit_pts, exact.normal);
+    if (!fc.ok || !fl.ok) continue;
+    ++r.vertices;
+    const double ec = std::abs(fc.H - exact.mean), el = std::abs(fl.H - exact.mean);
+    r.max_abs_H_error_cage = std::max(r.max_abs_H_error_cage, ec);
+    r.max_abs_H_error_limit = std::max(r.max_abs_H_error_limit, el);
+    r.max_abs_H = std::max(r.max_abs_H, std::abs(exact.mean));
+    sum_cage += ec;
+    sum_limit += el;
+  }
+  if (r.vertices > 0) {
+    r.mean_abs_H_error_cage = sum_cage / r.vertices;
+    r.mean_abs_H_error_limit = sum_limit / r.vertices;
+  }
+  return r;
+}
+
+}  // namespace subd2nurbs
