@@ -12,8 +12,10 @@
 // (MATH.md 7.2: frequency 0 is a 3x3 block, every other frequency 2x2 blocks on cos / sin
 // vectors), so no general non-symmetric eigen-solver touches a matrix with repeated eigenvalues.
 // The outer block S12 (eigenvalues 1/8 .. 1/64) is not diagonalised: for n = 8, 12, ... S has
-// the eigenvalue 1/8 too (frequency n/4), and the full A need not be diagonalisable there. The
-// outer points are carried by the exact recurrence o_{k+1} = S11 V Lambda^k c^ + S12 o_k instead.
+// the eigenvalue 1/8 too (frequency n/4), a double root shared with S12. The full A turns out
+// to be diagonalisable all the same (StamEigen.FullMatrixIsWellConditioned: cond(V_A) <= 265 for
+// n = 3..16, as MATH.md 7.2 says), but nothing here relies on it: the outer points are carried
+// by the exact recurrence o_{k+1} = S11 V Lambda^k c^ + S12 o_k.
 //
 // The matrices are not typed in: they are read off one step of our own refiner (refine_once,
 // identical to OpenSubdiv) on a synthetic mesh, so they follow the refiner's rules exactly.

@@ -93,3 +93,18 @@ TEST(StamEigen, CacheIsSharedAcrossThreads) {
   for (int i = 1; i < 4; ++i) EXPECT_EQ(got[i].get(), stam_eigen(17).get());
   EXPECT_THROW(stam_eigen(2), std::invalid_argument);
 }
+
+TEST(StamEigen, FullMatrixIsWellConditioned) {
+  // MATH.md 7.2: all eigenvalues of A real, its eigenvector matrix well conditioned (80-300
+  // for n <= 8). Also for n = 8, 12, 16, where S and S12 share the eigenvalue 1/8.
+  for (int n = 3; n <= 16; ++n) {
+    SCOPED_TRACE(n);
+    const auto e = stam_eigen(n);
+    Eigen::EigenSolver<Eigen::MatrixXd> es(e->A);
+    ASSERT_EQ(es.info(), Eigen::Success);
+    EXPECT_LT(es.eigenvalues().imag().cwiseAbs().maxCoeff(), 1e-12);
+    Eigen::JacobiSVD<Eigen::MatrixXcd> svd(es.eigenvectors());
+    const auto& sv = svd.singularValues();
+    EXPECT_LT(sv(0) / sv(sv.size() - 1), 1000.0);
+  }
+}
