@@ -88,6 +88,30 @@ double limit_distance(const PatchBuild& b, const LimitEvaluator& limit, int patc
   return closest_distance(limit, lp, x);
 }
 
+std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b, int patch, int n) {
+  std::vector<std::array<double, 2>> out;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) out.push_back({static_cast<double>(i) / (n - 1), static_cast<double>(j) / (n - 1)});
+  const NurbsPatch& p = b.set.patches.at(static_cast<size_t>(patch));
+  if (p.kind != PatchKind::Pccm) return out;
+  // Construction Q changes the surface only in the level-k quads next to an irregular corner,
+  // 2^-(k-a) of the patch wide: a few rings of samples, halving towards each corner.
+  const int depth = b.info.level - b.info.coarse_level + 1;
+  const double w[4] = {0.2, 0.45, 0.7, 0.95};
+  for (int m = 1; m <= depth; ++m) {
+    const double h = std::ldexp(1.0, -m);
+    for (double x : w)
+      for (double y : w) {
+        const double a = h * x, c = h * y;
+        out.push_back({a, c});
+        out.push_back({1 - a, c});
+        out.push_back({1 - a, 1 - c});
+        out.push_back({a, 1 - c});
+      }
+  }
+  return out;
+}
+
 QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
                               const ContinuityReport& continuity, int n) {
   if (n < 2) throw std::invalid_argument("measure_quality: at least 2 samples per side");
@@ -105,12 +129,12 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       ++q.polar_patches;
       continue;
     }
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) {
+    for (const std::array<double, 2>& st : quality_sample_parameters(b, static_cast<int>(pi), n)) {
+      {
         DeviationSample d;
         d.patch = static_cast<int>(pi);
-        d.s = static_cast<double>(i) / (n - 1);
-        d.t = static_cast<double>(j) / (n - 1);
+        d.s = st[0];
+        d.t = st[1];
         d.limit = patch_to_limit(b, d.patch, d.s, d.t);
         d.point = evaluate(patch, d.s, d.t).p;
         const LimitSample L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
@@ -139,6 +163,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
           h2sum += L.mean * L.mean;
         }
       }
+    }
   }
   if (q.deviation_samples > 0) {
     q.deviation_mean = sum / q.deviation_samples;

@@ -3,6 +3,7 @@
 // does across the same edges, and the curvature of the limit.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "core/eval/continuity.h"
@@ -82,7 +83,12 @@ struct QualityReport {
 /// same parameters within the same face (an upper bound of the true distance).
 double limit_distance(const PatchBuild& build, const LimitEvaluator& limit, int patch, double s, double t);
 
-/// Samples every patch on an n x n grid (n = samples_per_side, endpoints included) against the
+/// The parameters measure_quality samples on a patch: the n x n grid (endpoints included), and
+/// on patches at irregular vertices (PatchKind::Pccm) 16 more per corner and level, halving
+/// towards each corner down to the level-k zone where Construction Q differs from the limit.
+std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& build, int patch, int n);
+
+/// Samples every patch (quality_sample_parameters) (n = samples_per_side, endpoints included) against the
 /// exact limit, and every shared curve (from `continuity`) on both sides.
 QualityReport measure_quality(const PatchBuild& build, const LimitEvaluator& limit,
                               const ContinuityReport& continuity, int samples_per_side = 9);
