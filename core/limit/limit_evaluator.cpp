@@ -387,16 +387,64 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
   if (Y < 1) { tile = 0; x = X - 1; y = Y; }
   else if (X < 1) { tile = 2; x = X; y = Y - 1; }
   else { tile = 1; x = X - 1; y = Y - 1; }
-  // Level m-1 configuration: ring in the eigenbasis, outer points by the recurrence.
-  Eigen::Matrix<double, Eigen::Dynamic, 3> cj = pr.chat;
-  Eigen::Matrix<double, 7, 3> o = pr.outer;
+  // Level m-1 configuration: ring in the eigenbasis (c_j = Lambda^j c^), outer points by the
+  // recurrence o_{j+1} = W c_j + S12 o_j. Plain loops over a per-thread buffer: no allocation
+  // per query (Eigen's dynamic products allocate temporaries).
+  const int K = E.K;
+  thread_local std::vector<double> buffer;
+  buffer.resize(static_cast<size_t>(3) * K);
+  double* cj = buffer.data();  // cj[3 * i + c]
+  for (int i = 0; i < K; ++i)
+    for (int c = 0; c < 3; ++c) cj[3 * i + c] = pr.chat(i, c);
+  double o[7][3], next[7][3];
+  for (int r = 0; r < 7; ++r)
+    for (int c = 0; c < 3; ++c) o[r][c] = pr.outer(r, c);
   for (int j = 0; j + 1 < mlev; ++j) {
-    o = E.W * cj + E.S12 * o;
-    cj = E.lambda.asDiagonal() * cj;
+    for (int r = 0; r < 7; ++r) {
+      double acc[3] = {0, 0, 0};
+      for (int i = 0; i < K; ++i) {
+        const double w = E.W(r, i);
+        acc[0] += w * cj[3 * i];
+        acc[1] += w * cj[3 * i + 1];
+        acc[2] += w * cj[3 * i + 2];
+      }
+      for (int q = 0; q < 7; ++q) {
+        const double w = E.S12(r, q);
+        acc[0] += w * o[q][0];
+        acc[1] += w * o[q][1];
+        acc[2] += w * o[q][2];
+      }
+      next[r][0] = acc[0];
+      next[r][1] = acc[1];
+      next[r][2] = acc[2];
+    }
+    std::copy(&next[0][0], &next[0][0] + 21, &o[0][0]);
+    for (int i = 0; i < K; ++i) {
+      const double l = E.lambda(i);
+      cj[3 * i] *= l;
+      cj[3 * i + 1] *= l;
+      cj[3 * i + 2] *= l;
+    }
   }
-  const Eigen::Matrix<double, 16, 3> T = E.tile_ring_V[tile] * cj + E.tile_outer[tile] * o;
+  const Eigen::MatrixXd& TR = E.tile_ring_V[tile];
+  const Eigen::MatrixXd& TO = E.tile_outer[tile];
   std::array<Point3, 16> Pt;
-  for (int i = 0; i < 16; ++i) Pt[i] = {T(i, 0), T(i, 1), T(i, 2)};
+  for (int r = 0; r < 16; ++r) {
+    double acc[3] = {0, 0, 0};
+    for (int i = 0; i < K; ++i) {
+      const double w = TR(r, i);
+      acc[0] += w * cj[3 * i];
+      acc[1] += w * cj[3 * i + 1];
+      acc[2] += w * cj[3 * i + 2];
+    }
+    for (int q = 0; q < 7; ++q) {
+      const double w = TO(r, q);
+      acc[0] += w * o[q][0];
+      acc[1] += w * o[q][1];
+      acc[2] += w * o[q][2];
+    }
+    Pt[r] = {acc[0], acc[1], acc[2]};
+  }
   Derivs d = bspline16(Pt.data(), x, y);
   for (int k = 0; k < 3; ++k) d.p[k] += pr.limit[k];
   const double s1 = std::ldexp(1.0, mlev), s2 = s1 * s1;
@@ -775,6 +823,15 @@ LimitPoint LimitEvaluator::evaluate_point(int f, int sub, double u, double v) co
     const int c = face_cache_[f];
     if (c >= 0 && cache_[c].prepared.method == LimitMethod::Regular)
       return bspline16_first(cache_[c].prepared.grid.data(), u, v);
+    if (c >= 0 && cache_[c].prepared.method == LimitMethod::Stam) {
+      const Prepared& pr = cache_[c].prepared;
+      bool singular = false;
+      const Derivs d = eval_prepared(pr, u, v, &singular);
+      if (!singular) {
+        const LimitSample s = to_ptex(d, corner_frame(pr.corner));
+        return LimitPoint{s.p, s.du, s.dv};
+      }
+    }
   }
   const LimitSample s = evaluate(f, sub, u, v);
   return LimitPoint{s.p, s.du, s.dv};
