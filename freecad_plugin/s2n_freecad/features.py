@@ -37,7 +37,30 @@ def _placement_points(vertices, placement):
     return vertices @ a.T + t
 
 
-class CageFeature:
+class _Stateless:
+    """Proxies keep nothing in the saved document: everything is in properties.
+    FreeCAD 0.20 pickles proxies with __getstate__ / __setstate__, 0.21+ with dumps / loads;
+    both restore through restored_state()."""
+
+    def restored_state(self):
+        pass
+
+    def __getstate__(self):
+        return None
+
+    def __setstate__(self, state):
+        self.restored_state()
+        return None
+
+    def dumps(self):
+        return None
+
+    def loads(self, state):
+        self.restored_state()
+        return None
+
+
+class CageFeature(_Stateless):
     """Proxy of a Cage object: the cage's arrays as properties (coordinates in double
     precision), its shape the cage's edges."""
 
@@ -133,18 +156,6 @@ class CageFeature:
         obj.Proxy = self
         self.setup(obj)
 
-    # FreeCAD 0.20 pickles proxies with __getstate__ / __setstate__, 0.21+ with dumps / loads.
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return None
-
-    def loads(self, state):
-        return None
 
 
 def is_cage(obj):
@@ -211,7 +222,7 @@ def convert_cage(cage, level, tolerance, polar, progress=True):
             indicator.stop()
 
 
-class NurbsFeature:
+class NurbsFeature(_Stateless):
     """Proxy of a NURBS object: converts its Source (Cage or Mesh::Feature) on recompute."""
 
     TYPE = "Subd2Nurbs::NURBS"
@@ -309,19 +320,8 @@ class NurbsFeature:
         self._result = None
         self.setup(obj)
 
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
+    def restored_state(self):
         self._result = None
-        return None
-
-    def dumps(self):
-        return None
-
-    def loads(self, state):
-        self._result = None
-        return None
 
 
 def highlight_edges(obj, names, color=(1.0, 0.0, 0.0)):
@@ -337,7 +337,7 @@ def highlight_edges(obj, names, color=(1.0, 0.0, 0.0)):
         Gui.Selection.addSelection(obj.Document.Name, obj.Name, n)
 
 
-class _ViewProvider:
+class _ViewProvider(_Stateless):
     ICON = "Subd2Nurbs.svg"
 
     def __init__(self, vobj):
@@ -349,17 +349,6 @@ class _ViewProvider:
     def getIcon(self):
         return os.path.join(ICONS, self.ICON)
 
-    def __getstate__(self):
-        return None
-
-    def __setstate__(self, state):
-        return None
-
-    def dumps(self):
-        return None
-
-    def loads(self, state):
-        return None
 
 
 class ViewProviderCage(_ViewProvider):
