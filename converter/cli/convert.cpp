@@ -131,15 +131,19 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
       << info.pccm_patches << " pccm, " << info.caps.size() << " polar caps), level " << info.level
       << " (coarse level " << info.coarse_level << ", " << c.extra_levels << " extra)\n";
   if (!c.caps.empty()) {
-    double dist = 0, angle = 0;
+    double dist = 0, angle = 0, k_near = 0, k_far = 0;
     for (const pipeline::CapMeasure& m : c.caps) {
       dist = std::max(dist, m.bp_distance);
-      angle = std::max(angle, m.pole_normal_angle_deg);
+      angle = std::max(angle, m.pole.normal_angle_deg[1]);
+      k_far = std::max(k_far, m.pole.max_abs_k[0]);
+      k_near = std::max(k_near, m.pole.max_abs_k[1]);
     }
     err << "  polar      " << c.caps.size() << " caps (" << c.cap_options.radial_steps << " radial pre-step"
         << (c.cap_options.radial_steps > 1 ? "s" : "") << ", lambda " << short_number(c.cap_options.lambda)
         << "): max distance from the BP limit " << short_number(dist) << " (" << short_number(dist / size)
-        << " of the model size); normal at the pole within " << short_number(angle) << " deg of BP's\n";
+        << " of the model size); normal at the pole within " << short_number(angle)
+        << " deg of BP's; max |k| " << short_number(k_far) << " at 1e-2 and " << short_number(k_near)
+        << " at 1e-4 from the pole\n";
   }
   const auto& fm = c.fans_by_mode;
   err << "  fans       " << fm[0] << " smooth, " << fm[1] << " dart, " << fm[2] << " crease, " << fm[3]

@@ -96,19 +96,11 @@ void collect_fans(ConversionResult& c) {
 void measure_caps(ConversionResult& c) {
   for (const CapInfo& ci : c.build.info.caps) {
     CapMeasure m;
-    m.pole = ci.structure.pole;
+    m.pole_vertex = ci.structure.pole;
     m.valence = ci.structure.valence;
     const NurbsPatch& patch = c.build.set.patches[ci.patch];
     m.bp_distance = cap_distance_to_bp(ci.input, ci.cap, patch);
-    const Point3& bn = ci.cap.normal;
-    for (int q = 0; q < 32; ++q) {
-      const Point3 nv = unit_normal(evaluate(patch, 1e-4, (q + 0.5) / 32));
-      const double dot = nv[0] * bn[0] + nv[1] * bn[1] + nv[2] * bn[2];
-      const double cx = nv[1] * bn[2] - nv[2] * bn[1], cy = nv[2] * bn[0] - nv[0] * bn[2],
-                   cz = nv[0] * bn[1] - nv[1] * bn[0];
-      m.pole_normal_angle_deg =
-          std::max(m.pole_normal_angle_deg, std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dot) * 180 / M_PI);
-    }
+    m.pole = measure_cap_pole(ci.cap, patch);
     c.caps.push_back(m);
   }
 }
@@ -280,11 +272,14 @@ std::string report_json(const ConversionResult& c) {
                       json_number(c.cap_options.lambda) + ",\n    \"caps\": [";
   for (size_t i = 0; i < c.caps.size(); ++i) {
     const CapMeasure& m = c.caps[i];
-    polar += std::string(i ? ",\n      " : "\n      ") + "{\"pole\": " + std::to_string(m.pole) +
+    polar += std::string(i ? ",\n      " : "\n      ") + "{\"pole\": " + std::to_string(m.pole_vertex) +
              ", \"valence\": " + std::to_string(m.valence) + ", \"bp_distance\": " + json_number(m.bp_distance) +
              ", \"bp_distance_relative\": " + relative(m.bp_distance) +
-             ", \"pole_normal_angle_deg\": " + json_number(m.pole_normal_angle_deg) + "}";
-  }
+             ", \"pole_normal_angle_deg\": " + json_number(m.pole.normal_angle_deg[1]) +
+             ", \"pole_curvature\": {\"distance\": [" + json_number(m.pole.distance[0]) + ", " +
+             json_number(m.pole.distance[1]) + "], \"max_abs_k\": [" + json_number(m.pole.max_abs_k[0]) + ", " +
+             json_number(m.pole.max_abs_k[1]) + "], \"normal_angle_deg\": [" + json_number(m.pole.normal_angle_deg[0]) +
+             ", " + json_number(m.pole.normal_angle_deg[1]) + "]}}";  }
   polar += std::string(c.caps.empty() ? "]" : "\n    ]") + ",\n    \"separated_poles\": [";
   for (size_t i = 0; i < info.separated_poles.size(); ++i)
     polar += (i ? ", " : "") + std::to_string(info.separated_poles[i]);

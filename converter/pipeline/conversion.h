@@ -78,10 +78,10 @@ struct ApproximateFan {
 
 /// One polar cap, measured.
 struct CapMeasure {
-  int pole = -1;             ///< cage vertex
+  int pole_vertex = -1;      ///< cage vertex
   int valence = 0;
   double bp_distance = 0;    ///< max distance from the BP limit surface to the cap (model units)
-  double pole_normal_angle_deg = 0;  ///< cap normal at u = 1e-4 (max over v) vs the BP limit normal
+  CapPoleMeasure pole;       ///< normal angle to BP's and max |k| at 1e-2 and 1e-4 from the pole
 };
 
 /// Where the result went, for the report; filled by the caller (empty strings give null).

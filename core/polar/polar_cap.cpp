@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/limit/limit_evaluator.h"  // finish_sample: curvature from derivatives
 
 #include "core/util/eigen_point.h"
 
@@ -158,6 +159,29 @@ double distance_to_patch(const NurbsPatch& patch, const V3& x, double u, double 
 }
 
 }  // namespace
+
+CapPoleMeasure measure_cap_pole(const PolarCap& cap, const NurbsPatch& patch) {
+  NurbsPatch relative = patch;
+  for (Point3& q : relative.poles) q = to_point(to_eigen(q) - to_eigen(cap.centre));
+  const V3 bn = to_eigen(cap.normal);
+  CapPoleMeasure m;
+  for (int i = 0; i < 2; ++i)
+    for (int q = 0; q < 64; ++q) {
+      const SurfaceDerivs d = evaluate(relative, m.distance[i] / cap.m, (q + 0.5) / 64);
+      LimitSample s;
+      s.p = d.p;
+      s.du = d.du;
+      s.dv = d.dv;
+      s.duu = d.duu;
+      s.duv = d.duv;
+      s.dvv = d.dvv;
+      finish_sample(s);
+      const V3 nv = to_eigen(s.normal);
+      m.normal_angle_deg[i] = std::max(m.normal_angle_deg[i], std::atan2(nv.cross(bn).norm(), nv.dot(bn)) * 180 / kPi);
+      m.max_abs_k[i] = std::max({m.max_abs_k[i], std::abs(s.k1), std::abs(s.k2)});
+    }
+  return m;
+}
 
 double cap_distance_to_bp(const PolarNet& rings0to3, const PolarCap& cap, const NurbsPatch& patch, int levels) {
   PolarNet p = rings0to3;

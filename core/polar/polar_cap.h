@@ -47,6 +47,17 @@ PolarCap build_polar_cap(const PolarNet& rings0to3, const PolarCapOptions& optio
 /// that the boundary has n * 2^circular_refinements spans, one per neighbouring patch.
 NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements = 0);
 
+/// The cap next to its pole, over 64 directions: the angle between its normal and the BP
+/// limit normal, and the largest principal curvature |k|, at radial distances 1e-2 and 1e-4
+/// (in cap spans) from the collapsed edge. Evaluated relative to the centre. Bounded
+/// curvature means the two maxima are close (MATH.md 4.4).
+struct CapPoleMeasure {
+  double distance[2] = {1e-2, 1e-4};
+  double normal_angle_deg[2] = {0, 0};
+  double max_abs_k[2] = {0, 0};
+};
+CapPoleMeasure measure_cap_pole(const PolarCap& cap, const NurbsPatch& patch);
+
 /// Largest distance from the BP limit surface of rings 0..3 to the cap `patch` (built from
 /// them): the pole's limit point, and the limit points of the grid after `levels` radial BP
 /// steps from ring 3 (where BP is the tensor spline, so bp_grid_limit is exact) out to the

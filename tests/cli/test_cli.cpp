@@ -137,7 +137,9 @@ TEST(CliPolar, ConvertMakesCapsUnlessOffAndChecksItsOptions) {
   ASSERT_EQ(on.exit_code, 0) << on.err;
   EXPECT_EQ(python_json_check(dir.file("on.json"),
                               "r['patches']['polar_caps'] == 2 and r['brep']['faces'] == 16 * 5 + 2 and "
-                              "r['brep']['type'] == 'solid' and len(r['polar']['caps']) == 2"),
+                              "r['brep']['type'] == 'solid' and len(r['polar']['caps']) == 2 and "
+                              "all(0 < c['pole_curvature']['max_abs_k'][1] <= 2 * c['pole_curvature']['max_abs_k'][0] "
+                              "for c in r['polar']['caps'])"),
             0);
   const Result off = run("convert " + in + " --polar off -o " + quote(dir.file("off.step")) + " --report " +
                          quote(dir.file("off.json")));
