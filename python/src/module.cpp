@@ -13,6 +13,7 @@
 #include <TopTools_IndexedMapOfShape.hxx>
 
 #include <cmath>
+#include <memory>
 #include <new>
 #include <optional>
 #include <string>
@@ -25,6 +26,8 @@
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
 #include "core/analysis/mesh_stats.h"
+#include "core/eval/preview_mesh.h"
+#include "core/limit/limit_evaluator.h"
 #include "core/mesh/errors.h"
 #include "core/refine/refiner.h"
 #include "core/mesh/quad_recovery.h"
@@ -331,7 +334,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                  const py::dict& options, int level, double tolerance, bool absolute, bool build_brep,
                  bool polar, int radial_steps, double polar_lambda, bool separate_poles,
-                 const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
+                 const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
                  const std::function<void(const std::string&, double)>& progress) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
@@ -364,6 +367,25 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
 
   py::dict d;
   d["report"] = pipeline::report_json(c);
+  if (!preview_color.empty()) {  // the patches tessellated and coloured as convert --preview does
+    const PreviewColor color = preview_color_from_string(preview_color);
+    std::unique_ptr<LimitEvaluator> limit;
+    if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, points);
+    const PreviewMesh mesh = build_preview(c.build, limit.get(), color, preview_samples);
+    const auto n = static_cast<py::ssize_t>(mesh.values.size());
+    auto rows = [&](const std::vector<float>& v) { return py::array_t<float>({n, static_cast<py::ssize_t>(3)}, v.data()); };
+    py::dict pv;
+    pv["positions"] = rows(mesh.positions);
+    pv["normals"] = rows(mesh.normals);
+    pv["colors"] = rows(mesh.colors);
+    pv["values"] = py::array_t<float>(n, mesh.values.data());
+    pv["triangles"] = py::array_t<std::uint32_t>({static_cast<py::ssize_t>(mesh.indices.size() / 3), static_cast<py::ssize_t>(3)},
+                                                mesh.indices.data());
+    pv["value_min"] = mesh.value_min;
+    pv["value_max"] = mesh.value_max;
+    pv["color"] = preview_color;
+    d["preview"] = pv;
+  }
   py::list patches;
   for (const NurbsPatch& p : c.build.set.patches) patches.append(patch_dict(p));
   d["patches"] = patches;

@@ -311,6 +311,7 @@ class ConversionResult:
         self.warnings = d["warnings"]
         self.model_size = d["model_size"]
         self.closed = d["closed"]
+        self.preview = d.get("preview")  # convert(preview=...): the coloured tessellation, else None
 
     def write(self, path, schema="ap214"):
         """Writes the B-rep as STEP (.step/.stp, schema "ap214" or "ap242"), IGES (.iges/.igs)
@@ -341,7 +342,8 @@ class ConversionResult:
 
 
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
-            progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False):
+            progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
+            preview=None, preview_samples=16):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
     level: extra refinement levels beyond the minimum (>= 0; default 0), as --level.
@@ -353,6 +355,10 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
     separate_poles: poles of valence 3..5 or too close to another get the separating first
         step and become caps too (as --separate-poles; needs polar).
+    preview: "deviation", "curvature" or "zebra": also tessellate the patches with per-vertex
+        colours, as convert --preview / --color / --preview-samples do; the result's `preview`
+        is then a dict of numpy arrays (positions, normals, colors, values, triangles) and the
+        colour map's value_min / value_max.
     progress: a callable(stage: str, fraction: float) called as the stages run.
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
     """
@@ -376,11 +382,15 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         raise SettingsError("polar_lambda must be a positive number, not %r" % (polar_lambda,))
     if separate_poles and not polar:
         raise SettingsError("separate_poles needs polar")
+    if preview not in (None, "deviation", "curvature", "zebra"):
+        raise SettingsError("preview must be None, 'deviation', 'curvature' or 'zebra', not %r" % (preview,))
+    if not _is_int(preview_samples) or preview_samples < 2:
+        raise SettingsError("preview_samples must be an integer >= 2, not %r" % (preview_samples,))
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
     d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
                             bool(polar), int(radial_steps), float(polar_lambda), bool(separate_poles),
-                            cage.name, cage.warnings, progress)
+                            preview or "", int(preview_samples), cage.name, cage.warnings, progress)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")

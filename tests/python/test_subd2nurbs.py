@@ -11,6 +11,7 @@ import json
 import math
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
 
@@ -310,6 +311,31 @@ class Triangles(unittest.TestCase):
         self.assertEqual(cage.quad_recovery["fan_vertices"], 1)
         self.assertEqual(cage.quad_recovery["quads"], 0)
         self.assertEqual(cage.num_faces, n)
+
+
+class Preview(unittest.TestCase):
+    def test_preview_colours_match_the_cli_glb(self):
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+        import render_glb
+        cage_file = corpus("catmark_cube_creases0")
+        for color in ("curvature", "deviation", "zebra"):
+            r = s2n.convert(s2n.read_cage(cage_file), brep=False, preview=color, preview_samples=6)
+            p = r.preview
+            self.assertEqual(p["positions"].shape, p["colors"].shape)
+            self.assertEqual(p["triangles"].shape[1], 3)
+            self.assertLess(int(p["triangles"].max()), len(p["positions"]))
+            with tempfile.TemporaryDirectory() as d:
+                glb = os.path.join(d, "p.glb")
+                subprocess.run([CLI, "convert", cage_file, "-o", os.path.join(d, "c.brep"), "-q", "--preview", glb,
+                                "--color", color, "--preview-samples", "6"], check=True)
+                pos, _, col, idx = render_glb.read_glb(glb)
+            self.assertEqual(len(pos), p["positions"].size)
+            np.testing.assert_array_equal(np.array(col, dtype=np.float32).reshape(-1, 3), p["colors"])
+            np.testing.assert_array_equal(np.array(pos, dtype=np.float32).reshape(-1, 3), p["positions"])
+            np.testing.assert_array_equal(np.array(idx).reshape(-1, 3), p["triangles"])
+        with self.assertRaises(s2n.SettingsError):
+            s2n.convert(s2n.read_cage(cage_file), preview="rainbow")
 
 
 class Writing(unittest.TestCase):
