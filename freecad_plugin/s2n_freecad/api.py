@@ -152,3 +152,31 @@ def check_quality(obj, count=5, highlight=True):
     if highlight and App.GuiUp:
         features.highlight_edges(obj, [w[0] for w in worst])
     return report
+
+
+def make_color_map(nurbs, coloring="Curvature", samples=12, doc=None, name="ColorMap"):
+    """A ColorMap object of a NURBS object: its patches tessellated with per-vertex colours for
+    the mean curvature, the deviation from the exact limit surface, or zebra stripes: the same
+    colours as `subd2nurbs convert --preview P.glb --color curvature|deviation|zebra`. The NURBS
+    object is hidden in the GUI so the colours show."""
+    if not isinstance(getattr(nurbs, "Proxy", None), features.NurbsFeature):
+        raise TypeError("make_color_map: expected a NURBS object made by make_nurbs")
+    coloring = coloring.capitalize()
+    if coloring not in features.COLORINGS:
+        raise ValueError("make_color_map: coloring must be one of %s" % ", ".join(features.COLORINGS))
+    if int(samples) < 2:
+        raise ValueError("make_color_map: samples must be >= 2")
+    doc = _document(doc) if doc is not None else nurbs.Document
+    with _Transaction(doc, "Subd2Nurbs color map"):
+        obj = doc.addObject("App::FeaturePython", name)
+        features.ColorMapFeature(obj)
+        obj.Nurbs = nurbs
+        obj.Coloring = coloring
+        obj.Samples = int(samples)
+        if App.GuiUp:
+            features.ViewProviderColorMap(obj.ViewObject)
+            nurbs.ViewObject.Visibility = False
+        doc.recompute()
+        if not obj.isValid():
+            raise RuntimeError("the color map failed to recompute")
+    return obj

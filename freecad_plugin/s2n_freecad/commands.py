@@ -100,10 +100,32 @@ class CheckQuality:
                     _report_failure("Check surface quality (%s)" % obj.Label, e)
 
 
+class ColorMap:
+    def GetResources(self):
+        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Check.svg"),
+                "MenuText": "Colour map (curvature)",
+                "ToolTip": "Show the selected NURBS object's mean curvature as per-vertex colours (a ColorMap "
+                           "object: change its Coloring to Deviation or Zebra), the colours of "
+                           "subd2nurbs convert --preview"}
+
+    def IsActive(self):
+        return any(isinstance(getattr(o, "Proxy", None), features.NurbsFeature)
+                   for o in Gui.Selection.getSelection())
+
+    def Activated(self):
+        for obj in Gui.Selection.getSelection():
+            if isinstance(getattr(obj, "Proxy", None), features.NurbsFeature):
+                try:
+                    api.make_color_map(obj)
+                except Exception as e:
+                    _report_failure("Colour map (%s)" % obj.Label, e)
+
+
 COMMANDS = {
     "Subd2Nurbs_ImportCage": ImportCage(),
     "Subd2Nurbs_Convert": ConvertToNurbs(),
     "Subd2Nurbs_CheckQuality": CheckQuality(),
+    "Subd2Nurbs_ColorMap": ColorMap(),
 }
 
 for _name, _command in COMMANDS.items():

@@ -206,14 +206,15 @@ class _Progress:
         self.indicator.stop()
 
 
-def convert_cage(cage, level, tolerance, polar, progress=True):
-    """subd2nurbs.convert with the NURBS object's settings."""
+def convert_cage(cage, level, tolerance, polar, progress=True, **options):
+    """subd2nurbs.convert with the NURBS object's settings (and further convert options)."""
     if polar not in POLAR:
         raise subd2nurbs.SettingsError("PolarHandling must be one of %s" % ", ".join(POLAR))
     if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
         raise subd2nurbs.SettingsError("polar caps are not available in this subd2nurbs build: use Catmull-Clark")
     kwargs = {"tolerance": tolerance} if tolerance and tolerance > 0 else {"level": int(level)}
     kwargs["polar"] = polar == "Polar caps"
+    kwargs.update(options)
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
         return subd2nurbs.convert(cage, progress=indicator, **kwargs)
@@ -324,6 +325,60 @@ class NurbsFeature(_Stateless):
         self._result = None
 
 
+COLORINGS = ["Curvature", "Deviation", "Zebra"]
+
+
+class ColorMapFeature(_Stateless):
+    """Proxy of a ColorMap object: the NURBS object's patches tessellated with per-vertex
+    colours, exactly as `subd2nurbs convert --preview P.glb --color ...` makes them (mean
+    curvature, deviation from the exact limit surface, or zebra stripes)."""
+
+    TYPE = "Subd2Nurbs::ColorMap"
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.setup(obj)
+        obj.Samples = 12
+
+    def onDocumentRestored(self, obj):
+        obj.Proxy = self
+        self.setup(obj)
+
+    @staticmethod
+    def setup(obj):
+        g = "Color map"
+        _add(obj, "App::PropertyLink", "Nurbs", g, "The NURBS object to colour")
+        if "Coloring" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "Coloring", g,
+                 "Mean curvature (blue negative, red positive), deviation from the exact limit surface "
+                 "(blue 0 .. red max) or zebra stripes of the normal")
+            obj.Coloring = COLORINGS
+        _add(obj, "App::PropertyInteger", "Samples", g, "Grid points per patch side (>= 2)")
+        r = "Result"
+        _add(obj, "App::PropertyVectorList", "Points", r, "Tessellation vertices", read_only=True, hidden=True)
+        _add(obj, "App::PropertyIntegerList", "Triangles", r, "Vertex indices, three per triangle",
+             read_only=True, hidden=True)
+        _add(obj, "App::PropertyColorList", "Colors", r, "One colour per vertex", read_only=True, hidden=True)
+        _add(obj, "App::PropertyFloat", "ValueMin", r, "Value at the low end of the colour scale", read_only=True)
+        _add(obj, "App::PropertyFloat", "ValueMax", r, "Value at the high end of the colour scale", read_only=True)
+
+    def execute(self, obj):
+        nurbs = obj.Nurbs
+        if nurbs is None or not isinstance(getattr(nurbs, "Proxy", None), NurbsFeature):
+            raise ValueError("%s: Nurbs must be a NURBS object made by the workbench" % obj.Label)
+        if obj.Samples < 2:
+            raise ValueError("%s: Samples must be >= 2" % obj.Label)
+        cage = cage_of(nurbs.Source)
+        result = convert_cage(cage, nurbs.Level, nurbs.Tolerance, nurbs.PolarHandling, progress=nurbs.ShowProgress,
+                              brep=False, preview=obj.Coloring.lower(), preview_samples=obj.Samples)
+        p = result.preview
+        obj.Points = [App.Vector(*map(float, q)) for q in p["positions"]]
+        obj.Triangles = [int(i) for i in p["triangles"].reshape(-1)]
+        obj.Colors = [tuple(float(c) for c in q) for q in p["colors"]]
+        obj.ValueMin = float(p["value_min"])
+        obj.ValueMax = float(p["value_max"])
+
+
 def highlight_edges(obj, names, color=(1.0, 0.0, 0.0)):
     """Draws the named edges ("EdgeN") of obj in `color`, thicker, and selects them."""
     import FreeCADGui as Gui
@@ -367,3 +422,54 @@ class ViewProviderNurbs(_ViewProvider):
     def claimChildren(self):
         source = getattr(self, "Object", None) and self.Object.Source
         return [source] if source is not None else []
+
+
+class ViewProviderColorMap(_ViewProvider):
+    """Draws the colour map with Coin: vertices, per-vertex colours, triangles."""
+
+    ICON = "Subd2Nurbs_Check.svg"
+
+    def attach(self, vobj):
+        super().attach(vobj)
+        from pivy import coin
+        self.coords = coin.SoCoordinate3()
+        self.material = coin.SoMaterial()
+        binding = coin.SoMaterialBinding()
+        binding.value = coin.SoMaterialBinding.PER_VERTEX_INDEXED
+        hints = coin.SoShapeHints()
+        hints.vertexOrdering = coin.SoShapeHints.COUNTERCLOCKWISE
+        self.faces = coin.SoIndexedFaceSet()
+        root = coin.SoSeparator()
+        for node in (hints, self.coords, self.material, binding, self.faces):
+            root.addChild(node)
+        vobj.addDisplayMode(root, "Colors")
+        self.updateData(vobj.Object, "Colors")
+
+    def getDisplayModes(self, vobj):
+        return ["Colors"]
+
+    def getDefaultDisplayMode(self):
+        return "Colors"
+
+    def setDisplayMode(self, mode):
+        return mode
+
+    def updateData(self, obj, prop):
+        if prop not in ("Points", "Triangles", "Colors") or not hasattr(self, "faces"):
+            return
+        points = [(p.x, p.y, p.z) for p in obj.Points]
+        colors = [tuple(c[:3]) for c in obj.Colors]
+        if not points or len(colors) != len(points):
+            return
+        self.coords.point.setValues(0, len(points), points)
+        self.coords.point.setNum(len(points))
+        self.material.diffuseColor.setValues(0, len(colors), colors)
+        self.material.diffuseColor.setNum(len(colors))
+        index = []
+        t = list(obj.Triangles)
+        for k in range(0, len(t) - 2, 3):
+            index += [t[k], t[k + 1], t[k + 2], -1]
+        self.faces.coordIndex.setValues(0, len(index), index)
+        self.faces.coordIndex.setNum(len(index))
+        self.faces.materialIndex.setValues(0, len(index), index)
+        self.faces.materialIndex.setNum(len(index))

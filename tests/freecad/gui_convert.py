@@ -2,7 +2,8 @@
 # `freecad gui_convert.py` under Xvfb with the workbench installed in $HOME's Mod folder:
 # FreeCAD must have loaded the workbench from there; "Convert to NURBS" on an imported cage must
 # give one valid solid with one face per cage quad; "Check surface quality" must run; the view
-# is saved as a PNG (S2N_SCREENSHOT). Exits through os._exit (0 = pass) so the GUI closes.
+# is saved as a PNG (S2N_SCREENSHOT); "Colour map" must draw the curvature colours, saved as a
+# second PNG next to it (..._colormap.png). Exits through os._exit (0 = pass) so the GUI closes.
 import os
 import sys
 import traceback
@@ -52,6 +53,23 @@ def main():
     Gui.updateGui()
     view.saveImage(out, 1000, 700, "White")
     assert os.path.getsize(out) > 10000, os.path.getsize(out)
+
+    # The colour map (mean curvature) drawn by its Coin view provider, in a second picture.
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(nurbs)
+    Gui.runCommand("Subd2Nurbs_ColorMap")
+    maps = [o for o in doc.Objects if isinstance(getattr(o, "Proxy", None), features.ColorMapFeature)]
+    assert len(maps) == 1, [o.Name for o in doc.Objects]
+    colour = maps[0]
+    assert colour.isValid() and len(colour.Colors) == len(colour.Points) > 0
+    Gui.Selection.clearSelection()
+    cage.ViewObject.Visibility = False
+    view.viewIsometric()
+    view.fitAll()
+    Gui.updateGui()
+    out2 = out[:-4] + "_colormap.png"
+    view.saveImage(out2, 1000, 700, "White")
+    assert os.path.getsize(out2) > 10000, os.path.getsize(out2)
     App.Console.PrintMessage("gui_convert: ok, %d faces, screenshot %s\n" % (len(shape.Faces), out))
 
 

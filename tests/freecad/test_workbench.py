@@ -248,6 +248,31 @@ class Workbench(unittest.TestCase):
             self.assertGreaterEqual(angle, 0)
         self.assertLess(report["max_gap"], 1e-9 * 10)
 
+    def test_color_map_has_the_previews_colours(self):
+        # The same per-vertex colours as the module's (and so the CLI's --preview) tessellation.
+        path = corpus("catmark_cube_creases0")
+        nurbs = s2n.make_nurbs(s2n.make_cage(path, doc=self.doc), progress=False)
+        for coloring in ("Curvature", "Deviation", "Zebra"):
+            with self.subTest(coloring):
+                cm = s2n.make_color_map(nurbs, coloring, samples=5)
+                expected = subd2nurbs.convert(subd2nurbs.read_cage(path), brep=False, preview=coloring.lower(),
+                                              preview_samples=5).preview
+                self.assertEqual(len(cm.Points), len(expected["positions"]))
+                self.assertEqual(len(cm.Colors), len(expected["colors"]))
+                self.assertEqual(list(cm.Triangles), [int(i) for i in expected["triangles"].reshape(-1)])
+                for got, want in zip(cm.Colors, expected["colors"]):
+                    for a, b in zip(got[:3], want):
+                        self.assertAlmostEqual(a, float(b), delta=1e-6)
+                for got, want in zip(cm.Points, expected["positions"]):
+                    self.assertAlmostEqual((got - App.Vector(*map(float, want))).Length, 0, delta=1e-6)
+        cm.Coloring = "Zebra"
+        cm.Samples = 3
+        self.doc.recompute()
+        self.assertTrue(cm.isValid())
+        self.assertEqual(len(cm.Points), 6 * 3 * 3)  # 6 patches, 3 x 3 points each
+        with self.assertRaises(TypeError):
+            s2n.make_color_map(s2n.make_cage(path, doc=self.doc))
+
     def test_undo_removes_the_conversion(self):
         self.doc.UndoMode = 1
         cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
