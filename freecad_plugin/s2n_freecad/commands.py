@@ -80,12 +80,10 @@ class ConvertToNurbs:
             Gui.Selection.addSelection(made[-1])
 
 
-class CheckQuality:
-    def GetResources(self):
-        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Check.svg"),
-                "MenuText": "Check surface quality",
-                "ToolTip": "Report gaps, normal jumps and the deviation from the limit surface of the selected "
-                           "NURBS object in the report view, and highlight its worst edges"}
+class _OnSelectedNurbs:
+    """A command run on every selected NURBS object; failures are reported per object."""
+
+    TITLE = ""
 
     def IsActive(self):
         return any(isinstance(getattr(o, "Proxy", None), features.NurbsFeature)
@@ -95,12 +93,27 @@ class CheckQuality:
         for obj in Gui.Selection.getSelection():
             if isinstance(getattr(obj, "Proxy", None), features.NurbsFeature):
                 try:
-                    api.check_quality(obj)
+                    self.run(obj)
                 except Exception as e:
-                    _report_failure("Check surface quality (%s)" % obj.Label, e)
+                    _report_failure("%s (%s)" % (self.TITLE, obj.Label), e)
 
 
-class ColorMap:
+class CheckQuality(_OnSelectedNurbs):
+    TITLE = "Check surface quality"
+
+    def GetResources(self):
+        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Check.svg"),
+                "MenuText": self.TITLE,
+                "ToolTip": "Report gaps, normal jumps and the deviation from the limit surface of the selected "
+                           "NURBS object in the report view, and highlight its worst edges"}
+
+    def run(self, obj):
+        api.check_quality(obj)
+
+
+class ColorMap(_OnSelectedNurbs):
+    TITLE = "Colour map"
+
     def GetResources(self):
         return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Check.svg"),
                 "MenuText": "Colour map (curvature)",
@@ -108,17 +121,8 @@ class ColorMap:
                            "object: change its Coloring to Deviation or Zebra), the colours of "
                            "subd2nurbs convert --preview"}
 
-    def IsActive(self):
-        return any(isinstance(getattr(o, "Proxy", None), features.NurbsFeature)
-                   for o in Gui.Selection.getSelection())
-
-    def Activated(self):
-        for obj in Gui.Selection.getSelection():
-            if isinstance(getattr(obj, "Proxy", None), features.NurbsFeature):
-                try:
-                    api.make_color_map(obj)
-                except Exception as e:
-                    _report_failure("Colour map (%s)" % obj.Label, e)
+    def run(self, obj):
+        api.make_color_map(obj)
 
 
 COMMANDS = {
