@@ -2,34 +2,15 @@
 
 #include <CLI/CLI.hpp>
 
-#include <unistd.h>
-
 #include <chrono>
-#include <filesystem>
 
 #include "converter/cli/commands.h"
 #include "converter/cli/quality_json.h"
 #include "converter/pipeline/conversion.h"
 #include "core/eval/quality.h"
 #include "io/atomic_file.h"
-#include "io/input_error.h"
-#include "io/obj_reader.h"
 
 namespace subd2nurbs::cli {
-
-namespace {
-
-/// Fails early (before the work) when a file cannot be created in `path`'s directory.
-void check_output_directory(const std::string& path) {
-  namespace fs = std::filesystem;
-  fs::path dir = fs::path(path).parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw WriteError(path, "the directory " + dir.string() + " does not exist");
-  if (::access(dir.c_str(), W_OK) != 0) throw WriteError(path, "the directory " + dir.string() + " is not writable");
-}
-
-}  // namespace
 
 CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
   CLI::App* c = app.add_subcommand(
@@ -49,14 +30,11 @@ void run_check(const CheckOptions& o, std::ostream& err) {
   using Clock = std::chrono::steady_clock;
   if (!o.json.empty()) check_output_directory(o.json);
   if (!o.quiet) err << "subd2nurbs: reading " << o.mesh << "\n";
-  const LoadedCage cage = read_obj(o.mesh);
-  Diagnostics validation;
-  const SubdivLevel base = load_and_validate(cage, &validation);
-  std::vector<std::string> warnings;
-  for (const Diagnostic& d : cage.diagnostics) warnings.push_back(format_diagnostic(cage, d));
-  for (const Diagnostic& d : validation) warnings.push_back(format_diagnostic(cage, d));
+  const LoadedInput loaded = load_input(o.mesh);
+  const SubdivLevel& base = loaded.level;
+  const std::vector<std::string>& warnings = loaded.warnings;
   for (const std::string& w : warnings) err << w << "\n";
-  const std::vector<Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
+  const std::vector<Point3> positions = loaded.positions();
   if (pipeline::level_faces(base, o.level) > pipeline::kMaxLevelFaces)
     throw UsageError("--level " + std::to_string(o.level) + " would refine " + o.mesh + " too far");
 

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <new>
 #include <vector>
@@ -48,29 +49,6 @@ const char* kExitCodeHelp =
     "  4  internal error, or the export failed (OCCT refused the shape or the B-rep is not\n"
     "     valid; nothing is written)";
 
-// --- loading -----------------------------------------------------------------------------
-
-struct Loaded {
-  LoadedCage cage;
-  SubdivLevel level;
-  std::vector<std::string> warnings;  ///< formatted "FILE:LINE: warning: ..."
-};
-
-Loaded load(const std::string& path) {
-  Loaded result;
-  result.cage = read_cage(path);
-  Diagnostics validation;
-  result.level = load_and_validate(result.cage, &validation);
-  for (const Diagnostic& d : result.cage.diagnostics)
-    result.warnings.push_back(format_diagnostic(result.cage, d));
-  for (const Diagnostic& d : validation) result.warnings.push_back(format_diagnostic(result.cage, d));
-  return result;
-}
-
-std::vector<Point3> base_positions(const LoadedCage& cage) {
-  return std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end());
-}
-
 const char* boundary_name(BoundaryRule rule) {
   switch (rule) {
     case BoundaryRule::None: return "none";
@@ -101,7 +79,7 @@ std::string histogram_text(const std::map<int, int>& histogram, const char* unit
   return s.empty() ? "-" : s;
 }
 
-void print_text(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
+void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
   const SubdivOptions& o = loaded.level.options;
   const BoundingBox& b = s.bounds;
   out << loaded.cage.path << "\n"
@@ -162,7 +140,7 @@ std::string json_point(const Point3& p) {
   return "[" + json_number(p[0]) + ", " + json_number(p[1]) + ", " + json_number(p[2]) + "]";
 }
 
-void print_json(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
+void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
   const SubdivOptions& o = loaded.level.options;
   auto flag = [](bool b) { return b ? "true" : "false"; };
   out << "{\n"
@@ -214,11 +192,35 @@ void print_json(std::ostream& out, const Loaded& loaded, const MeshStats& s) {
 
 }  // namespace
 
+// --- loading and output checks shared by the subcommands ---------------------------------
+
+LoadedInput load_input(const std::string& path) {
+  LoadedInput result;
+  result.cage = read_cage(path);
+  Diagnostics validation;
+  result.level = load_and_validate(result.cage, &validation);
+  for (const Diagnostic& d : result.cage.diagnostics)
+    result.warnings.push_back(format_diagnostic(result.cage, d));
+  for (const Diagnostic& d : validation) result.warnings.push_back(format_diagnostic(result.cage, d));
+  return result;
+}
+
+void check_output_directory(const std::string& path) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw WriteError(path, "the directory " + dir.string() + " does not exist");
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw WriteError(path, "the directory " + dir.string() + " is not writable");
+}
+
 // --- subcommands ---------------------------------------------------------------------------
 
 void run_info(const InfoOptions& options, std::ostream& out) {
-  const Loaded loaded = load(options.mesh);
-  const MeshStats stats = compute_stats(loaded.level, base_positions(loaded.cage));
+  const LoadedInput loaded = load_input(options.mesh);
+  const MeshStats stats = compute_stats(loaded.level, loaded.positions());
   if (options.json)
     print_json(out, loaded, stats);
   else
@@ -227,7 +229,7 @@ void run_info(const InfoOptions& options, std::ostream& out) {
 
 void run_refine(const RefineOptions& options, std::ostream& err) {
   if (options.levels < 0) throw UsageError("the number of levels must be >= 0");
-  const Loaded loaded = load(options.mesh);
+  const LoadedInput loaded = load_input(options.mesh);
   for (const std::string& w : loaded.warnings) err << w << "\n";
 
   // After the first level every face is a quad: corners * 4^(levels-1) faces.
@@ -249,7 +251,7 @@ void run_refine(const RefineOptions& options, std::ostream& err) {
   if (options.polar == "on") structures = detect_polar_structures(loaded.level).structures;
   else if (options.polar != "off") throw UsageError("--polar must be on or off");
   const PolarRefinement refined =
-      refine_with_polar(loaded.level, base_positions(loaded.cage), options.levels, structures);
+      refine_with_polar(loaded.level, loaded.positions(), options.levels, structures);
   if (refined.structures > 0 && report)
     err << "subd2nurbs: " << refined.structures << " polar structures refined by BP subdivision\n";
   if (report) err << "subd2nurbs: writing " << options.output << "\n";

@@ -5,6 +5,10 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "core/refine/refiner.h"
+#include "io/obj_reader.h"
 
 namespace subd2nurbs::cli {
 
@@ -16,6 +20,24 @@ enum ExitCode : int {
   kWriteFailure = 3,   ///< an output file could not be written
   kInternalError = 4,  ///< a bug, an unexpected failure (e.g. out of memory), a failed export
 };
+
+/// A cage read (OBJ with tags, or glTF with quad recovery: io/gltf_reader.h read_cage) and
+/// validated, with the reader's and validation's warnings formatted "FILE:LINE: warning: ...".
+struct LoadedInput {
+  LoadedCage cage;
+  SubdivLevel level;
+  std::vector<std::string> warnings;
+
+  std::vector<Point3> positions() const {
+    return std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end());
+  }
+};
+/// \throw InputError for an unreadable or invalid cage
+LoadedInput load_input(const std::string& path);
+
+/// Fails early, before any work, when no file can be created in `path`'s directory.
+/// \throw WriteError naming `path`
+void check_output_directory(const std::string& path);
 
 struct InfoOptions {
   std::string mesh;

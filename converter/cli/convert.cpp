@@ -1,8 +1,6 @@
 #include "converter/cli/convert.h"
 #include "converter/cli/quality_json.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,7 +15,6 @@
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
 #include "io/atomic_file.h"
-#include "io/gltf_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 #include "io/patch_json.h"
@@ -64,18 +61,6 @@ const char* output_kind_name(OutputKind k) {
     case OutputKind::Brep: return "BREP";
   }
   return "?";
-}
-
-/// Fails early (before the work) when a file cannot be created in `path`'s directory.
-void check_directory(const std::string& path) {
-  namespace fs = std::filesystem;
-  fs::path dir = fs::path(path).parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw WriteError(path, "the directory " + dir.string() + " does not exist");
-  if (::access(dir.c_str(), W_OK) != 0)
-    throw WriteError(path, "the directory " + dir.string() + " is not writable");
 }
 
 /// Prints stage lines and, for the B-rep, a percentage: in place on a terminal, else a line
@@ -197,9 +182,9 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
 
   const OutputKind kind = output_kind(options.output);
   const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
-  check_directory(options.output);
-  if (!options.report.empty()) check_directory(options.report);
-  if (!options.preview.empty()) check_directory(options.preview);
+  check_output_directory(options.output);
+  if (!options.report.empty()) check_output_directory(options.report);
+  if (!options.preview.empty()) check_output_directory(options.preview);
 
   Progress progress(err, options.quiet, options.progress_tty);
   std::vector<std::string> load_warnings;
@@ -211,12 +196,11 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   // Load.
   auto t = Clock::now();
   progress.stage("reading " + options.mesh);
-  const LoadedCage cage = read_cage(options.mesh);
-  Diagnostics validation;
-  const SubdivLevel base = load_and_validate(cage, &validation);
-  for (const Diagnostic& d : cage.diagnostics) warn(format_diagnostic(cage, d));
-  for (const Diagnostic& d : validation) warn(format_diagnostic(cage, d));
-  const std::vector<Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
+  const LoadedInput loaded = load_input(options.mesh);
+  const LoadedCage& cage = loaded.cage;
+  const SubdivLevel& base = loaded.level;
+  for (const std::string& w : loaded.warnings) warn(w);
+  const std::vector<Point3> positions = loaded.positions();
   const double load_ms = ms_since(t);
   if (cage.recovery.applied && !options.quiet)
     err << "subd2nurbs: recovered " << cage.recovery.quads << " quads from " << cage.recovery.source_triangles

@@ -8,9 +8,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include "converter/cli/commands.h"
 #include "core/limit/limit_evaluator.h"
 #include "io/input_error.h"
-#include "io/obj_reader.h"
 
 namespace subd2nurbs::cli {
 
@@ -97,11 +97,9 @@ CLI::App* add_limit_command(CLI::App& app, LimitOptions& options) {
 }
 
 void run_limit(const LimitOptions& options, std::istream& in, std::ostream& out, std::ostream& err) {
-  const LoadedCage cage = read_obj(options.mesh);
-  Diagnostics validation;
-  SubdivLevel level = load_and_validate(cage, &validation);
-  for (const Diagnostic& d : cage.diagnostics) err << format_diagnostic(cage, d) << "\n";
-  for (const Diagnostic& d : validation) err << format_diagnostic(cage, d) << "\n";
+  LoadedInput loaded = load_input(options.mesh);
+  for (const std::string& w : loaded.warnings) err << w << "\n";
+  SubdivLevel& level = loaded.level;
 
   std::vector<Query> queries;
   const bool from_stdin = options.queries.empty() || options.queries == "-";
@@ -113,8 +111,7 @@ void run_limit(const LimitOptions& options, std::istream& in, std::ostream& out,
     queries = read_queries(file, options.queries, level.mesh);
   }
   const std::string name = from_stdin ? "<stdin>" : options.queries;
-  const std::vector<Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
-  const LimitEvaluator evaluator(std::move(level), positions);
+  const LimitEvaluator evaluator(std::move(level), loaded.positions());
 
   const bool progress = queries.size() >= 1000000;
   std::string text;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -545,6 +546,16 @@ TEST(CliGltf, InfoReportsRecoveredQuadsAndConvertMatchesTheObj) {
                                   "'))['patches']['total']"),
             0);
   EXPECT_TRUE(std::filesystem::is_regular_file(dir.file("glb.step")));
+  // check and limit read it like convert does.
+  const Result check = run("check " + quote(glb) + " -q --json " + quote(dir.file("check.json")));
+  ASSERT_EQ(check.exit_code, 0) << check.err;
+  EXPECT_EQ(python_json_check(dir.file("check.json"), "r['patches'] == " + std::to_string(quads)), 0);
+  {
+    std::ofstream(dir.file("q.txt")) << "0 0.5 0.5\n";
+  }
+  const Result limit = run("limit " + quote(glb) + " " + quote(dir.file("q.txt")));
+  ASSERT_EQ(limit.exit_code, 0) << limit.err;
+  EXPECT_EQ(std::count(limit.out.begin(), limit.out.end(), '\n'), 1);
 
   // A file that is not glTF: exit 2 naming it.
   {
