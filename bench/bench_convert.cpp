@@ -76,21 +76,6 @@ constexpr int kIsolation = 2;  // = our default level k for an all-quad cage (a 
 
 // --- cages -----------------------------------------------------------------------------------
 
-/// Rotates the edge shared by torus faces (i, j) and (i + 1, j) of torus(nu, nv) (see the
-/// header comment). Both faces are rewritten in place; the face count does not change.
-void rotate_edge(MeshInput& m, int nu, int nv, int i, int j) {
-  auto vtx = [&](int a, int b) { return ((a + nu) % nu) * nv + (b + nv) % nv; };
-  const int a = vtx(i, j), b = vtx(i + 1, j), c = vtx(i + 1, j + 1), d = vtx(i, j + 1);
-  const int e = vtx(i + 2, j), f = vtx(i + 2, j + 1);
-  int* f1 = &m.face_indices[4 * static_cast<size_t>(vtx(i, j))];
-  int* f2 = &m.face_indices[4 * static_cast<size_t>(vtx(i + 1, j))];
-  if (f1[0] != a || f1[1] != b || f1[2] != c || f1[3] != d || f2[0] != b || f2[1] != e ||
-      f2[2] != f || f2[3] != c)
-    throw std::logic_error("rotate_edge: faces are not the expected torus faces");
-  const int q1[4] = {d, a, b, e}, q2[4] = {e, f, c, d};
-  for (int k = 0; k < 4; ++k) f1[k] = q1[k], f2[k] = q2[k];
-}
-
 struct Cage {
   std::string name;
   MeshInput input;
@@ -100,14 +85,9 @@ struct Cage {
 Cage make_cage(const std::string& name) {
   Cage cage;
   cage.name = name;
-  constexpr int nu = 100, nv = 100;
-  cage.input = testing::torus(nu, nv);
-  if (name == "torus_ev") {
-    for (int si = 0; si < 6; ++si)
-      for (int sj = 0; sj < 6; ++sj) rotate_edge(cage.input, nu, nv, 8 + 16 * si, 8 + 16 * sj);
-  } else if (name != "torus") {
-    throw std::invalid_argument("unknown cage " + name);
-  }
+  if (name == "torus_ev") cage.input = testing::torus_with_rotated_edges();
+  else if (name == "torus") cage.input = testing::torus(100, 100);
+  else throw std::invalid_argument("unknown cage " + name);
   validate_and_build(cage.input);  // throws if a rotation broke the cage
   // Valences (every edge of a closed manifold quad mesh is seen twice, once per face).
   std::vector<int> twice(cage.input.positions.size(), 0);

@@ -30,29 +30,9 @@ namespace {
 constexpr int kQueries = 100000;
 constexpr int kIsolation = 10;  // OpenSubdiv's deepest, as in the test oracle
 
-/// Rotates the edge shared by torus faces (i, j) and (i + 1, j) (as bench_convert.cpp does):
-/// (a b c d), (b e f c) -> (d a b e), (e f c d): two valence-3 and two valence-5 vertices.
-void rotate_edge(MeshInput& m, int nu, int nv, int i, int j) {
-  auto vtx = [&](int a, int b) { return ((a + nu) % nu) * nv + (b + nv) % nv; };
-  const int a = vtx(i, j), b = vtx(i + 1, j), c = vtx(i + 1, j + 1), d = vtx(i, j + 1);
-  const int e = vtx(i + 2, j), f = vtx(i + 2, j + 1);
-  int* f1 = &m.face_indices[4 * static_cast<size_t>(vtx(i, j))];
-  int* f2 = &m.face_indices[4 * static_cast<size_t>(vtx(i + 1, j))];
-  if (f1[0] != a || f1[1] != b || f1[2] != c || f1[3] != d || f2[0] != b || f2[1] != e ||
-      f2[2] != f || f2[3] != c)
-    throw std::logic_error("rotate_edge: faces are not the expected torus faces");
-  const int q1[4] = {d, a, b, e}, q2[4] = {e, f, c, d};
-  for (int k = 0; k < 4; ++k) f1[k] = q1[k], f2[k] = q2[k];
-}
-
 const MeshInput& cage(int which) {
   static const MeshInput regular = testing::torus(100, 100);
-  static const MeshInput ev = [] {
-    MeshInput m = testing::torus(100, 100);
-    for (int si = 0; si < 6; ++si)
-      for (int sj = 0; sj < 6; ++sj) rotate_edge(m, 100, 100, 8 + 16 * si, 8 + 16 * sj);
-    return m;
-  }();
+  static const MeshInput ev = testing::torus_with_rotated_edges();
   return which == 0 ? regular : ev;
 }
 

@@ -8,10 +8,10 @@
 #include <fstream>
 #include <map>
 #include <regex>
-#include <fstream>
 #include <string>
 
 #include "common/gltf_writer.h"
+#include "common/run_command.h"
 #include "io/obj_reader.h"
 #include "io/temp_dir.h"
 
@@ -21,29 +21,11 @@ using subd2nurbs::testing::TempDir;
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using Result = subd2nurbs::testing::CommandResult;
+using subd2nurbs::testing::quote;
 
 /// Runs subd2nurbs with the given (already quoted) arguments.
-Result run(const std::string& args) {
-  TempDir dir;
-  const std::string command = quote(SUBD2NURBS_EXE) + " " + args + " >" +
-                              quote(dir.file("out")) + " 2>" + quote(dir.file("err"));
-  const int status = std::system(command.c_str());
-  Result r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = read_text(dir.file("out"));
-  r.err = read_text(dir.file("err"));
-  return r;
-}
+Result run(const std::string& args) { return subd2nurbs::testing::run_command(quote(SUBD2NURBS_EXE) + " " + args); }
 
 std::string sample() { return std::string(SUBD2NURBS_SAMPLES_DIR) + "/rounded_box.obj"; }
 std::string data(const std::string& name) {

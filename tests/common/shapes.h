@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include "core/mesh/mesh_input.h"
@@ -70,6 +71,32 @@ inline MeshInput torus(int nu, int nv, double R = 3.0, double r = 1.0) {
       int i1 = (i + 1) % nu, j1 = (j + 1) % nv;
       for (int v : {i * nv + j, i1 * nv + j, i1 * nv + j1, i * nv + j1}) m.face_indices.push_back(v);
     }
+  return m;
+}
+
+/// Rotates the edge shared by faces (i, j) and (i + 1, j) of torus(nu, nv): the quads
+/// (a b c d), (b e f c) become (d a b e), (e f c d), so b and c drop to valence 3 and d and e
+/// rise to valence 5. \throw std::logic_error if those faces are not the torus's own.
+inline void rotate_torus_edge(MeshInput& m, int nu, int nv, int i, int j) {
+  auto vtx = [&](int a, int b) { return ((a + nu) % nu) * nv + (b + nv) % nv; };
+  const int a = vtx(i, j), b = vtx(i + 1, j), c = vtx(i + 1, j + 1), d = vtx(i, j + 1);
+  const int e = vtx(i + 2, j), f = vtx(i + 2, j + 1);
+  int* f1 = &m.face_indices[4 * static_cast<size_t>(vtx(i, j))];
+  int* f2 = &m.face_indices[4 * static_cast<size_t>(vtx(i + 1, j))];
+  if (f1[0] != a || f1[1] != b || f1[2] != c || f1[3] != d || f2[0] != b || f2[1] != e ||
+      f2[2] != f || f2[3] != c)
+    throw std::logic_error("rotate_torus_edge: faces are not the expected torus faces");
+  const int q1[4] = {d, a, b, e}, q2[4] = {e, f, c, d};
+  for (int k = 0; k < 4; ++k) f1[k] = q1[k], f2[k] = q2[k];
+}
+
+/// The benchmarks' torus with extraordinary vertices: torus(100, 100) with 36 edge rotations
+/// on a 6 x 6 grid of sites, 16 faces apart: 72 valence-3 and 72 valence-5 vertices.
+inline MeshInput torus_with_rotated_edges() {
+  constexpr int n = 100;
+  MeshInput m = torus(n, n);
+  for (int si = 0; si < 6; ++si)
+    for (int sj = 0; sj < 6; ++sj) rotate_torus_edge(m, n, n, 8 + 16 * si, 8 + 16 * sj);
   return m;
 }
 

@@ -10,6 +10,7 @@
 
 #include "convert/corpus_brep.h"
 #include "converter/occt/writers.h"
+#include "common/run_command.h"
 #include "io/temp_dir.h"
 
 using namespace subd2nurbs;
@@ -70,11 +71,6 @@ TEST(RoundTripCheck, AreaComparisonNoticesAGeometricChange) {
   EXPECT_GT(relative_difference(a.area, b.area), 1e3 * kAreaTolerance) << a.area << " vs " << b.area;
 }
 
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
 
 TEST(CliStep, SampleReadsBackAsAValidSolid) {
   TempDir dir;

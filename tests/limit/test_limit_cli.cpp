@@ -1,12 +1,12 @@
 // `subd2nurbs limit` end to end: output format and values (compared with the library, whose
 // values are checked against OpenSubdiv in test_limit_vs_osd.cpp), bad query lines, exit codes.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 
+#include "common/run_command.h"
 #include "io/temp_dir.h"
 #include "limit_test_util.h"
 
@@ -15,16 +15,7 @@ using namespace subd2nurbs::testing;
 
 namespace {
 
-struct Result {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
+using Result = CommandResult;
 
 /// Runs `subd2nurbs limit MESH [file]` with `queries` on stdin (or in a file).
 Result run_limit(const std::string& mesh, const std::string& queries, bool as_file) {
@@ -33,15 +24,8 @@ Result run_limit(const std::string& mesh, const std::string& queries, bool as_fi
     std::ofstream q(dir.file("q.txt"));
     q << queries;
   }
-  const std::string command = quote(SUBD2NURBS_EXE) + " limit " + quote(mesh) +
-                              (as_file ? " " + quote(dir.file("q.txt")) : " <" + quote(dir.file("q.txt"))) +
-                              " >" + quote(dir.file("out")) + " 2>" + quote(dir.file("err"));
-  const int status = std::system(command.c_str());
-  Result r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = read_text(dir.file("out"));
-  r.err = read_text(dir.file("err"));
-  return r;
+  return run_command(quote(SUBD2NURBS_EXE) + " limit " + quote(mesh) +
+                     (as_file ? " " + quote(dir.file("q.txt")) : " <" + quote(dir.file("q.txt"))));
 }
 
 }  // namespace
@@ -131,27 +115,20 @@ TEST(LimitCli, HolesMissingFilesAndUsage) {
   EXPECT_NE(r.err.find("hole"), std::string::npos) << r.err;
   // Missing mesh, missing query file, missing argument.
   EXPECT_EQ(run_limit("/nonexistent.obj", "0 0.5 0.5\n", false).exit_code, 2);
-  TempDir dir;
-  const std::string cmd = quote(SUBD2NURBS_EXE) + " limit " + quote(limit_corpus_path("catmark_cube")) +
-                          " /nonexistent_queries.txt >/dev/null 2>" + quote(dir.file("err"));
-  int status = std::system(cmd.c_str());
-  EXPECT_EQ(WEXITSTATUS(status), 2);
-  EXPECT_NE(read_text(dir.file("err")).find("/nonexistent_queries.txt"), std::string::npos);
-  status = std::system((quote(SUBD2NURBS_EXE) + " limit >/dev/null 2>&1").c_str());
-  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const Result missing = run_command(quote(SUBD2NURBS_EXE) + " limit " + quote(limit_corpus_path("catmark_cube")) +
+                                     " /nonexistent_queries.txt");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("/nonexistent_queries.txt"), std::string::npos);
+  EXPECT_EQ(run_command(quote(SUBD2NURBS_EXE) + " limit").exit_code, 1);
 }
 
 TEST(CheckCli, WritesTheQualityReportAndUsesTheDocumentedExitCodes) {
   TempDir dir;
   const std::string cube = limit_corpus_path("catmark_cube");
-  auto sh = [&](const std::string& args) {
-    const int status = std::system((quote(SUBD2NURBS_EXE) + " " + args + " >" + quote(dir.file("out")) +
-                                    " 2>" + quote(dir.file("err")))
-                                       .c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  };
-  ASSERT_EQ(sh("check " + quote(cube) + " --json " + quote(dir.file("q.json"))), 0) << read_text(dir.file("err"));
-  EXPECT_NE(read_text(dir.file("err")).find("quality: deviation from the exact limit max"), std::string::npos);
+  auto sh = [&](const std::string& args) { return run_command(quote(SUBD2NURBS_EXE) + " " + args); };
+  const Result check = sh("check " + quote(cube) + " --json " + quote(dir.file("q.json")));
+  ASSERT_EQ(check.exit_code, 0) << check.err;
+  EXPECT_NE(check.err.find("quality: deviation from the exact limit max"), std::string::npos);
   // Python reads it; the cube has irregular vertices, so the deviation is positive but small,
   // every shared edge is smooth, and the samples cover every patch.
   const std::string py =
@@ -164,7 +141,8 @@ TEST(CheckCli, WritesTheQualityReportAndUsesTheDocumentedExitCodes) {
   EXPECT_EQ(std::system(("python3 -c " + quote(py) + " " + quote(dir.file("q.json"))).c_str()), 0);
   // convert --report carries the same object.
   ASSERT_EQ(sh("convert " + quote(cube) + " -o " + quote(dir.file("c.step")) + " --report " +
-               quote(dir.file("r.json")) + " -q"),
+               quote(dir.file("r.json")) + " -q")
+                .exit_code,
             0);
   const std::string same =
       "import json,sys; a=json.load(open(sys.argv[1]))['quality']; b=json.load(open(sys.argv[2]))['quality'];"
@@ -173,7 +151,7 @@ TEST(CheckCli, WritesTheQualityReportAndUsesTheDocumentedExitCodes) {
                          quote(dir.file("r.json")))
                             .c_str()),
             0);
-  EXPECT_EQ(sh("check /nonexistent.obj"), 2);
-  EXPECT_EQ(sh("check " + quote(cube) + " --samples 1"), 1);
-  EXPECT_EQ(sh("check " + quote(cube) + " --json /nonexistent_dir/q.json"), 3);
+  EXPECT_EQ(sh("check /nonexistent.obj").exit_code, 2);
+  EXPECT_EQ(sh("check " + quote(cube) + " --samples 1").exit_code, 1);
+  EXPECT_EQ(sh("check " + quote(cube) + " --json /nonexistent_dir/q.json").exit_code, 3);
 }
