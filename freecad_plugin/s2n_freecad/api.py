@@ -42,6 +42,18 @@ class _Transaction:
         return False
 
 
+def _show_and_recompute(obj, view_provider, what, hide=None):
+    """Gives `obj` its view provider (with the GUI; `hide` is made invisible), recomputes its
+    document and raises if `obj` did not recompute, so that the caller's transaction aborts."""
+    if App.GuiUp:
+        view_provider(obj.ViewObject)
+        if hide is not None:
+            hide.ViewObject.Visibility = False
+    obj.Document.recompute()
+    if not obj.isValid():
+        raise RuntimeError("the %s failed to recompute" % what)
+
+
 def check_occt():
     """Raises RuntimeError unless FreeCAD's OCCT is the version subd2nurbs links (BREP text
     is exchanged between the two, see docs)."""
@@ -70,11 +82,7 @@ def make_cage(source, doc=None, name="Cage"):
         obj = doc.addObject("Part::FeaturePython", name)
         features.CageFeature(obj)
         features.CageFeature.store(obj, cage, source if isinstance(source, str) else "")
-        if App.GuiUp:
-            features.ViewProviderCage(obj.ViewObject)
-        doc.recompute()
-        if not obj.isValid():
-            raise RuntimeError("the cage object failed to recompute")
+        _show_and_recompute(obj, features.ViewProviderCage, "cage object")
     return obj
 
 
@@ -106,12 +114,7 @@ def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, 
         obj.PolarHandling = polar
         obj.OutputType = "Shell" if shell else "Solid"
         obj.ShowProgress = bool(progress)
-        if App.GuiUp:
-            features.ViewProviderNurbs(obj.ViewObject)
-            source.ViewObject.Visibility = False
-        doc.recompute()
-        if not obj.isValid():
-            raise RuntimeError("the NURBS object failed to recompute")
+        _show_and_recompute(obj, features.ViewProviderNurbs, "NURBS object", hide=source)
     return obj
 
 
@@ -173,10 +176,5 @@ def make_color_map(nurbs, coloring="Curvature", samples=12, doc=None, name="Colo
         obj.Nurbs = nurbs
         obj.Coloring = coloring
         obj.Samples = int(samples)
-        if App.GuiUp:
-            features.ViewProviderColorMap(obj.ViewObject)
-            nurbs.ViewObject.Visibility = False
-        doc.recompute()
-        if not obj.isValid():
-            raise RuntimeError("the color map failed to recompute")
+        _show_and_recompute(obj, features.ViewProviderColorMap, "color map", hide=nurbs)
     return obj
