@@ -46,28 +46,36 @@ inline void frame_to_face(int r, double s, double t, double& fu, double& fv) {
   }
 }
 
+/// Calls fn(patch, x, y, N, corner) for each level-k quad of each patch: the N x N grid of
+/// PatchBuildInfo::sub_corners, x along u, `corner` the quad's level-k frame corner. Polar
+/// caps have no grid and are skipped.
+template <class Fn>
+void for_each_sub_quad(const PatchBuild& b, Fn&& fn) {
+  const int N = 1 << (b.info.level - b.info.coarse_level);
+  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
+    const auto& grid = b.info.sub_corners[pi];
+    if (grid.empty()) continue;
+    for (int y = 0; y < N; ++y)
+      for (int x = 0; x < N; ++x) fn(static_cast<int>(pi), x, y, N, grid[y * N + x]);
+  }
+}
+
 /// Max distance between each merged patch and its level-k Bezier pieces (5x5 samples each).
 inline double max_piece_error(const PatchBuild& b) {
   const PolyMesh& mk = b.refinement.levels[b.info.level].mesh;
   double worst = 0;
-  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
-    const auto& grid = b.info.sub_corners[pi];
-    const int N = static_cast<int>(std::lround(std::sqrt(static_cast<double>(grid.size()))));
-    for (int y = 0; y < N; ++y)
-      for (int x = 0; x < N; ++x) {
-        const int c = grid[y * N + x];
-        const int f = mk.corner_face(c), r = c - mk.face_begin(f);
-        for (int a = 0; a <= 4; ++a)
-          for (int bb = 0; bb <= 4; ++bb) {
-            const double s = a / 4.0, t = bb / 4.0;
-            double fu, fv;
-            frame_to_face(r, s, t, fu, fv);
-            const Eigen::Vector3d q = eval_bezier(&b.level_nets[static_cast<size_t>(f) * 16], fu, fv);
-            const SurfaceDerivs d = evaluate(b.set.patches[pi], (x + s) / N, (y + t) / N);
-            worst = std::max(worst, (ev(d.p) - q).norm());
-          }
+  for_each_sub_quad(b, [&](int pi, int x, int y, int N, int c) {
+    const int f = mk.corner_face(c), r = c - mk.face_begin(f);
+    for (int a = 0; a <= 4; ++a)
+      for (int bb = 0; bb <= 4; ++bb) {
+        const double s = a / 4.0, t = bb / 4.0;
+        double fu, fv;
+        frame_to_face(r, s, t, fu, fv);
+        const Eigen::Vector3d q = eval_bezier(&b.level_nets[static_cast<size_t>(f) * 16], fu, fv);
+        const SurfaceDerivs d = evaluate(b.set.patches[pi], (x + s) / N, (y + t) / N);
+        worst = std::max(worst, (ev(d.p) - q).norm());
       }
-  }
+  });
   return worst;
 }
 
@@ -88,17 +96,12 @@ inline double max_corner_limit_error(const PatchBuild& b) {
     }
   }
   double worst = 0;
-  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
-    const auto& grid = b.info.sub_corners[pi];
-    const int N = static_cast<int>(std::lround(std::sqrt(static_cast<double>(grid.size()))));
-    for (int y = 0; y < N; ++y)
-      for (int x = 0; x < N; ++x) {
-        const int v = mk.corner_vertex(grid[y * N + x]);
-        if (near_fan[v]) continue;
-        const SurfaceDerivs d = evaluate(b.set.patches[pi], static_cast<double>(x) / N, static_cast<double>(y) / N);
-        worst = std::max(worst, (ev(d.p) - ev(limit[v])).norm());
-      }
-  }
+  for_each_sub_quad(b, [&](int pi, int x, int y, int N, int c) {
+    const int v = mk.corner_vertex(c);
+    if (near_fan[v]) return;
+    const SurfaceDerivs d = evaluate(b.set.patches[pi], static_cast<double>(x) / N, static_cast<double>(y) / N);
+    worst = std::max(worst, (ev(d.p) - ev(limit[v])).norm());
+  });
   return worst;
 }
 

@@ -113,24 +113,19 @@ void check_shape(const std::string& name) {
   const PolyMesh& mk = b.refinement.levels[b.info.level].mesh;
   double worst = 0;
   int compared = 0;
-  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
+  for_each_sub_quad(b, [&](int pi, int x, int y, int N, int c) {
+    if (zone.count(mk.corner_face(c))) return;
     const int F = b.set.patches[pi].base_faces[0];
-    const auto& grid = b.info.sub_corners[pi];
-    const int N = static_cast<int>(std::lround(std::sqrt(static_cast<double>(grid.size()))));
-    for (int y = 0; y < N; ++y)
-      for (int x = 0; x < N; ++x) {
-        if (zone.count(mk.corner_face(grid[y * N + x]))) continue;
-        for (double s : {0.0, 0.3, 0.75})
-          for (double t : {0.0, 0.6, 1.0}) {
-            const double u = (x + s) / N, v = (y + t) / N;
-            const OsdLimitEvaluator::Sample o = osd.eval(F, u, v);
-            if (!o.regular_patch) continue;
-            const SurfaceDerivs d = evaluate(b.set.patches[pi], u, v);
-            worst = std::max(worst, (ev(d.p) - ev(o.p)).norm());
-            ++compared;
-          }
+    for (double s : {0.0, 0.3, 0.75})
+      for (double t : {0.0, 0.6, 1.0}) {
+        const double u = (x + s) / N, v = (y + t) / N;
+        const OsdLimitEvaluator::Sample o = osd.eval(F, u, v);
+        if (!o.regular_patch) continue;
+        const SurfaceDerivs d = evaluate(b.set.patches[pi], u, v);
+        worst = std::max(worst, (ev(d.p) - ev(o.p)).norm());
+        ++compared;
       }
-  }
+  });
   ::testing::Test::RecordProperty("osd_points", compared);
   ::testing::Test::RecordProperty("osd_max_relative_error", sci(worst / diag));
   EXPECT_LT(worst, 1e-12 * diag) << compared << " points compared";
