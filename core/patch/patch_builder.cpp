@@ -560,6 +560,16 @@ KnotVector reversed(const KnotVector& kv) {
   return r;
 }
 
+/// The model size: the bounding-box diagonal of the cage's points (not empty).
+double bounding_diagonal(const std::vector<Point3>& positions) {
+  V3 lo = v3(positions[0]), hi = lo;
+  for (const Point3& q : positions) {
+    lo = lo.cwiseMin(v3(q));
+    hi = hi.cwiseMax(v3(q));
+  }
+  return (hi - lo).norm();
+}
+
 /// PatchOptions::separate_poles: the separating first step at the poles that need it, then
 /// the ordinary build of that level-1 cage. False (and `out` untouched) if no pole needs it.
 bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -592,9 +602,7 @@ bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point
   }
   out.info.separated_poles = chosen;
   out.info.rejected_poles = left;  // the level-1 cage has no other all-triangle vertices
-  V3 lo = v3(positions[0]), hi = lo;  // model size of the cage, not of its level 1
-  for (const Point3& q : positions) { lo = lo.cwiseMin(v3(q)); hi = hi.cwiseMax(v3(q)); }
-  out.set.model_size = (hi - lo).norm();
+  out.set.model_size = bounding_diagonal(positions);  // of the cage, not of its level 1
   return true;
 }
 
@@ -927,12 +935,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     }
   }
 
-  // Model size: the cage's bounding-box diagonal.
-  if (!positions.empty()) {
-    V3 lo = v3(positions[0]), hi = lo;
-    for (const Point3& q : positions) { lo = lo.cwiseMin(v3(q)); hi = hi.cwiseMax(v3(q)); }
-    ps.model_size = (hi - lo).norm();
-  }
+  if (!positions.empty()) ps.model_size = bounding_diagonal(positions);
   return out;
 }
 

@@ -94,7 +94,7 @@ SeparatedLevel separate_poles(const SubdivLevel& base, const std::vector<Point3>
   // Topology: level-1 face h (the child of corner h) at a separated pole splits into two
   // triangles along (P0', F_i).
   SeparatedLevel out;
-  std::vector<int> sizes, faces, extra_faces;
+  std::vector<int> sizes, faces, extra_faces, extra_cage_faces;
   for (int h = 0; h < m1.num_faces(); ++h) {
     const int* fv = m1.face_vertices(h);
     out.cage_face.push_back(m.corner_face(h));
@@ -103,6 +103,7 @@ SeparatedLevel separate_poles(const SubdivLevel& base, const std::vector<Point3>
       sizes.push_back(3);
       faces.insert(faces.end(), {fv[0], fv[1], fv[2]});
       extra_faces.insert(extra_faces.end(), {fv[0], fv[2], fv[3]});
+      extra_cage_faces.push_back(m.corner_face(h));
     } else {
       sizes.push_back(m1.face_size(h));
       faces.insert(faces.end(), fv, fv + m1.face_size(h));
@@ -110,18 +111,10 @@ SeparatedLevel separate_poles(const SubdivLevel& base, const std::vector<Point3>
   }
   std::vector<int> face_source(sizes.size());
   for (size_t f = 0; f < face_source.size(); ++f) face_source[f] = static_cast<int>(f);
-  for (size_t k = 0; k < extra_faces.size(); k += 3) {
-    sizes.push_back(3);
-    faces.insert(faces.end(), extra_faces.begin() + static_cast<long>(k), extra_faces.begin() + static_cast<long>(k) + 3);
-    face_source.push_back(-1);
-    out.cage_face.push_back(out.cage_face[0]);  // fixed below
-  }
-  // The appended triangles come from the same cage triangles, in order.
-  {
-    size_t next = m1.num_faces();
-    for (int h = 0; h < m1.num_faces(); ++h)
-      if (at_pole[m.corner_vertex(h)] && m.face_size(m.corner_face(h)) == 3) out.cage_face[next++] = m.corner_face(h);
-  }
+  sizes.insert(sizes.end(), extra_cage_faces.size(), 3);
+  faces.insert(faces.end(), extra_faces.begin(), extra_faces.end());
+  face_source.insert(face_source.end(), extra_cage_faces.size(), -1);
+  out.cage_face.insert(out.cage_face.end(), extra_cage_faces.begin(), extra_cage_faces.end());
   std::vector<int> identity(m1.num_vertices());
   for (int v = 0; v < m1.num_vertices(); ++v) identity[v] = v;
   out.level = rebuild_level(step.child, identity, m1.num_vertices(), sizes, faces, face_source);
