@@ -738,6 +738,18 @@ void finish_sample_local(LimitSample& o) { finish_sample(o); }
 
 }  // namespace
 
+LimitSample sample_from_derivatives(const SurfaceDerivs& d) {
+  LimitSample s;
+  s.p = d.p;
+  s.du = d.du;
+  s.dv = d.dv;
+  s.duu = d.duu;
+  s.duv = d.duv;
+  s.dvv = d.dvv;
+  finish_sample(s);
+  return s;
+}
+
 void finish_sample(LimitSample& o) {
   const Point3& a = o.du;
   const Point3& b = o.dv;

@@ -28,6 +28,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/eval/nurbs_eval.h"
 #include "core/refine/refiner.h"
 
 namespace subd2nurbs {
@@ -85,5 +86,9 @@ class LimitEvaluator {
 
 /// Principal curvatures etc. from derivatives (fills normal, k1, k2, mean, gauss).
 void finish_sample(LimitSample& s);
+
+/// A sample of any surface from its derivatives (e.g. a patch's, core/eval/nurbs_eval.h),
+/// finished with finish_sample.
+LimitSample sample_from_derivatives(const SurfaceDerivs& d);
 
 }  // namespace subd2nurbs

@@ -8,7 +8,7 @@
 #include <Eigen/Dense>
 
 #include "core/eval/nurbs_eval.h"
-#include "core/limit/limit_evaluator.h"  // finish_sample: curvature from derivatives
+#include "core/limit/limit_evaluator.h"  // sample_from_derivatives: curvature
 
 #include "core/util/eigen_point.h"
 
@@ -167,15 +167,7 @@ CapPoleMeasure measure_cap_pole(const PolarCap& cap, const NurbsPatch& patch) {
   CapPoleMeasure m;
   for (int i = 0; i < 2; ++i)
     for (int q = 0; q < 64; ++q) {
-      const SurfaceDerivs d = evaluate(relative, m.distance[i] / cap.m, (q + 0.5) / 64);
-      LimitSample s;
-      s.p = d.p;
-      s.du = d.du;
-      s.dv = d.dv;
-      s.duu = d.duu;
-      s.duv = d.duv;
-      s.dvv = d.dvv;
-      finish_sample(s);
+      const LimitSample s = sample_from_derivatives(evaluate(relative, m.distance[i] / cap.m, (q + 0.5) / 64));
       const V3 nv = to_eigen(s.normal);
       m.normal_angle_deg[i] = std::max(m.normal_angle_deg[i], std::atan2(nv.cross(bn).norm(), nv.dot(bn)) * 180 / kPi);
       m.max_abs_k[i] = std::max({m.max_abs_k[i], std::abs(s.k1), std::abs(s.k2)});

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/limit/limit_evaluator.h"  // sample_from_derivatives
 #include "core/polar/polar_cap.h"
 #include "core/polar/polar_net.h"
 
@@ -31,19 +32,10 @@ struct Curvature {
   V3 normal;
 };
 
-/// Principal curvatures from the first and second fundamental forms.
+/// Principal curvatures from the derivatives (the fundamental forms, core/limit).
 inline Curvature curvature(const SurfaceDerivs& d) {
-  const V3 xu = ev(d.du), xv = ev(d.dv);
-  Curvature c;
-  c.normal = xu.cross(xv).normalized();
-  const double E = xu.dot(xu), F = xu.dot(xv), G = xv.dot(xv);
-  const double L = ev(d.duu).dot(c.normal), M = ev(d.duv).dot(c.normal), N = ev(d.dvv).dot(c.normal);
-  const double det = E * G - F * F;
-  const double K = (L * N - M * M) / det, H = (E * N - 2 * F * M + G * L) / (2 * det);
-  const double root = std::sqrt(std::max(0.0, H * H - K));
-  c.k1 = H + root;
-  c.k2 = H - root;
-  return c;
+  const LimitSample s = sample_from_derivatives(d);
+  return {s.k1, s.k2, ev(s.normal)};
 }
 
 /// The patch with every pole moved by -centre: evaluating relative to the cap's centre
