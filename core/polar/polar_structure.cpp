@@ -16,48 +16,42 @@ std::string read_structure(const SubdivLevel& level, int p, PolarStructure& s) {
   s.pole = p;
   s.valence = n;
   for (auto& ring : s.rings) ring.assign(n, -1);
-  std::vector<int> triangles(n), quads1(n), quads2(n);
+  std::vector<int> triangles(n), layer_quads[2];
+  std::vector<int> inner(n);  // per spoke j: the halfedge ring_L[j] -> ring_L[j+1] inside ring L
   for (int j = 0; j < n; ++j) {
     s.rings[0][j] = m.to_vertex(c[j]);
     triangles[j] = m.corner_face(c[j]);
+    inner[j] = m.next(c[j]);
   }
-  // 1-layer: the face across edge (ring1[j], ring1[j+1]) of triangle j.
-  for (int j = 0; j < n; ++j) {
-    const int t = m.twin(m.next(c[j]));  // ring1[j+1] -> ring1[j] in the 1-layer quad
-    if (t < 0) return "its 1-link edge " + vtx(s.rings[0][j]) + " - " + vtx(s.rings[0][(j + 1) % n]) +
-                      " is on the boundary";
-    const int f = m.corner_face(t);
-    if (m.face_size(f) != 4)
-      return "face " + std::to_string(f) + " of its 1-layer has " + std::to_string(m.face_size(f)) +
-             " sides, polar structures need quads there";
-    quads1[j] = f;
-    const int r2j = m.corner_vertex(m.next(m.next(t))), r2j1 = m.corner_vertex(m.prev(t));
-    for (const auto& [slot, value] : {std::pair<int, int>{j, r2j}, std::pair<int, int>{(j + 1) % n, r2j1}}) {
-      int& cur = s.rings[1][slot];
-      if (cur >= 0 && cur != value)
-        return "its 1-layer quads do not form a ring (ring-1 " + vtx(s.rings[0][slot]) +
-               " has more than one ring-2 neighbour)";
-      cur = value;
-    }
-  }
-  // 2-layer: the face across edge (ring2[j], ring2[j+1]) of the 1-layer quad j.
-  for (int j = 0; j < n; ++j) {
-    const int t0 = m.twin(m.next(c[j]));
-    const int t = m.twin(m.next(m.next(t0)));  // ring2[j+1] -> ring2[j] in the 2-layer quad
-    if (t < 0) return "it has no 2-layer (only one quad ring): the 1-layer's outer edge " + vtx(s.rings[1][j]) + " - " +
-                      vtx(s.rings[1][(j + 1) % n]) + " is on the boundary";
-    const int f = m.corner_face(t);
-    if (m.face_size(f) != 4)
-      return "face " + std::to_string(f) + " of its 2-layer has " + std::to_string(m.face_size(f)) +
-             " sides, polar structures need quads there";
-    quads2[j] = f;
-    const int r3j = m.corner_vertex(m.next(m.next(t))), r3j1 = m.corner_vertex(m.prev(t));
-    for (const auto& [slot, value] : {std::pair<int, int>{j, r3j}, std::pair<int, int>{(j + 1) % n, r3j1}}) {
-      int& cur = s.rings[2][slot];
-      if (cur >= 0 && cur != value)
-        return "its 2-layer quads do not form a ring (ring-2 " + vtx(s.rings[1][slot]) +
-               " has more than one ring-3 neighbour)";
-      cur = value;
+  // Layer L = 1, 2: the quads across the edges of ring L (ring L - 1 in s.rings), which give
+  // ring L + 1; their outer edges are the next layer's inner ones.
+  for (int L = 1; L <= 2; ++L) {
+    const std::vector<int>& ring = s.rings[L - 1];
+    std::vector<int>& outer = s.rings[L];
+    std::vector<int>& quads = layer_quads[L - 1];
+    quads.assign(n, -1);
+    const std::string layer = std::to_string(L) + "-layer";
+    for (int j = 0; j < n; ++j) {
+      const int t = m.twin(inner[j]);  // ring[j+1] -> ring[j] in the layer's quad
+      if (t < 0) {
+        const std::string edge = vtx(ring[j]) + " - " + vtx(ring[(j + 1) % n]) + " is on the boundary";
+        return L == 1 ? "its 1-link edge " + edge
+                      : "it has no 2-layer (only one quad ring): the 1-layer's outer edge " + edge;
+      }
+      const int f = m.corner_face(t);
+      if (m.face_size(f) != 4)
+        return "face " + std::to_string(f) + " of its " + layer + " has " + std::to_string(m.face_size(f)) +
+               " sides, polar structures need quads there";
+      quads[j] = f;
+      inner[j] = m.next(m.next(t));  // outer[j] -> outer[j+1]
+      for (const auto& [slot, value] : {std::pair<int, int>{j, m.corner_vertex(inner[j])},
+                                        std::pair<int, int>{(j + 1) % n, m.corner_vertex(m.prev(t))}}) {
+        int& cur = outer[slot];
+        if (cur >= 0 && cur != value)
+          return "its " + layer + " quads do not form a ring (ring-" + std::to_string(L) + " " + vtx(ring[slot]) +
+                 " has more than one ring-" + std::to_string(L + 1) + " neighbour)";
+        cur = value;
+      }
     }
   }
   // 1-link and 2-link vertices are interior and 4-valent.
@@ -86,8 +80,8 @@ std::string read_structure(const SubdivLevel& level, int p, PolarStructure& s) {
     }
   }
   s.cap_faces = triangles;
-  s.cap_faces.insert(s.cap_faces.end(), quads1.begin(), quads1.end());
-  s.layer2_faces = quads2;
+  s.cap_faces.insert(s.cap_faces.end(), layer_quads[0].begin(), layer_quads[0].end());
+  s.layer2_faces = layer_quads[1];
   for (const auto& list : {s.cap_faces, s.layer2_faces})
     for (int f : list)
       if (level.face_hole[f]) return "face " + std::to_string(f) + " of the structure is a hole";
