@@ -104,20 +104,22 @@ double deviation_rate(int n) {
 DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
   DeviationReport out;
   out.sample_levels = sample_levels;
-  const SubdivLevel& lk = build.refinement.levels[build.info.level];
-  const PolyMesh& mk = lk.mesh;
   double sum = 0;
   for (size_t fi = 0; fi < build.info.fans.size(); ++fi) {
     const IrregularFan& fan = build.info.fans[fi];
-    // The zone (2 face rings) and a margin of 3 more rings, as a stand-alone cage.
-    const std::vector<std::pair<int, int>> local = face_rings(mk, fan.vertex, 5);  // zone: rings 0, 1
+    const FanPiece& piece = build.fan_pieces.at(static_cast<size_t>(fan.piece));
+    const SubdivLevel& lk = piece.mesh.level;
+    const PolyMesh& mk = lk.mesh;
+    // The zone (2 face rings) and a margin of 3 more rings (the fan's piece of level k_v), as
+    // a stand-alone cage.
+    const std::vector<std::pair<int, int>> local = face_rings(mk, piece.vertex, 5);  // zone: rings 0, 1
     std::unordered_map<int, int> local_vertex;
     MeshInput sub;
     sub.options = lk.options;
     auto local_index = [&](int v) {
       auto [it, inserted] = local_vertex.emplace(v, static_cast<int>(sub.positions.size()));
       if (inserted) {
-        sub.positions.push_back(build.level_positions[v]);
+        sub.positions.push_back(piece.mesh.x[v]);
         if (lk.vertex_sharpness[v] > 0) sub.corners.push_back({it->second, lk.vertex_sharpness[v]});
       }
       return it->second;
@@ -176,7 +178,8 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
         done[v] = 1;
         const V3 q = v3(limit[v]);
         double d = 1e300;
-        for (int c : candidates) d = std::min(d, distance_to_net(&build.level_nets[static_cast<size_t>(c) * 16], q));
+        for (int c : candidates)
+          if (piece.has_net[c]) d = std::min(d, distance_to_net(&piece.nets[static_cast<size_t>(c) * 16], q));
         fd.max = std::max(fd.max, d);
         ++fd.samples;
         sum += d;

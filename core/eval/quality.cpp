@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/util/tolerances.h"
 
 namespace subd2nurbs {
 
@@ -23,14 +24,8 @@ double angle_deg(const Point3& a, const Point3& b) {
   return std::atan2(norm(c), dot(a, b)) * 180.0 / std::acos(-1.0);
 }
 
-/// Level-a face of a patch (from its first level-k quad, climbing the child -> corner chain).
-int coarse_face(const PatchBuild& b, int patch) {
-  const int a = b.info.coarse_level, k = b.info.level;
-  const std::vector<int>& sc = b.info.sub_corners.at(static_cast<size_t>(patch));
-  int f = b.refinement.levels[k].mesh.corner_face(sc.at(0));
-  for (int j = k; j > a; --j) f = b.refinement.levels[j - 1].mesh.corner_face(f);
-  return f;
-}
+/// Level-a face of a patch.
+int coarse_face(const PatchBuild& b, int patch) { return b.coarse_face.at(static_cast<size_t>(patch)); }
 
 /// Closest point on the limit surface near `start` (Gauss-Newton in the start's face,
 /// parameters clamped to [0,1]^2).
@@ -96,7 +91,10 @@ std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b
   if (p.kind != PatchKind::Pccm) return out;
   // Construction Q changes the surface only in the level-k quads next to an irregular corner,
   // 2^-(k-a) of the patch wide: a few rings of samples, halving towards each corner.
-  const int depth = b.info.level - b.info.coarse_level + 1;
+  int zone_level = b.info.coarse_level;
+  for (const PatchLeaf& l : b.leaves.at(static_cast<size_t>(patch)))
+    if (l.zone) zone_level = std::max(zone_level, l.level);
+  const int depth = zone_level - b.info.coarse_level + 1;
   const double w[4] = {0.2, 0.45, 0.7, 0.95};
   for (int m = 1; m <= depth; ++m) {
     const double h = std::ldexp(1.0, -m);
@@ -139,7 +137,11 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
         d.point = evaluate(patch, d.s, d.t).p;
         const LimitSample L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
         d.parametric = norm(sub(d.point, L.p));
-        d.distance = d.parametric > 0 ? std::min(d.parametric, closest_distance(limit, d.limit, d.point)) : 0;
+        // The closest-point distance is at most the same-parameter one; searching for it only
+        // pays where the patch is not the limit itself (Construction Q reparametrizes).
+        d.distance = d.parametric > tolerances::kSameSurface * ps.model_size
+                         ? std::min(d.parametric, closest_distance(limit, d.limit, d.point))
+                         : d.parametric;
         ++q.deviation_samples;
         sum += d.distance;
         psum += d.parametric;

@@ -1,15 +1,19 @@
 #include "core/patch/patch_builder.h"
 
-#include "core/polar/polar_separation.h"
-#include "core/patch/quad_frames.h"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include <Eigen/Core>
-#include <Eigen/Geometry>
+
+#include "core/patch/fan_construction.h"
+#include "core/patch/knot_assembly.h"
+#include "core/patch/quad_frames.h"
+#include "core/patch/regular_net.h"
+#include "core/polar/polar_separation.h"
+#include "core/util/eigen_point.h"
+#include "core/util/tolerances.h"
 
 namespace subd2nurbs {
 
@@ -24,529 +28,288 @@ const char* to_string(FanMode mode) {
   return "?";
 }
 
+
 namespace {
-
-using V3 = Eigen::Vector3d;
-constexpr double kPi = 3.14159265358979323846;
-
-V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
-Point3 pt(const V3& v) { return {v.x(), v.y(), v.z()}; }
 
 using frames::face_net_index;
 using frames::rotation_in_face;
 using frames::step_x;
 using frames::step_y;
 
-// ---- the level-k mesh: sharp edges, vertex rules, fans ------------------------------------
+/// Deepest level any local refinement may reach above the coarse level. Semi-sharp tags below
+/// infinity (10) decay to 0 within 11 levels (Chaikin's averaging within a few more), and
+/// extra levels for a tolerance are bounded by the caller; this only guards against a bug.
+constexpr int kMaxDepth = 30;
 
-struct LevelView {
-  const SubdivLevel& level;
-  const PolyMesh& m;
-  const std::vector<Point3>& x;
+constexpr int kFanRings = 5;   ///< faces kept around a fan's vertex while refining
+constexpr int kFanClear = 3;   ///< rings around it that must be free of semi-sharp tags
 
-  bool sharp(int e) const {
-    return m.is_boundary_edge(e) || level.edge_sharpness[e] >= kInfiniteSharpness;
-  }
-  // The ray along corner c's edge, leaving corner_vertex(c).
-  bool sharp_ray_out(int c) const { return sharp(m.corner_edge(c)); }
-  // The ray along prev(c)'s edge, i.e. the other edge of c's face at corner_vertex(c).
-  bool sharp_ray_in(int c) const { return sharp(m.corner_edge(m.prev(c))); }
-  // Counter-clockwise neighbour face's corner at the same vertex (across the "in" ray).
-  int ccw(int c) const { return sharp_ray_in(c) ? -1 : m.twin(m.prev(c)); }
-  int cw(int c) const { return sharp_ray_out(c) ? -1 : m.next(m.twin(c)); }
+bool semi(float s) { return s > 0.0f && s < static_cast<float>(kInfiniteSharpness); }
 
-  // Faces in the fan (between sharp edges) that contains corner c; -1 if cyclic.
-  int fan_size(int c) const {
-    int n = 1;
-    for (int d = ccw(c); d != -1; d = ccw(d)) {
-      if (d == c) return -1;
-      ++n;
-    }
-    for (int d = cw(c); d != -1; d = cw(d)) ++n;
-    return n;
-  }
-
-  bool regular_corner(int c) const {
-    const int v = m.corner_vertex(c);
-    switch (vertex_rule(level, v)) {
-      case VertexRule::Smooth: return !m.is_boundary_vertex(v) && m.valence(v) == 4;
-      case VertexRule::Crease: return fan_size(c) == 2;
-      case VertexRule::Corner: return fan_size(c) == 1;
-      case VertexRule::Dart: return false;
-    }
-    return false;
-  }
-  V3 X(int v) const { return v3(x[v]); }
-};
-
-// ---- regular patches (MATH.md 6.1 with the phantom points of 1.2) -------------------------
-
-const double kM[4][4] = {{1.0 / 6, 4.0 / 6, 1.0 / 6, 0},
-                         {0, 4.0 / 6, 2.0 / 6, 0},
-                         {0, 2.0 / 6, 4.0 / 6, 0},
-                         {0, 1.0 / 6, 4.0 / 6, 1.0 / 6}};
-
-// Bezier net (face frame) of a quad whose four corners are regular for it.
-void regular_net(const LevelView& L, int f, Point3* net) {
-  const PolyMesh& m = L.m;
-  const int h0 = m.face_begin(f);
-  V3 G[4][4];      // G[x+1][y+1], x, y in -1..2
-  bool have[4][4] = {};
-  auto set = [&](int x, int y, int v) { G[x + 1][y + 1] = L.X(v); have[x + 1][y + 1] = true; };
-  // Corners (0,0), (1,0), (1,1), (0,1).
-  const int cx[4] = {0, 1, 1, 0}, cy[4] = {0, 0, 1, 1};
-  for (int i = 0; i < 4; ++i) set(cx[i], cy[i], m.corner_vertex(h0 + i));
-  // Outer rows across each open side i (edge of corner h_i, from corner i to corner i+1).
-  // In the neighbour across the edge, next(next(t)) is next to corner i, prev(t) to corner i+1.
-  // Outward step of side i: side 0 -> (0,-1), 1 -> (+1,0), 2 -> (0,+1), 3 -> (-1,0).
-  const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
-  bool open[4];
-  for (int i = 0; i < 4; ++i) {
-    const int h = h0 + i;
-    open[i] = !L.sharp(m.corner_edge(h));
-    if (!open[i]) continue;
-    const int t = m.twin(h);
-    const int a = i, b = (i + 1) % 4;
-    set(cx[a] + ox[i], cy[a] + oy[i], m.corner_vertex(m.next(m.next(t))));
-    set(cx[b] + ox[i], cy[b] + oy[i], m.corner_vertex(m.prev(t)));
-  }
-  // Diagonal points at smooth 4-valent corners: two faces around the corner.
-  for (int i = 0; i < 4; ++i) {
-    const int h = h0 + i;
-    const int prev_side = (i + 3) % 4;
-    if (!open[i] || !open[prev_side]) continue;
-    const int opposite = m.twin(m.prev(m.twin(m.prev(h))));  // two faces counter-clockwise
-    set(cx[i] + ox[i] + ox[prev_side], cy[i] + oy[i] + oy[prev_side],
-        m.corner_vertex(m.next(m.next(opposite))));
-  }
-  // Phantom points: first the rows beside the four corners, then the diagonals. A missing
-  // x = -1 or 2 point reflects in x; otherwise (missing y row) it reflects in y.
-  auto phantom = [&](int x, int y) {
-    if (have[x + 1][y + 1]) return;
-    if (x == -1) G[0][y + 1] = 2 * G[1][y + 1] - G[2][y + 1];
-    else if (x == 2) G[3][y + 1] = 2 * G[2][y + 1] - G[1][y + 1];
-    else if (y == -1) G[x + 1][0] = 2 * G[x + 1][1] - G[x + 1][2];
-    else G[x + 1][3] = 2 * G[x + 1][2] - G[x + 1][1];
-    have[x + 1][y + 1] = true;
-  };
-  for (int t = 0; t <= 1; ++t) {
-    phantom(-1, t); phantom(2, t); phantom(t, -1); phantom(t, 2);
-  }
-  for (int x : {-1, 2})
-    for (int y : {-1, 2}) {
-      const bool x_side_sharp = (x == -1) ? !open[3] : !open[1];
-      if (x_side_sharp) {
-        G[x + 1][y + 1] = (x == -1) ? 2 * G[1][y + 1] - G[2][y + 1] : 2 * G[2][y + 1] - G[1][y + 1];
-        have[x + 1][y + 1] = true;
-      } else if (!have[x + 1][y + 1]) {  // the x side is open: reflect across the y side
-        G[x + 1][y + 1] = (y == -1) ? 2 * G[x + 1][1] - G[x + 1][2] : 2 * G[x + 1][2] - G[x + 1][1];
-        have[x + 1][y + 1] = true;
-      }
-    }
-  // B = M G M^T
-  V3 T[4][4];
-  for (int i = 0; i < 4; ++i)
-    for (int b = 0; b < 4; ++b) {
-      T[i][b] = V3::Zero();
-      for (int a = 0; a < 4; ++a) T[i][b] += kM[i][a] * G[a][b];
-    }
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) {
-      V3 s = V3::Zero();
-      for (int b = 0; b < 4; ++b) s += kM[j][b] * T[i][b];
-      net[i * 4 + j] = pt(s);
-    }
+/// A semi-sharp tag on a vertex, or on an edge of a face, within `rings` rings of v.
+bool semi_sharp_near(const SubdivLevel& l, int v, int rings) {
+  const PolyMesh& m = l.mesh;
+  for (int f : face_rings(m, {v}, rings))
+    for (int h = m.face_begin(f); h < m.face_end(f); ++h)
+      if (semi(l.edge_sharpness[m.corner_edge(h)]) || semi(l.vertex_sharpness[m.corner_vertex(h)])) return true;
+  return false;
 }
 
-// ---- fans around irregular vertices (MATH.md 5.3, and the open variant of 5.6) ------------
-
-enum class RayKind : unsigned char {
-  G1,           ///< smooth ray between two sectors: exactly G1
-  Cut,          ///< two sectors, constructed quadratic, no G1 claim (dart's sharp ray, approx.)
-  ExactEnd,     ///< end of an open fan: a sharp edge whose limit curve is known exactly
-};
-
-struct Fan {
-  int v = -1;
-  std::vector<int> sectors;  ///< corner at v of each sector's quad (0,0), counter-clockwise
-  bool cyclic = false;
-  FanMode mode = FanMode::Smooth;
-};
-
-class FanBuilder {
- public:
-  FanBuilder(const LevelView& L, const std::vector<Point3>& limit, std::vector<Point3>& nets)
-      : L_(L), m_(L.m), limit_(limit), nets_(nets) {}
-
-  // Builds the fan's nets; returns the G1 coefficient c and fills ray kinds.
-  double build(const Fan& fan, std::vector<RayKind>& kinds, std::vector<int>& ray_edges);
-
- private:
-  V3& B(int s, int i, int j) { return B_[s][i][j]; }
-  int nS() const { return static_cast<int>(B_.size()); }
-  int nR() const { return cyclic_ ? nS() : nS() + 1; }
-  // Sector owning ray r as its x axis (-1 for the end ray of an open fan).
-  int x_sector(int r) const { return r < nS() ? r : -1; }
-  // Sector owning ray r as its y axis (-1 for ray 0 of an open fan).
-  int y_sector(int r) const { return cyclic_ ? (r + nS() - 1) % nS() : r - 1; }
-  V3 ray(int r, int i) {
-    const int s = x_sector(r);
-    return s >= 0 ? B(s, i, 0) : B(y_sector(r), 0, i);
-  }
-  void set_ray(int r, int i, const V3& p) {
-    if (const int s = x_sector(r); s >= 0) B(s, i, 0) = p;
-    if (const int s = y_sector(r); s >= 0) B(s, 0, i) = p;
-  }
-  void add_to_ray_block(int r, const V3& d);
-
-  const LevelView& L_;
-  const PolyMesh& m_;
-  const std::vector<Point3>& limit_;
-  std::vector<Point3>& nets_;
-  bool cyclic_ = false;
-  std::vector<std::array<std::array<V3, 7>, 7>> B_;
-};
-
-void FanBuilder::add_to_ray_block(int r, const V3& d) {
-  for (int i : {3, 4}) set_ray(r, i, ray(r, i) + d);
-  if (const int s = x_sector(r); s >= 0) { B(s, 3, 1) += d; B(s, 4, 1) += d; }
-  if (const int s = y_sector(r); s >= 0) { B(s, 1, 3) += d; B(s, 1, 4) += d; }
-}
-
-double FanBuilder::build(const Fan& fan, std::vector<RayKind>& kinds, std::vector<int>& ray_edges) {
-  cyclic_ = fan.cyclic;
-  const int ns = static_cast<int>(fan.sectors.size());
-  B_.resize(ns);
-  for (auto& rows : B_)
-    for (auto& row : rows) row.fill(V3::Zero());
-  const int v = fan.v;
-  const int n = m_.valence(v);
-
-  // Step 1: regular quads (1,0), (0,1), (1,1) of every sector, from the level-k nets.
-  std::vector<std::array<int, 4>> quads(ns);  // frame corners of quads (0,0),(1,0),(0,1),(1,1)
-  for (int s = 0; s < ns; ++s) {
-    const int q00 = fan.sectors[s];
-    const int q10 = step_x(m_, q00), q01 = step_y(m_, q00), q11 = step_y(m_, q10);
-    quads[s] = {q00, q10, q01, q11};
-    const int qa[4] = {0, 1, 0, 1}, qb[4] = {0, 0, 1, 1};
-    for (int q = 3; q >= 1; --q) {
-      const int c = quads[s][q];
-      const int f = m_.corner_face(c), r = rotation_in_face(m_, c);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) B(s, 3 * qa[q] + i, 3 * qb[q] + j) = v3(nets_[f * 16 + face_net_index(r, i, j)]);
-    }
-  }
-  const int nr = nR();
-  // Keep one value for the two copies of every two-sided ray.
-  for (int r = 0; r < nr; ++r)
-    if (x_sector(r) >= 0 && y_sector(r) >= 0)
-      for (int i = 3; i <= 6; ++i) B(y_sector(r), 0, i) = B(x_sector(r), i, 0);
-
-  // Ray kinds and their level-k edges.
-  kinds.assign(nr, RayKind::G1);
-  ray_edges.assign(nr, -1);
-  for (int r = 0; r < nr; ++r) {
-    ray_edges[r] = r < ns ? m_.corner_edge(fan.sectors[r]) : m_.corner_edge(m_.prev(fan.sectors[ns - 1]));
-    const bool sharp = L_.sharp(ray_edges[r]);
-    if (!cyclic_ && (r == 0 || r == nr - 1)) kinds[r] = RayKind::ExactEnd;
-    else if (sharp || fan.mode == FanMode::Approximate) kinds[r] = RayKind::Cut;
-  }
-
-  // Step 2: limit data.
-  const V3 p = v3(limit_[v]);
-  const V3 xv = L_.X(v);
-  for (int s = 0; s < ns; ++s) B(s, 0, 0) = p;
-  // Exact end rays: the crease curve is the cubic B-spline of the crease polygon. Its first
-  // Bezier points from the EV are (2v + e)/3 and (v + 2e)/3.
-  for (int r = 0; r < nr; ++r) {
-    if (kinds[r] != RayKind::ExactEnd) continue;
-    const int e = (r == 0) ? m_.to_vertex(fan.sectors[0]) : m_.corner_vertex(m_.prev(fan.sectors[ns - 1]));
-    const V3 xe = L_.X(e);
-    set_ray(r, 1, (2 * xv + xe) / 3);
-    set_ray(r, 2, (xv + 2 * xe) / 3);
-  }
-  std::vector<V3> q2(nr), q1(nr);
-  for (int r = 0; r < nr; ++r) q2[r] = ray(r, 3);
-
-  // Step 3 (closed fans of even valence): vertex enclosure.
-  if (fan.mode == FanMode::Smooth && ns % 2 == 0) {
-    V3 A = V3::Zero();
-    for (int r = 0; r < ns; ++r) A += ((r % 2) ? -1.0 : 1.0) * q2[r];
-    A /= ns;
-    for (int r = 0; r < ns; ++r) add_to_ray_block(r, -((r % 2) ? -1.0 : 1.0) * A);
-    for (int r = 0; r < nr; ++r) q2[r] = ray(r, 3);
-  }
-
-  // Step 4: the tangent oval q1 and the G1 coefficient c.
-  double c = 0;
-  const bool fourier = fan.mode == FanMode::Smooth || fan.mode == FanMode::Dart ||
-                       (fan.mode == FanMode::Approximate && cyclic_);
-  if (fourier) {
-    // Approximate closed fans (valence 2, cone points) take the same tangent oval without the
-    // G1 claim: at valence 2 it makes the two corners degenerate (collinear rays) like the
-    // limit's own parametrization, instead of folding one sector over the other.
-    c = fan.mode == FanMode::Approximate ? 0.0 : std::cos(2 * kPi / ns);
-    V3 E1 = V3::Zero(), E2 = V3::Zero();
-    for (int r = 0; r < ns; ++r) {
-      E1 += std::cos(2 * kPi * r / ns) * q2[r];
-      E2 += std::sin(2 * kPi * r / ns) * q2[r];
-    }
-    E1 /= ns;
-    E2 /= ns;
-    if (fan.mode == FanMode::Smooth) {
-      // Limit normal from the tangent masks (MATH.md 1.4).
-      const double cn = std::cos(2 * kPi / ns), An = 1 + cn + std::cos(kPi / ns) * std::sqrt(2 * (9 + cn));
-      V3 T1 = V3::Zero(), T2 = V3::Zero();
-      for (int r = 0; r < ns; ++r) {
-        const int h = fan.sectors[r];
-        const V3 e = L_.X(m_.to_vertex(h)) - xv, d = L_.X(m_.corner_vertex(m_.next(m_.next(h)))) - xv;
-        const double t0 = 2 * kPi * r / ns, t1 = 2 * kPi * (r + 1) / ns;
-        T1 += An * std::cos(t0) * e + (std::cos(t0) + std::cos(t1)) * d;
-        T2 += An * std::sin(t0) * e + (std::sin(t0) + std::sin(t1)) * d;
-      }
-      const V3 N = T1.cross(T2).normalized();
-      E1 -= E1.dot(N) * N;
-      E2 -= E2.dot(N) * N;
-    }
-    for (int r = 0; r < nr; ++r)
-      q1[r] = p + std::cos(2 * kPi * r / ns) * E1 + std::sin(2 * kPi * r / ns) * E2;
-  } else if (fan.mode == FanMode::Crease && ns >= 2) {
-    const int k = ns;
-    const double psi = kPi / k;
-    c = std::cos(psi);
-    const V3 E1 = 1.5 * (ray(0, 1) - p);
-    // Exact cross-boundary tangent for the standard rules (MATH.md 1.5), to fix the plane.
-    const double c2k = std::cos(2 * kPi / (2 * k));
-    const double A = 1 + c2k + std::cos(kPi / (2 * k)) * std::sqrt(2 * (9 + c2k));
-    const double lam = (5 + c2k + std::cos(kPi / (2 * k)) * std::sqrt(2 * (9 + c2k))) / 16;
-    V3 t2 = V3::Zero();
-    double Se = 0, Sd = 0;
-    for (int i = 0; i < k; ++i) {
-      const int h = fan.sectors[i];
-      if (i >= 1) {
-        const double w = A * std::sin(i * psi);
-        t2 += w * (L_.X(m_.to_vertex(h)) - xv);
-        Se += w;
-      }
-      const double w = std::sin(i * psi) + std::sin((i + 1) * psi);
-      t2 += w * (L_.X(m_.corner_vertex(m_.next(m_.next(h)))) - xv);
-      Sd += w;
-    }
-    const double beta = (A * std::sin(psi) / 2 + 2 * std::sin(psi) - Se - Sd) / (8 * lam - 2);
-    t2 += beta * (L_.X(m_.to_vertex(fan.sectors[0])) - xv);
-    t2 += beta * (L_.X(m_.corner_vertex(m_.prev(fan.sectors[k - 1]))) - xv);
-    const V3 N = E1.cross(t2).normalized();
-    // E2: least-squares fit of the interior rays' targets (p + q2)/2.
-    V3 num = V3::Zero();
-    double den = 0;
-    for (int r = 1; r < k; ++r) {
-      const double sr = std::sin(r * psi);
-      num += sr * ((p + q2[r]) / 2 - p - std::cos(r * psi) * E1);
-      den += sr * sr;
-    }
-    V3 E2 = num / den;
-    E2 -= E2.dot(N) * N;
-    for (int r = 0; r < nr; ++r) q1[r] = p + std::cos(r * psi) * E1 + std::sin(r * psi) * E2;
-  } else if (fan.mode == FanMode::Corner) {
-    const int k = ns;
-    const double psi = kPi / (2 * k);
-    c = std::cos(psi);
-    const V3 a = 1.5 * (ray(0, 1) - p), b = 1.5 * (ray(k, 1) - p);
-    for (int r = 0; r < nr; ++r)
-      q1[r] = p + (std::sin((k - r) * psi) * a + std::sin(r * psi) * b) / std::sin(k * psi);
-  } else {
-    for (int r = 0; r < nr; ++r) q1[r] = (p + q2[r]) / 2;
-  }
-
-  // Steps 5 and 6: first edge segment = degree-raised quadratic (p, q1, q2), C1 at q2.
-  std::vector<V3> b1(nr), b2(nr);
-  for (int r = 0; r < nr; ++r) {
-    if (kinds[r] == RayKind::ExactEnd) {
-      b1[r] = ray(r, 1);
-      b2[r] = ray(r, 2);
-      continue;
-    }
-    b1[r] = (p + 2 * q1[r]) / 3;
-    b2[r] = (2 * q1[r] + q2[r]) / 3;
-    set_ray(r, 1, b1[r]);
-    set_ray(r, 2, b2[r]);
-    const V3 b4 = 2 * q2[r] - b2[r];
-    const V3 delta = b4 - ray(r, 4);
-    set_ray(r, 4, b4);
-    if (const int s = x_sector(r); s >= 0) B(s, 4, 1) += delta;
-    if (const int s = y_sector(r); s >= 0) B(s, 1, 4) += delta;
-  }
-
-  // Step 7: twists. T_s + T_{s-1} = R_r across every G1 ray r between sectors s-1 and s.
-  std::vector<V3> target(ns), T(ns);
-  for (int s = 0; s < ns; ++s) {
-    const int h = fan.sectors[s];
-    target[s] = (n * xv + 2 * L_.X(m_.to_vertex(h)) + 2 * L_.X(m_.corner_vertex(m_.prev(h))) +
-                 L_.X(m_.corner_vertex(m_.next(m_.next(h))))) / (n + 5);
-  }
-  auto R = [&](int r) { return V3(2 * b1[r] + (4 * c / 9) * (q2[r] - q1[r])); };
-  const bool closed_chain = cyclic_ && std::all_of(kinds.begin(), kinds.end(), [](RayKind k) { return k == RayKind::G1; });
-  if (closed_chain) {
-    if (ns % 2 == 1) {
-      for (int s = 0; s < ns; ++s) {
-        V3 sum = V3::Zero();
-        for (int r = 0; r < ns; ++r) sum += ((r % 2) ? -1.0 : 1.0) * R(((s - r) % ns + ns) % ns);
-        T[s] = sum / 2;
-      }
-    } else {
-      T[0] = V3::Zero();
-      for (int s = 1; s < ns; ++s) T[s] = R(s) - T[s - 1];
-      V3 w = V3::Zero();
-      for (int s = 0; s < ns; ++s) w += ((s % 2) ? -1.0 : 1.0) * (target[s] - T[s]);
-      w /= ns;
-      for (int s = 0; s < ns; ++s) T[s] += ((s % 2) ? -1.0 : 1.0) * w;
-    }
-  } else {
-    // Open chains: maximal runs of sectors joined by G1 rays. Within a run starting at sector
-    // s0, T_s = (-1)^(s-s0) T_s0 + C_s; T_s0 minimises the distance to the targets.
-    // Find a ray that is not G1 to start from (there is one: the fan is open or cut).
-    int start = 0;
-    while (start < nr && kinds[start] == RayKind::G1) ++start;
-    int s = cyclic_ ? start % ns : 0;
-    int done = 0;
-    while (done < ns) {
-      std::vector<int> run{s};
-      std::vector<V3> C{V3::Zero()};
-      for (;;) {
-        const int next_s = cyclic_ ? (run.back() + 1) % ns : run.back() + 1;
-        const int r = cyclic_ ? next_s : run.back() + 1;  // ray between run.back() and next_s
-        if (static_cast<int>(run.size()) + done >= ns || next_s >= ns || kinds[r] != RayKind::G1) break;
-        C.push_back(R(r) - C.back());
-        run.push_back(next_s);
-      }
-      V3 t0 = V3::Zero();
-      for (size_t i = 0; i < run.size(); ++i) t0 += ((i % 2) ? -1.0 : 1.0) * (target[run[i]] - C[i]);
-      t0 /= static_cast<double>(run.size());
-      for (size_t i = 0; i < run.size(); ++i) T[run[i]] = ((i % 2) ? -1.0 : 1.0) * t0 + C[i];
-      done += static_cast<int>(run.size());
-      s = cyclic_ ? (run.back() + 1) % ns : run.back() + 1;
-    }
-  }
-  for (int s2 = 0; s2 < ns; ++s2) B(s2, 1, 1) = T[s2];
-
-  // Step 8: the second cross row beside every ray.
-  for (int r = 0; r < nr; ++r) {
-    const int sx = x_sector(r), sy = y_sector(r);
-    if (kinds[r] == RayKind::G1) {
-      const V3 X = 2 * B(sx, 3, 1) - B(sx, 4, 1);
-      const V3 Y = 2 * B(sy, 1, 3) - B(sy, 1, 4);
-      B(sx, 2, 1) = b2[r] + (X - Y) / 2;
-      B(sy, 1, 2) = b2[r] - (X - Y) / 2;
-      B(sx, 3, 1) = (B(sx, 2, 1) + B(sx, 4, 1)) / 2;
-      B(sy, 1, 3) = (B(sy, 1, 2) + B(sy, 1, 4)) / 2;
-    } else {
-      if (sx >= 0) B(sx, 2, 1) = 2 * B(sx, 3, 1) - B(sx, 4, 1);
-      if (sy >= 0) B(sy, 1, 2) = 2 * B(sy, 1, 3) - B(sy, 1, 4);
-    }
-  }
-  // Step 9: the far corner of the EV patch.
-  for (int s2 = 0; s2 < ns; ++s2) B(s2, 2, 2) = 2 * B(s2, 2, 3) - B(s2, 2, 4);
-
-  // Step 10: write quads (0,0), (1,0), (0,1) back into the level-k nets.
-  for (int s2 = 0; s2 < ns; ++s2) {
-    const int qa[3] = {0, 1, 0}, qb[3] = {0, 0, 1};
-    for (int q = 0; q < 3; ++q) {
-      const int cq = quads[s2][q];
-      const int f = m_.corner_face(cq), r = rotation_in_face(m_, cq);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) nets_[f * 16 + face_net_index(r, i, j)] = pt(B(s2, 3 * qa[q] + i, 3 * qb[q] + j));
-    }
-  }
-  return c;
-}
-
-// Fans of irregular vertex v: maximal runs of faces between sharp rays (one cyclic fan if it
-// has no sharp ray). Fans that are regular for all their faces are skipped.
-std::vector<Fan> fans_at(const LevelView& L, int v) {
-  const PolyMesh& m = L.m;
-  std::vector<Fan> out;
-  const int* cs = m.vertex_corners(v);
-  const int nf = m.vertex_face_count(v);
-  if (nf == 0) return out;
-  const VertexRule rule = vertex_rule(L.level, v);
-  int sharp_start = -1;
-  for (int i = 0; i < nf; ++i)
-    if (L.sharp_ray_out(cs[i])) { sharp_start = i; break; }
-  if (sharp_start < 0) {
-    Fan fan{v, {}, true, FanMode::Smooth};
-    for (int i = 0; i < nf; ++i) fan.sectors.push_back(cs[i]);
-    const int n = nf;
-    fan.mode = (rule == VertexRule::Smooth && n >= 3) ? FanMode::Smooth : FanMode::Approximate;
-    if (rule == VertexRule::Smooth && n == 4) return out;  // regular
-    out.push_back(fan);
-    return out;
-  }
-  if (rule == VertexRule::Dart) {
-    Fan fan{v, {}, true, nf >= 3 ? FanMode::Dart : FanMode::Approximate};
-    for (int i = 0; i < nf; ++i) fan.sectors.push_back(cs[(sharp_start + i) % nf]);
-    out.push_back(fan);
-    return out;
-  }
-  // Open fans: start at every corner whose out ray is sharp.
-  for (int i = 0; i < nf; ++i) {
-    const int c0 = cs[(sharp_start + i) % nf];
-    if (!L.sharp_ray_out(c0)) continue;
-    Fan fan{v, {c0}, false, FanMode::Approximate};
-    for (int d = L.ccw(c0); d != -1; d = L.ccw(d)) fan.sectors.push_back(d);
-    const int k = static_cast<int>(fan.sectors.size());
-    if (rule == VertexRule::Crease) {
-      if (k == 2) continue;  // regular crease side
-      fan.mode = FanMode::Crease;
-    } else if (rule == VertexRule::Corner) {
-      if (k == 1) continue;  // regular corner
-      fan.mode = FanMode::Corner;
-    }
-    out.push_back(fan);
+/// Cuts the faces within `rings` rings of `seeds` out of `piece`; `follow` are corners of the
+/// piece, returned as the same corners of the new piece.
+LocalMesh recut(const LocalMesh& piece, const std::vector<int>& seeds, int rings, std::vector<int>& follow) {
+  const PolyMesh& m = piece.level.mesh;
+  const std::vector<int> faces = face_rings(m, seeds, rings);
+  LocalMesh out = cut_out(piece, faces);
+  for (int& c : follow) {
+    const int f = m.corner_face(c);
+    const auto it = std::lower_bound(faces.begin(), faces.end(), f);
+    if (it == faces.end() || *it != f) throw std::logic_error("patch builder: a needed face fell out of its piece");
+    c = out.level.mesh.face_begin(static_cast<int>(it - faces.begin())) + (c - m.face_begin(f));
   }
   return out;
 }
 
-// ---- merging the level-k Bezier nets of a coarse quad into one B-spline (MATH.md 5.4) ------
+/// The zone of one sector of a fan: the 7 x 7 Bezier points of its four level-k_v quads in
+/// the sector's frame (x along the coarse face's edge leaving the vertex).
+struct Zone {
+  int level = 0;
+  std::array<Point3, 49> net{};
+};
 
-// Knot vector on [0,1] with N uniform spans; interior multiplicity 2 at 1/N, 2/N if low,
-// at (N-1)/N, (N-2)/N if high, else 1. Ends clamped (multiplicity 4).
-KnotVector coarse_knots(int N, bool low, bool high) {
-  KnotVector kv;
-  for (int i = 0; i <= N; ++i) {
-    kv.knots.push_back(static_cast<double>(i) / N);
-    int mult = (i == 0 || i == N) ? 4 : 1;
-    if (i > 0 && i < N && ((low && i <= 2) || (high && i >= N - 2))) mult = 2;
-    kv.mults.push_back(mult);
+/// Zone points (sector frame, x, y in 0..6) seen from corner i of the coarse face: patch
+/// indices (I, J) with I along u.
+std::pair<int, int> zone_to_patch(int i, int x, int y) {
+  switch (i) {
+    case 0: return {x, y};
+    case 1: return {6 - y, x};
+    case 2: return {6 - x, 6 - y};
+    default: return {y, 6 - x};
   }
-  return kv;
 }
 
-// For pole i of a clamped cubic with flat knots U and N uniform spans of width 1/N: the span
-// whose polynomial piece is used, and the blossom weights on that span's 4 Bezier points.
-struct PoleFromBezier {
-  int span;
-  double w[4];
+struct RayRecord {
+  int fan = -1;
+  Continuity continuity = Continuity::C2;
+  double c = 0;
 };
-std::vector<PoleFromBezier> blossom_rows(const std::vector<double>& U, int N) {
-  const int np = static_cast<int>(U.size()) - 4;
-  std::vector<PoleFromBezier> rows(np);
-  for (int i = 0; i < np; ++i) {
-    const double a1 = U[i + 1], a2 = U[i + 2], a3 = U[i + 3];
-    int span = std::min(N - 1, static_cast<int>(std::floor(a2 * N + 0.5)));
-    if (static_cast<double>(span + 1) / N > U[i + 4] + 1e-12) --span;  // keep inside the support
-    span = std::max(0, span);
-    const double lo = static_cast<double>(span) / N;
-    double w[4] = {1, 0, 0, 0};
-    int deg = 0;
-    for (double a : {a1, a2, a3}) {
-      const double s = (a - lo) * N;
-      for (int q = deg + 1; q >= 0; --q) w[q] = (q <= deg ? w[q] * (1 - s) : 0) + (q > 0 ? w[q - 1] * s : 0);
-      ++deg;
-    }
-    rows[i].span = span;
-    std::copy(w, w + 4, rows[i].w);
+
+/// Everything the fans leave for the coarse quads.
+struct FanResults {
+  std::vector<std::array<int, 4>> zone_of_corner;  ///< per level-a face and corner: index into zones
+  std::vector<Zone> zones;
+  std::vector<RayRecord> rays;  ///< per level-a edge and end: 2 e + (edge_vertex(e, 0) == v ? 0 : 1)
+};
+
+/// Builds the fans of coarse vertex v (if it has any once its semi-sharp tags decay).
+void build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, int min_level, int a,
+                   const std::vector<char>& capped_a, PatchBuild& out, FanResults& res) {
+  const PolyMesh& ma = la.mesh;
+  std::vector<int> follow;
+  LocalMesh piece = cut_out(la, xa, face_rings(ma, {v}, kFanRings));
+  auto local_vertex = [&](const LocalMesh& p) {
+    for (int u = 0; u < p.level.mesh.num_vertices(); ++u)
+      if (p.origin_vertex[u] == v && p.level.mesh.vertex_face_count(u) == ma.vertex_face_count(v)) return u;
+    throw std::logic_error("patch builder: fan vertex lost in its piece");
+  };
+  int lv = local_vertex(piece);
+  int level = a;
+  while (level < min_level || semi_sharp_near(piece.level, lv, kFanClear)) {
+    if (level - a >= kMaxDepth) throw std::logic_error("patch builder: semi-sharp tags do not decay at vertex " + std::to_string(v));
+    const LocalMesh refined = refine_piece(piece);
+    piece = recut(refined, {lv}, kFanRings, follow);  // lv: vertex-child keeps its index
+    lv = local_vertex(piece);
+    ++level;
   }
-  return rows;
+  const LevelView L{piece.level, piece.level.mesh, piece.x};
+  std::vector<Fan> fans = fans_at(L, lv);
+  // Fans inside a polar cap (the pole itself) make no Catmull-Clark patch.
+  fans.erase(std::remove_if(fans.begin(), fans.end(),
+                            [&](const Fan& f) {
+                              for (int c : f.sectors)
+                                if (!capped_a[piece.origin_face[piece.level.mesh.corner_face(c)]]) return false;
+                              return true;
+                            }),
+             fans.end());
+  if (fans.empty()) return;
+  const PolyMesh& m = piece.level.mesh;
+  FanPiece fp;
+  fp.vertex = lv;
+  fp.level = level;
+  fp.nets.assign(static_cast<size_t>(m.num_faces()) * 16, Point3{});
+  fp.has_net.assign(m.num_faces(), 0);
+  for (int f : face_rings(m, {lv}, kFanClear))
+    if (is_regular_leaf(L, f)) {
+      regular_net(L, f, &fp.nets[static_cast<size_t>(f) * 16]);
+      fp.has_net[f] = 1;
+    }
+  const Point3 limit = vertex_limit(piece.level, piece.x, lv);
+  FanBuilder fb(L, limit, fp.nets);
+  const int piece_index = static_cast<int>(out.fan_pieces.size());
+  for (const Fan& fan : fans) {
+    std::vector<RayKind> kinds;
+    std::vector<int> ray_edges;
+    IrregularFan rec;
+    rec.vertex = v;
+    rec.base_vertex = a == 0 ? v : (v < out.refinement.levels[0].mesh.num_vertices() ? v : -1);
+    rec.mode = fan.mode;
+    rec.valence = m.valence(lv);
+    rec.sectors = static_cast<int>(fan.sectors.size());
+    rec.c = fb.build(fan, kinds, ray_edges);
+    rec.level = level;
+    rec.piece = piece_index;
+    out.info.fans.push_back(rec);
+    const int fan_index = static_cast<int>(out.info.fans.size()) - 1;
+    const int ns = static_cast<int>(fan.sectors.size());
+    // Zones, keyed by coarse face and corner.
+    std::vector<std::pair<int, int>> face_corner(ns);
+    for (int s = 0; s < ns; ++s) {
+      const int c00 = fan.sectors[s];
+      const int F = piece.origin_face[m.corner_face(c00)];
+      int i = 0;
+      while (i < 4 && ma.corner_vertex(ma.face_begin(F) + i) != v) ++i;
+      if (i == 4) throw std::logic_error("patch builder: a fan sector outside its coarse face");
+      face_corner[s] = {F, i};
+      Zone z;
+      z.level = level;
+      const int q[4] = {c00, step_x(m, c00), step_y(m, c00), step_y(m, step_x(m, c00))};
+      const int qa[4] = {0, 1, 0, 1}, qb[4] = {0, 0, 1, 1};
+      for (int k = 0; k < 4; ++k) {
+        const int f = m.corner_face(q[k]), r = rotation_in_face(m, q[k]);
+        fp.has_net[f] = 1;
+        for (int x = 0; x < 4; ++x)
+          for (int y = 0; y < 4; ++y) z.net[(3 * qa[k] + x) * 7 + 3 * qb[k] + y] = fp.nets[static_cast<size_t>(f) * 16 + face_net_index(r, x, y)];
+      }
+      res.zone_of_corner[F][i] = static_cast<int>(res.zones.size());
+      res.zones.push_back(z);
+    }
+    // Rays: ray r < ns is sector r's x axis (edge i of its coarse face), the end ray of an
+    // open fan is the last sector's y axis (the edge before corner i).
+    for (size_t r = 0; r < kinds.size(); ++r) {
+      const bool end = static_cast<int>(r) == ns;
+      const auto [F, i] = face_corner[end ? ns - 1 : r];
+      const int corner = ma.face_begin(F) + i;
+      const int e = ma.corner_edge(end ? ma.prev(corner) : corner);
+      RayRecord& rr = res.rays[2 * e + (ma.edge_vertex(e, 0) == v ? 0 : 1)];
+      rr = {fan_index, kinds[r] == RayKind::G1 ? Continuity::G1 : Continuity::C0, rec.c};
+    }
+  }
+  fp.mesh = std::move(piece);
+  out.fan_pieces.push_back(std::move(fp));
+  out.info.level = std::max(out.info.level, level);
+}
+
+/// An active sub-quad of a coarse face: its frame corner in the current piece (x along u) and
+/// its square in the patch domain.
+struct SubQuad {
+  int corner;
+  double u0, v0, size;
+};
+
+/// The leaves of coarse face F (a quad), refining locally where they are not yet one bicubic.
+std::vector<PatchLeaf> leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a,
+                                 const FanResults& fans, int& deepest) {
+  const PolyMesh& ma = la.mesh;
+  std::vector<PatchLeaf> leaves;
+  auto emit_regular = [&](const LevelView& L, int c, const SubQuad& q, int level) {
+    const int f = L.m.corner_face(c), r = rotation_in_face(L.m, c);
+    Point3 net[16];
+    regular_net(L, f, net);
+    PatchLeaf leaf;
+    leaf.u0 = q.u0;
+    leaf.v0 = q.v0;
+    leaf.size = q.size;
+    leaf.level = level;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) leaf.net[i * 4 + j] = net[face_net_index(r, i, j)];
+    leaves.push_back(leaf);
+  };
+  {  // Most coarse quads are one bicubic already.
+    const LevelView L{la, ma, xa};
+    if (is_regular_leaf(L, F)) {
+      emit_regular(L, ma.face_begin(F), {ma.face_begin(F), 0, 0, 1}, a);
+      return leaves;
+    }
+  }
+  // The corner of F a sub-quad touches (-1 if none); corner i sits at (cu, cv).
+  auto touched_corner = [](const SubQuad& q) {
+    const bool lo_u = q.u0 == 0, hi_u = q.u0 + q.size == 1, lo_v = q.v0 == 0, hi_v = q.v0 + q.size == 1;
+    if (lo_u && lo_v) return 0;
+    if (hi_u && lo_v) return 1;
+    if (hi_u && hi_v) return 2;
+    if (lo_u && hi_v) return 3;
+    return -1;
+  };
+  std::vector<int> follow;
+  const std::vector<int> first_faces = face_rings(ma, vertices_of(ma, {F}), 2);
+  LocalMesh piece = cut_out(la, xa, first_faces);
+  const int F_in_piece = static_cast<int>(std::lower_bound(first_faces.begin(), first_faces.end(), F) - first_faces.begin());
+  std::vector<SubQuad> active{{piece.level.mesh.face_begin(F_in_piece), 0, 0, 1}};
+  for (int level = a;; ++level) {
+    if (level - a > kMaxDepth) throw std::logic_error("patch builder: coarse face " + std::to_string(F) + " does not resolve");
+    const LevelView L{piece.level, piece.level.mesh, piece.x};
+    std::vector<SubQuad> split;
+    for (const SubQuad& q : active) {
+      const int ci = touched_corner(q);
+      const int zi = ci >= 0 ? fans.zone_of_corner[F][ci] : -1;
+      if (zi >= 0) {
+        const Zone& z = fans.zones[zi];
+        if (level == z.level - 1) {
+          const double h = q.size / 2;
+          for (int qa = 0; qa < 2; ++qa)
+            for (int qb = 0; qb < 2; ++qb) {
+              PatchLeaf leaf;
+              leaf.u0 = q.u0 + qa * h;
+              leaf.v0 = q.v0 + qb * h;
+              leaf.size = h;
+              leaf.level = z.level;
+              leaf.zone = true;
+              for (int x = 0; x < 7; ++x)
+                for (int y = 0; y < 7; ++y) {
+                  const auto [I, J] = zone_to_patch(ci, x, y);
+                  if (I >= 3 * qa && I <= 3 * qa + 3 && J >= 3 * qb && J <= 3 * qb + 3)
+                    leaf.net[(I - 3 * qa) * 4 + (J - 3 * qb)] = z.net[x * 7 + y];
+                }
+              leaves.push_back(leaf);
+            }
+          deepest = std::max(deepest, z.level);
+          continue;
+        }
+        split.push_back(q);
+        continue;
+      }
+      if (is_regular_leaf(L, L.m.corner_face(q.corner))) {
+        emit_regular(L, q.corner, q, level);
+        deepest = std::max(deepest, level);
+      } else {
+        split.push_back(q);
+      }
+    }
+    if (split.empty()) break;
+    // Refine the piece and keep the 2-ring of the children.
+    const PolyMesh& mp = piece.level.mesh;
+    const LocalMesh refined = refine_piece(piece);
+    const PolyMesh& mc = refined.level.mesh;
+    const int dx[4] = {0, 1, 1, 0}, dy[4] = {0, 0, 1, 1};
+    std::vector<SubQuad> children;
+    follow.clear();
+    for (const SubQuad& q : split) {
+      const int P = mp.corner_face(q.corner), r = rotation_in_face(mp, q.corner);
+      const double h = q.size / 2;
+      for (int j = 0; j < 4; ++j) {
+        const int child_face = mp.face_begin(P) + (r + j) % mp.face_size(P);
+        const int child_corner = mc.face_begin(child_face) + (4 - j) % 4;
+        children.push_back({child_corner, q.u0 + dx[j] * h, q.v0 + dy[j] * h, h});
+        follow.push_back(child_corner);
+      }
+    }
+    std::vector<int> child_faces;
+    for (int c : follow) child_faces.push_back(mc.corner_face(c));
+    piece = recut(refined, vertices_of(mc, child_faces), 2, follow);
+    for (size_t i = 0; i < children.size(); ++i) children[i].corner = follow[i];
+    active.swap(children);
+  }
+  return leaves;
 }
 
 KnotVector reversed(const KnotVector& kv) {
@@ -562,10 +325,10 @@ KnotVector reversed(const KnotVector& kv) {
 
 /// The model size: the bounding-box diagonal of the cage's points (not empty).
 double bounding_diagonal(const std::vector<Point3>& positions) {
-  V3 lo = v3(positions[0]), hi = lo;
+  Eigen::Vector3d lo = to_eigen(positions[0]), hi = lo;
   for (const Point3& q : positions) {
-    lo = lo.cwiseMin(v3(q));
-    hi = hi.cwiseMax(v3(q));
+    lo = lo.cwiseMin(to_eigen(q));
+    hi = hi.cwiseMax(to_eigen(q));
   }
   return (hi - lo).norm();
 }
@@ -606,6 +369,7 @@ bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point
   return true;
 }
 
+
 }  // namespace
 
 PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -633,158 +397,86 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   bool quads = true;
   for (int f = 0; f < base.mesh.num_faces(); ++f)
     quads = quads && (cap_face[f] || base.mesh.face_size(f) == 4);  // holes too: as before
-  info.coarse_level = quads ? 0 : 1;
-  int k = info.coarse_level + 2 + std::max(0, options.extra_levels);
+  const int a = quads ? 0 : 1;
+  info.coarse_level = a;
+  info.level = a;
+  info.min_fan_level = a + 2 + std::max(0, options.extra_levels);
 
-  // Refine until level k is reached and no semi-sharp sharpness is left.
-  auto semi_sharp_left = [](const SubdivLevel& l) {
-    for (float s : l.edge_sharpness) if (s > 0 && s < kInfiniteSharpness) return true;
-    for (float s : l.vertex_sharpness) if (s > 0 && s < kInfiniteSharpness) return true;
-    return false;
-  };
+  // The coarse level: the cage, or its first Catmull-Clark step.
   out.refinement.levels.push_back(base);
-  std::vector<Point3> x = positions;
-  const int k_cap = std::max(k, info.coarse_level + std::max(2, options.max_levels_above_coarse));
-  for (int lvl = 0; lvl < k || (lvl < k_cap && semi_sharp_left(out.refinement.levels.back())); ++lvl) {
-    RefinementStep step = refine_once(out.refinement.levels.back());
+  out.cage_positions = positions;
+  out.coarse_positions = positions;
+  std::vector<char> capped_a = cap_face;
+  if (a == 1) {
+    RefinementStep step = refine_once(base);
     std::vector<Point3> y;
-    step.stencils.apply(x, y);
-    x.swap(y);
+    step.stencils.apply(positions, y);
+    out.coarse_positions.swap(y);
+    const PolyMesh& m0 = base.mesh;
+    capped_a.assign(m0.num_corners(), 0);
+    for (int h = 0; h < m0.num_corners(); ++h) capped_a[h] = cap_face[m0.corner_face(h)];  // child face h of corner h
     out.refinement.levels.push_back(std::move(step.child));
     out.refinement.steps.push_back(std::move(step.stencils));
   }
-  k = static_cast<int>(out.refinement.levels.size()) - 1;
-  info.level = k;
-  {  // At the cap, what is still semi-sharp becomes a sharp crease.
-    SubdivLevel& last = out.refinement.levels.back();
-    for (float& s : last.edge_sharpness)
-      if (s > 0 && s < kInfiniteSharpness) { s = static_cast<float>(kInfiniteSharpness); ++info.sharpened_edges; }
-    for (float& s : last.vertex_sharpness)
-      if (s > 0 && s < kInfiniteSharpness) { s = static_cast<float>(kInfiniteSharpness); ++info.sharpened_vertices; }
-  }
-  const int a = info.coarse_level, d = k - a, N = 1 << d;
-  std::vector<char> capped_a;  // level-a faces inside polar caps
-  const SubdivLevel& lk = out.refinement.levels[k];
-  const PolyMesh& mk = lk.mesh;
-  out.level_positions = x;
-  LevelView L{lk, mk, out.level_positions};
-
-  // Level-k faces inside polar caps (level t+1 face h is the child of level-t corner h).
-  std::vector<char> capped = cap_face;
-  for (int t = 0; t < k; ++t) {
-    const PolyMesh& mt = out.refinement.levels[t].mesh;
-    std::vector<char> next(mt.num_corners());
-    for (int h = 0; h < mt.num_corners(); ++h) next[h] = capped[mt.corner_face(h)];
-    capped.swap(next);
-    if (t + 1 == a) capped_a = capped;
-  }
-  if (a == 0) capped_a = cap_face;
-
-  // Limit positions of level-k vertices (closed-form masks: nothing semi-sharp is left).
-  std::vector<Point3> limit;
-  limit_stencils(lk).apply(out.level_positions, limit);
-
-  // Regular nets.
-  std::vector<Point3>& nets = out.level_nets;
-  nets.assign(static_cast<size_t>(mk.num_faces()) * 16, Point3{});
-  std::vector<char> zone(mk.num_faces(), 0);  // quad (0,0) of a fan
-  for (int f = 0; f < mk.num_faces(); ++f) {
-    bool regular = true;
-    for (int h = mk.face_begin(f); h < mk.face_end(f); ++h) regular = regular && L.regular_corner(h);
-    if (regular) regular_net(L, f, &nets[static_cast<size_t>(f) * 16]);
-    else zone[f] = 1;
-  }
-  // Fans at irregular vertices (all are children of level-a vertices, 4 apart at level k).
-  // What each fan says of its rays, per level-k edge. A sharp ray between two fans of one
-  // vertex is recorded twice (C0 both times); every other ray belongs to one fan.
-  struct RayRecord {
-    int fan = -1;
-    Continuity continuity = Continuity::C2;
-    double c = 0;
-  };
-  std::vector<RayRecord> ray_of_edge(mk.num_edges());
-  std::vector<char> covered(mk.num_faces(), 0);
-  FanBuilder fb(L, limit, nets);
-  const int va = out.refinement.levels[a].mesh.num_vertices();
-  for (int v = 0; v < va; ++v) {
-    for (const Fan& fan : fans_at(L, v)) {
-      bool inside_cap = true;  // the pole of a polar cap: no Catmull-Clark patch there
-      for (int c : fan.sectors) inside_cap = inside_cap && capped[mk.corner_face(c)];
-      if (inside_cap) continue;
-      std::vector<RayKind> kinds;
-      std::vector<int> ray_edges;
-      IrregularFan rec;
-      rec.vertex = v;
-      rec.base_vertex = v < base.mesh.num_vertices() ? v : -1;
-      rec.mode = fan.mode;
-      rec.valence = mk.valence(v);
-      rec.sectors = static_cast<int>(fan.sectors.size());
-      rec.c = fb.build(fan, kinds, ray_edges);
-      info.fans.push_back(rec);
-      for (int c : fan.sectors) covered[mk.corner_face(c)] = 1;
-      for (size_t r = 0; r < kinds.size(); ++r)
-        ray_of_edge[ray_edges[r]] = {static_cast<int>(info.fans.size()) - 1,
-                                     kinds[r] == RayKind::G1 ? Continuity::G1 : Continuity::C0, rec.c};
-    }
-  }
-  for (int f = 0; f < mk.num_faces(); ++f)
-    if (zone[f] && !covered[f] && !capped[f])
-      throw std::logic_error("patch builder: level-" + std::to_string(k) + " face " + std::to_string(f) +
-                             " has an irregular corner that no fan covers");
-
-  // Coarse quads: the grid of level-k frame corners inside each, by following child faces.
   const SubdivLevel& la = out.refinement.levels[a];
   const PolyMesh& ma = la.mesh;
+  const std::vector<Point3>& xa = out.coarse_positions;
+  const double model_size = positions.empty() ? 1.0 : bounding_diagonal(positions);
+
+  // Fans: every coarse vertex that stays irregular for some quad once its semi-sharp tags have
+  // decayed (those tags count as smooth in this view; infinitely sharp ones stay).
+  FanResults fans;
+  fans.zone_of_corner.assign(ma.num_faces(), {-1, -1, -1, -1});
+  fans.rays.assign(static_cast<size_t>(2) * ma.num_edges(), RayRecord{});
+  {
+    SubdivLevel decayed;
+    decayed.mesh = ma;
+    decayed.options = la.options;
+    decayed.face_hole = la.face_hole;
+    decayed.edge_sharpness = la.edge_sharpness;
+    decayed.vertex_sharpness = la.vertex_sharpness;
+    for (float& s : decayed.edge_sharpness) if (semi(s)) s = 0.0f;
+    for (float& s : decayed.vertex_sharpness) if (semi(s)) s = 0.0f;
+    const LevelView D{decayed, decayed.mesh, xa};
+    for (int v = 0; v < ma.num_vertices(); ++v) {
+      if (ma.vertex_face_count(v) == 0 || fans_at(D, v).empty()) continue;
+      int extra = std::max(0, options.extra_levels);
+      if (v < static_cast<int>(options.vertex_extra_levels.size())) extra += std::max(0, options.vertex_extra_levels[v]);
+      build_fans_at(la, xa, v, a + 2 + extra, a, capped_a, out, fans);
+    }
+  }
+
+  // Coarse quads: leaves, then knots.
   PatchSet& ps = out.set;
   std::vector<int> corner_of_vertex(ma.num_vertices(), -1);
   std::vector<int> curve_of_edge(ma.num_edges(), -1);
-  const int dx[4] = {0, 1, 1, 0}, dy[4] = {0, 0, 1, 1};
+  const double knot_tolerance = tolerances::kKnotRemoval * model_size;
   for (int F = 0; F < ma.num_faces(); ++F) {
     if (la.face_hole[F] || capped_a[F]) continue;
-    std::vector<int> grid{ma.face_begin(F)};  // frame corners, row-major [y][x]
-    int size = 1;
-    for (int t = 0; t < d; ++t) {
-      const PolyMesh& mp = out.refinement.levels[a + t].mesh;
-      const PolyMesh& mc = out.refinement.levels[a + t + 1].mesh;
-      std::vector<int> next(static_cast<size_t>(4) * size * size);
-      for (int y = 0; y < size; ++y)
-        for (int xx = 0; xx < size; ++xx) {
-          const int c = grid[y * size + xx];
-          const int P = mp.corner_face(c), r = rotation_in_face(mp, c);
-          for (int j = 0; j < 4; ++j) {
-            const int child_face = mp.face_begin(P) + (r + j) % mp.face_size(P);
-            const int child_corner = mc.face_begin(child_face) + (4 - j) % 4;
-            next[(2 * y + dy[j]) * 2 * size + 2 * xx + dx[j]] = child_corner;
-          }
-        }
-      grid.swap(next);
-      size *= 2;
-    }
-    // Corners with a fan construction decide the double knots.
-    auto zone_at = [&](int gx, int gy) { return zone[mk.corner_face(grid[gy * N + gx])] != 0; };
-    const bool z00 = zone_at(0, 0), z10 = zone_at(N - 1, 0), z11 = zone_at(N - 1, N - 1), z01 = zone_at(0, N - 1);
-    NurbsPatch patch;
-    patch.kind = (z00 || z10 || z11 || z01) ? PatchKind::Pccm : PatchKind::RegularBSpline;
-    patch.knots_u = coarse_knots(N, z00 || z01, z10 || z11);
-    patch.knots_v = coarse_knots(N, z00 || z10, z01 || z11);
-    const auto Uf = patch.knots_u.flat(), Vf = patch.knots_v.flat();
-    const auto ru = blossom_rows(Uf, N), rv = blossom_rows(Vf, N);
-    patch.num_poles_u = static_cast<int>(ru.size());
-    patch.num_poles_v = static_cast<int>(rv.size());
-    patch.poles.resize(static_cast<size_t>(patch.num_poles_u) * patch.num_poles_v);
-    for (int i = 0; i < patch.num_poles_u; ++i)
-      for (int j = 0; j < patch.num_poles_v; ++j) {
-        const int c = grid[rv[j].span * N + ru[i].span];
-        const int f = mk.corner_face(c), r = rotation_in_face(mk, c);
-        V3 s = V3::Zero();
-        for (int q = 0; q < 4; ++q)
-          for (int w = 0; w < 4; ++w)
-            s += ru[i].w[q] * rv[j].w[w] * v3(nets[static_cast<size_t>(f) * 16 + face_net_index(r, q, w)]);
-        patch.pole(i, j) = pt(s);
+    std::vector<PatchLeaf> leaves = leaves_of(la, xa, F, a, fans, info.level);
+    // Zone lines: h and 2h from every corner with a zone.
+    std::vector<double> du, dv;
+    bool pccm = false;
+    for (int i = 0; i < 4; ++i) {
+      const int zi = fans.zone_of_corner[F][i];
+      if (zi < 0) continue;
+      pccm = true;
+      const double h = std::ldexp(1.0, -(fans.zones[zi].level - a));
+      const bool hi_u = i == 1 || i == 2, hi_v = i == 2 || i == 3;
+      for (double t : {h, 2 * h}) {
+        du.push_back(hi_u ? 1 - t : t);
+        dv.push_back(hi_v ? 1 - t : t);
       }
+    }
+    NurbsPatch patch;
+    patch.kind = pccm ? PatchKind::Pccm : PatchKind::RegularBSpline;
+    const AssemblyStats st = assemble_patch(leaves, du, dv, knot_tolerance, patch);
+    info.removed_knots += st.removed_knots;
+    info.leaves += static_cast<long long>(leaves.size());
     patch.base_faces.push_back(a == 0 ? F : base.mesh.corner_face(F));  // level-1 face F = child of corner F
-    info.sub_corners.push_back(grid);
-    (patch.kind == PatchKind::Pccm ? info.pccm_patches : info.regular_patches)++;
+    (pccm ? info.pccm_patches : info.regular_patches)++;
+    out.coarse_face.push_back(F);
+    out.leaves.push_back(std::move(leaves));
 
     const int pi = static_cast<int>(ps.patches.size());
     // Corners and boundary curves.
@@ -793,7 +485,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       if (corner_of_vertex[va_i] < 0) {
         corner_of_vertex[va_i] = static_cast<int>(ps.corners.size());
         PatchCorner pc;
-        pc.base_vertex = va_i < base.mesh.num_vertices() ? va_i : -1;
+        pc.base_vertex = a == 0 || va_i < base.mesh.num_vertices() ? va_i : -1;
         const int ui = (i == 1 || i == 2) ? patch.num_poles_u - 1 : 0;  // corner i of the domain
         const int vi = (i == 2 || i == 3) ? patch.num_poles_v - 1 : 0;
         pc.position = patch.pole(ui, vi);
@@ -883,9 +575,11 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       }
     }
     ci.patch = pi;
-    info.sub_corners.emplace_back();
+    out.coarse_face.push_back(-1);
+    out.leaves.emplace_back();
     ps.patches.push_back(std::move(patch));
   }
+
 
   // Continuity claims per coarse edge, and the rays of irregular vertices.
   ps.closed = true;
@@ -898,32 +592,22 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       ps.closed = false;
       continue;
     }
-    // Sharp if any of its level-k pieces is (semi-sharp creases made sharp at the level cap
-    // count: the patches are built with them).
-    bool sharp = false;
-    for (int ek = e << d; ek < (e + 1) << d; ++ek) sharp = sharp || L.sharp(ek);
-    if (sharp) {
+    // Semi-sharp creases are refined exactly: the limit is C2 across them.
+    if (la.edge_sharpness[e] >= static_cast<float>(kInfiniteSharpness)) {
       bc.continuity = Continuity::C0;
       continue;
     }
     if (cap_boundary_edge[e]) {
       // C2 in geometry, but the cap's parameter is an affine image of the neighbours'
-      // (MATH.md 4.2: x_u = 2^-s x_U), so derivatives are not equal: claimed G1.
+      // (docs/polar.md: x_u = 2^-s x_U), so derivatives are not equal: claimed G1.
       bc.continuity = Continuity::G1;
       continue;
     }
     bc.continuity = Continuity::C2;
-    // The level-k edge of this coarse edge at each end vertex.
     for (int end = 0; end < 2; ++end) {
-      const int v = ma.edge_vertex(e, end);
-      // Walk down the levels: the half of the edge at v.
-      int ek = e;
-      for (int t = a; t < k; ++t) {
-        const PolyMesh& mp = out.refinement.levels[t].mesh;
-        ek = 2 * ek + (mp.edge_vertex(ek, 0) == v ? 0 : 1);
-      }
-      const RayRecord& rr = ray_of_edge[ek];
+      const RayRecord& rr = fans.rays[2 * e + end];
       if (rr.fan < 0) continue;
+      const int v = ma.edge_vertex(e, end);
       if (static_cast<int>(rr.continuity) < static_cast<int>(bc.continuity)) bc.continuity = rr.continuity;
       RayCurve ray;
       ray.curve = ci;
@@ -934,8 +618,8 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       info.rays.push_back(ray);
     }
   }
-
-  if (!positions.empty()) ps.model_size = bounding_diagonal(positions);
+  for (const NurbsPatch& p : ps.patches) info.total_poles += static_cast<long long>(p.poles.size());
+  ps.model_size = model_size;
   return out;
 }
 

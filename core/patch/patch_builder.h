@@ -1,35 +1,32 @@
 // Catmull-Clark cage -> PatchSet: one bicubic NURBS patch per quad of the coarsest all-quad
-// mesh (MATH.md sections 5.3, 5.4, 6).
+// mesh, with only the knots its surface needs (docs/patches.md, docs/math.md).
 //
-// Pipeline:
-//   1. a := 0 if the cage is all quads (holes aside), else 1 (one CC step splits n-gons).
-//   2. Refine uniformly to level k = a + 2 + extra_levels, and further while any semi-sharp
-//      sharpness is still active, so that every level-k edge is smooth or infinitely sharp.
-//   3. Per level-k quad whose four corners are regular *for that quad* (smooth 4-valent,
-//      crease vertex with 2 faces on the quad's side, corner vertex with 1 face), the exact
-//      limit patch: the bicubic B-spline of its 4x4 neighbourhood, with phantom points across
-//      sharp edges (MATH.md 1.2), converted to a Bezier net (6.1).
-//   4. Per irregular vertex and per fan of faces between its sharp edges ("fan"), the quads
-//      touching the vertex get Construction Q (5.3) or its open-fan variant (5.6, made
-//      precise here and tested): exactly G1 across the smooth rays, with the level-k 2x2
-//      zone joined C1 to the regular surface.
-//   5. The level-k Bezier nets of each coarse quad are merged into one clamped B-spline
-//      (5.4): double knots at h and 2h next to a corner that had a fan construction, simple
-//      knots elsewhere. Poles are blossoms of one Bezier piece (exact when the pieces join
-//      with the claimed continuity, which the tests verify piece by piece).
-//   6. The shared boundary topology (corners, one curve per coarse edge, which patches use
-//      it, and the continuity the construction guarantees across it).
-//   With PatchOptions::polar, polar structures are found first (MATH.md 3.1). Their
-//   triangles and 1-layer quads produce no Catmull-Clark patch and do not count for a; each
-//   structure becomes one polar cap (MATH.md 4) whose boundary, the cage's 2-link, is split
-//   into the curves of its neighbour patches, with a seam at spoke 0 and a collapsed side at
-//   the pole. The whole cage is still refined by Catmull-Clark: the level-k points the
-//   neighbour patches use lie on rings >= 2^(k+1) - 1, which do not depend on the pole
-//   (MATH.md 3.3), so they are the Catmull-Clark side of the paper's 4-step procedure.
+// Pipeline (each phase has its own file in core/patch/):
+//   1. a := 0 if the cage is all quads (holes and polar caps aside), else 1 (one CC step
+//      splits n-gons). Only this level is ever built for the whole cage.
+//   2. Fans (fan_construction): around every vertex that is irregular for some quad once its
+//      semi-sharp tags have decayed, the faces within 5 rings are cut out and refined locally
+//      (local_mesh) to the fan's level k_v = a + 2 + extra, deeper while a semi-sharp tag is
+//      left within 3 rings; there Construction Q gives the 2x2 zone of every sector.
+//   3. Leaves (this file): every coarse quad is walked as a quadtree. A sub-quad whose corners
+//      are regular for it and carry no semi-sharp tag is one bicubic (regular_net); the
+//      sub-quad at an irregular corner at level k_v - 1 is that fan's zone; anything else is
+//      split, refining only the 2-ring of the sub-quads that are split.
+//   4. Knots (knot_assembly): the union of the leaves' boundaries, double on zone lines,
+//      minus every simple knot the surface does not need (zero third-derivative jump along
+//      the whole line); poles by blossoming, so the patch is exactly the union of its leaves.
+//   5. Topology: corners, one curve per coarse edge, which patches use it and the continuity
+//      the construction guarantees across it.
+//   With PatchOptions::polar, polar structures are found first. Their triangles and 1-layer
+//   quads produce no Catmull-Clark patch and do not count for a; each structure becomes one
+//   polar cap whose boundary, the cage's 2-link, is split into the curves of its neighbour
+//   patches, with a seam at spoke 0 and a collapsed side at the pole (docs/polar.md).
 #pragma once
 
+#include <array>
 #include <vector>
 
+#include "core/patch/local_mesh.h"
 #include "core/patch/patch_set.h"
 #include "core/polar/polar_cap.h"
 #include "core/polar/polar_structure.h"
@@ -38,13 +35,13 @@
 namespace subd2nurbs {
 
 struct PatchOptions {
-  /// Levels beyond the minimum (coarse all-quad level + 2). More levels shrink the region
-  /// where Construction Q deviates from the limit (rates per valence in MATH.md 5.3).
+  /// Levels beyond the minimum (coarse all-quad level + 2) for every fan. More levels shrink
+  /// the region where Construction Q deviates from the limit (rates per valence in
+  /// docs/patches.md); each costs a few knots in the patches at that vertex.
   int extra_levels = 0;
-  /// Semi-sharp creases are refined until they are smooth, but at most this many levels
-  /// above the coarse all-quad level (each level quadruples the work). Sharpness left at
-  /// that level is treated as infinite, and PatchBuildInfo says how many edges it touched.
-  int max_levels_above_coarse = 5;
+  /// Further levels per coarse vertex (index: level-a vertex; missing entries are 0), added to
+  /// extra_levels for the fans at that vertex: a tolerance deepens only the fans that need it.
+  std::vector<int> vertex_extra_levels;
   /// Polar structures of the cage (MATH.md 3.1) become one singular polar cap each (MATH.md
   /// 4); off: every vertex goes through Catmull-Clark, poles included.
   bool polar = true;
@@ -72,6 +69,8 @@ struct IrregularFan {
   int valence = 0;
   int sectors = 0;       ///< faces in the fan
   double c = 0;          ///< G1 coefficient: D + E = 2c(1-t)^2 e' on the smooth rays
+  int level = 0;         ///< k_v: the level of its zone (a + 2 + extra, deeper past semi-sharp tags)
+  int piece = -1;        ///< index into PatchBuild::fan_pieces
 };
 
 /// A coarse edge leaving an irregular vertex: where MATH.md section 9's exact residual applies.
@@ -93,12 +92,16 @@ struct CapInfo {
 
 struct PatchBuildInfo {
   int coarse_level = 0;  ///< a: 0 if the cage is all quads (polar cap faces aside), else 1
-  int level = 0;         ///< k: the level the patches are built from
+  int level = 0;         ///< the deepest level of any leaf (a when every coarse quad is one bicubic)
+  int min_fan_level = 0; ///< a + 2 + extra_levels: the level of a fan with no semi-sharp tag near it
   int regular_patches = 0;
   int pccm_patches = 0;
-  /// Level-k edges and vertices whose semi-sharpness had not decayed at the level cap and
-  /// were made infinitely sharp (0 when every semi-sharp crease was refined to smoothness).
+  /// Semi-sharp tags are refined exactly however sharp they are (below infinity), so no edge
+  /// is ever made sharp; kept at 0 for the report format.
   int sharpened_edges = 0, sharpened_vertices = 0;
+  long long leaves = 0;       ///< polynomial pieces of all patches before knot removal
+  long long total_poles = 0;  ///< poles of all patches (caps included)
+  long long removed_knots = 0;  ///< simple knots removed because the surface is one polynomial across them
   std::vector<IrregularFan> fans;
   std::vector<CapInfo> caps;             ///< polar caps (PatchOptions::polar)
   std::vector<RejectedPole> rejected_poles;  ///< pole-like vertices left to Catmull-Clark
@@ -106,19 +109,37 @@ struct PatchBuildInfo {
   /// empty, `refinement.levels[0]` is the separated level-1 cage and levels count from it.
   std::vector<int> separated_poles;
   std::vector<RayCurve> rays;
-  /// For each patch, its (2^(k-a))^2 level-k quads, row-major [y][x] with x along u, each as
-  /// the level-k corner at the quad's patch-frame origin (its x axis runs along u).
-  std::vector<std::vector<int>> sub_corners;
+};
+
+/// One polynomial piece of a patch: a bicubic Bezier net over the square
+/// [u0, u0 + size] x [v0, v0 + size] of the patch's domain [0,1]^2.
+struct PatchLeaf {
+  double u0 = 0, v0 = 0, size = 1;
+  int level = 0;      ///< subdivision level of the piece
+  bool zone = false;  ///< a Construction Q piece (else the exact limit, a regular bicubic)
+  std::array<Point3, 16> net{};  ///< index i * 4 + j, i along u
+};
+
+/// The local piece of the level a fan was built on, kept for the deviation measurement: the
+/// faces within 5 rings of the vertex at level k_v, with the Bezier nets (face frame) of the
+/// zone faces and of the regular faces within 3 rings.
+struct FanPiece {
+  int vertex = -1;  ///< the irregular vertex, index in `mesh`
+  int level = 0;    ///< k_v
+  LocalMesh mesh;
+  std::vector<Point3> nets;   ///< 16 per face of mesh
+  std::vector<char> has_net;  ///< per face
 };
 
 struct PatchBuild {
   PatchSet set;
   PatchBuildInfo info;
-  /// Level-k Bezier nets, 16 points per level-k face in the face's own frame
-  /// (index i * 4 + j, i along the face's first edge). Kept for tests and deviation checks.
-  std::vector<Point3> level_nets;
-  Refinement refinement;  ///< levels 0..k
-  std::vector<Point3> level_positions;  ///< control points of level k
+  Refinement refinement;                 ///< levels 0..a only (the cage and its coarse all-quad level)
+  std::vector<Point3> cage_positions;    ///< control points of level 0
+  std::vector<Point3> coarse_positions;  ///< control points of level a
+  std::vector<int> coarse_face;          ///< per patch: its level-a face, -1 for a polar cap
+  std::vector<std::vector<PatchLeaf>> leaves;  ///< per patch: its pieces (empty for a polar cap)
+  std::vector<FanPiece> fan_pieces;      ///< one per irregular vertex with fans
 };
 
 /// Builds the patches of a validated cage. Positions are the cage's vertex positions.

@@ -10,6 +10,8 @@
 #include <Eigen/Geometry>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/eval/quality.h"
+#include "core/limit/limit_evaluator.h"
 #include "core/patch/patch_builder.h"
 
 namespace subd2nurbs::testing {
@@ -35,72 +37,44 @@ inline Eigen::Vector3d eval_bezier(const Point3* net, double s, double t) {
   return p;
 }
 
-/// Patch-frame coordinates (s, t) of a level-k quad whose frame corner has rotation r in its
-/// face -> the face's own coordinates.
-inline void frame_to_face(int r, double s, double t, double& fu, double& fv) {
-  switch (r) {
-    case 0: fu = s; fv = t; break;
-    case 1: fu = 1 - t; fv = s; break;
-    case 2: fu = 1 - s; fv = 1 - t; break;
-    default: fu = t; fv = 1 - s; break;
-  }
-}
-
-/// Calls fn(patch, x, y, N, corner) for each level-k quad of each patch: the N x N grid of
-/// PatchBuildInfo::sub_corners, x along u, `corner` the quad's level-k frame corner. Polar
-/// caps have no grid and are skipped.
+/// Calls fn(patch, leaf) for every polynomial piece of every patch (polar caps have none).
 template <class Fn>
-void for_each_sub_quad(const PatchBuild& b, Fn&& fn) {
-  const int N = 1 << (b.info.level - b.info.coarse_level);
-  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
-    const auto& grid = b.info.sub_corners[pi];
-    if (grid.empty()) continue;
-    for (int y = 0; y < N; ++y)
-      for (int x = 0; x < N; ++x) fn(static_cast<int>(pi), x, y, N, grid[y * N + x]);
-  }
+void for_each_leaf(const PatchBuild& b, Fn&& fn) {
+  for (size_t pi = 0; pi < b.leaves.size(); ++pi)
+    for (const PatchLeaf& leaf : b.leaves[pi]) fn(static_cast<int>(pi), leaf);
 }
 
-/// Max distance between each merged patch and its level-k Bezier pieces (5x5 samples each).
+/// Max distance between each patch and its pieces (5x5 samples each): the knot assembly
+/// must reproduce every piece exactly.
 inline double max_piece_error(const PatchBuild& b) {
-  const PolyMesh& mk = b.refinement.levels[b.info.level].mesh;
   double worst = 0;
-  for_each_sub_quad(b, [&](int pi, int x, int y, int N, int c) {
-    const int f = mk.corner_face(c), r = c - mk.face_begin(f);
+  for_each_leaf(b, [&](int pi, const PatchLeaf& leaf) {
     for (int a = 0; a <= 4; ++a)
       for (int bb = 0; bb <= 4; ++bb) {
         const double s = a / 4.0, t = bb / 4.0;
-        double fu, fv;
-        frame_to_face(r, s, t, fu, fv);
-        const Eigen::Vector3d q = eval_bezier(&b.level_nets[static_cast<size_t>(f) * 16], fu, fv);
-        const SurfaceDerivs d = evaluate(b.set.patches[pi], (x + s) / N, (y + t) / N);
+        const Eigen::Vector3d q = eval_bezier(leaf.net.data(), s, t);
+        const SurfaceDerivs d = evaluate(b.set.patches[pi], leaf.u0 + s * leaf.size, leaf.v0 + t * leaf.size);
         worst = std::max(worst, (ev(d.p) - q).norm());
       }
   });
   return worst;
 }
 
-/// Max distance between the patches at the corners of their level-k quads and the limit
-/// positions of the level-k vertices there, over vertices whose quads are all regular
-/// (where the patch is the exact limit surface).
+/// Max distance between the patches and the exact limit surface (core/limit) at the corners
+/// and centres of their regular pieces (not Construction Q zones), where the patch is the limit.
 inline double max_corner_limit_error(const PatchBuild& b) {
-  const SubdivLevel& lk = b.refinement.levels[b.info.level];
-  const PolyMesh& mk = lk.mesh;
-  std::vector<Point3> limit;
-  limit_stencils(lk).apply(b.level_positions, limit);
-  std::vector<char> near_fan(mk.num_vertices(), 0);
-  for (const IrregularFan& f : b.info.fans) {
-    const int* cs = mk.vertex_corners(f.vertex);
-    for (int i = 0; i < mk.vertex_face_count(f.vertex); ++i) {
-      const int face = mk.corner_face(cs[i]);
-      for (int h = mk.face_begin(face); h < mk.face_end(face); ++h) near_fan[mk.corner_vertex(h)] = 1;
-    }
-  }
+  const LimitEvaluator limit(b.refinement.levels[0], b.cage_positions);
   double worst = 0;
-  for_each_sub_quad(b, [&](int pi, int x, int y, int N, int c) {
-    const int v = mk.corner_vertex(c);
-    if (near_fan[v]) return;
-    const SurfaceDerivs d = evaluate(b.set.patches[pi], static_cast<double>(x) / N, static_cast<double>(y) / N);
-    worst = std::max(worst, (ev(d.p) - ev(limit[v])).norm());
+  for_each_leaf(b, [&](int pi, const PatchLeaf& leaf) {
+    if (leaf.zone) return;
+    for (double s : {0.0, 0.5, 1.0})
+      for (double t : {0.0, 0.5, 1.0}) {
+        const double u = leaf.u0 + s * leaf.size, v = leaf.v0 + t * leaf.size;
+        const LimitParam lp = patch_to_limit(b, pi, u, v);
+        const LimitPoint q = limit.evaluate_point(lp.face, lp.sub, lp.u, lp.v);
+        const SurfaceDerivs d = evaluate(b.set.patches[pi], u, v);
+        worst = std::max(worst, (ev(d.p) - ev(q.p)).norm());
+      }
   });
   return worst;
 }
@@ -111,9 +85,9 @@ inline double max_corner_limit_error(const PatchBuild& b) {
 /// which scales them equally.
 inline double max_g1_residual(const PatchBuild& b, int samples = 17) {
   double worst = 0;
-  const int N = 1 << (b.info.level - b.info.coarse_level);
   for (const RayCurve& ray : b.info.rays) {
     if (ray.continuity != Continuity::G1) continue;
+    const int N = 1 << (b.info.fans[ray.fan].level - b.info.coarse_level);
     const double c = ray.c;
     const BoundaryCurve& bc = b.set.curves[ray.curve];
     for (int k = 0; k < samples; ++k) {

@@ -69,9 +69,10 @@ TEST(Deviation, MeasureNoticesAMovedPole) {
   const double before = measure_deviation(b).max;
   // Move an interior point of a zone net by 1e-2 along z: the surface moves by up to
   // (4/9)^2 * 1e-2 = 2e-3 there, ten times the deviation before.
-  const PolyMesh& mk = b.refinement.levels[b.info.level].mesh;
-  const int f = mk.corner_face(mk.vertex_corners(b.info.fans[0].vertex)[0]);
-  b.level_nets[static_cast<size_t>(f) * 16 + 5][2] += 1e-2;
+  FanPiece& piece = b.fan_pieces[b.info.fans[0].piece];
+  const PolyMesh& mk = piece.mesh.level.mesh;
+  const int f = mk.corner_face(mk.vertex_corners(piece.vertex)[0]);
+  piece.nets[static_cast<size_t>(f) * 16 + 5][2] += 1e-2;
   EXPECT_LT(before, 5e-4);
   EXPECT_GT(measure_deviation(b).max, 1.5e-3);
 }

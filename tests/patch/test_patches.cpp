@@ -23,14 +23,15 @@ TEST(Patches, RegularTorusIsOneC2BSplinePerQuad) {
   const MeshInput in = torus(8, 6);
   const PatchBuild b = build_from_input(in);
   EXPECT_EQ(b.info.coarse_level, 0);
-  EXPECT_EQ(b.info.level, 2);
+  EXPECT_EQ(b.info.level, 0);  // every quad is one bicubic already: nothing is refined
   ASSERT_EQ(static_cast<int>(b.set.patches.size()), 48);
   EXPECT_EQ(b.info.regular_patches, 48);
   EXPECT_TRUE(b.set.closed);
   for (const NurbsPatch& p : b.set.patches) {
-    EXPECT_EQ(p.num_poles_u, 7);  // 4 spans, simple knots
-    EXPECT_EQ(p.num_poles_v, 7);
+    EXPECT_EQ(p.num_poles_u, 4);  // one span: the 16 poles of the quad's bicubic
+    EXPECT_EQ(p.num_poles_v, 4);
   }
+  EXPECT_EQ(b.info.total_poles, 48 * 16);
   const ContinuityReport r = measure_continuity(b.set);
   const double tol = 1e-12 * b.set.model_size;
   EXPECT_LT(r.max_gap, tol);
