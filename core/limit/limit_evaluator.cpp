@@ -5,6 +5,9 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <cstdint>
+#include <memory>
+#include <mutex>
 #include <unordered_map>
 
 #include "core/limit/stam_eigen.h"
@@ -647,12 +650,49 @@ LocalLevel refine_local(const SubdivLevel& L, const std::vector<Point3>& P, int 
   return out;
 }
 
+}  // namespace
+
+/// Refined neighbourhoods of the faces a descent passes through, keyed by the face it starts
+/// from and the path of child corners. Queries that are close together (the samples of one
+/// patch, the steps of a closest-point search) share their descents instead of refining the
+/// same 2-rings again. Bounded: cleared when full.
+struct LimitEvaluator::DescentCache {
+  struct Node {
+    LocalLevel level;
+    int first_child = 0;
+  };
+  std::mutex mutex;
+  std::unordered_map<std::uint64_t, std::shared_ptr<const Node>> nodes;
+  static constexpr size_t kMaxNodes = 2048;
+
+  template <class Make>
+  std::shared_ptr<const Node> get(std::uint64_t key, Make&& make) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      auto it = nodes.find(key);
+      if (it != nodes.end()) return it->second;
+    }
+    auto node = std::make_shared<const Node>(make());
+    std::lock_guard<std::mutex> lock(mutex);
+    if (nodes.size() >= kMaxNodes) nodes.clear();
+    nodes.emplace(key, node);
+    return node;
+  }
+};
+
+namespace {
+
+using DescentCache = LimitEvaluator::DescentCache;
+
 /// The general driver: face f of level L, local face coordinates (s, t) = A (u, v) + c.
+/// With a cache, `key` names face f0 of L0 uniquely among the evaluator's descents (0: none).
 LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, int f0, double s0,
-                         double t0, Affine A, LimitMethod* method, int depth = 0) {
+                         double t0, Affine A, LimitMethod* method, int depth = 0,
+                         DescentCache* cache = nullptr, std::uint64_t key = 0) {
   const SubdivLevel* L = &L0;
   const std::vector<Point3>* P = &P0;
   LocalLevel cur;
+  std::shared_ptr<const DescentCache::Node> cached;
   int f = f0;
   double s = s0, t = t0;
   for (;; ++depth) {
@@ -723,10 +763,23 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
       return out;
     }
     int first_child = 0;
-    LocalLevel next = refine_local(*L, *P, f, first_child);
-    cur = std::move(next);
-    L = &cur.level;
-    P = &cur.pos;
+    if (cache && key != 0 && key < (std::uint64_t{1} << 61)) {
+      cached = cache->get(key, [&] {
+        DescentCache::Node n;
+        n.level = refine_local(*L, *P, f, n.first_child);
+        return n;
+      });
+      key = key * 4 + static_cast<std::uint64_t>(k);
+      L = &cached->level.level;
+      P = &cached->level.pos;
+      first_child = cached->first_child;
+    } else {
+      LocalLevel next = refine_local(*L, *P, f, first_child);
+      cur = std::move(next);
+      L = &cur.level;
+      P = &cur.pos;
+      key = 0;
+    }
     f = first_child + k;
     A = A.then(child_map(k));
     s = 2 * a;
@@ -787,7 +840,7 @@ constexpr int kMaxStoredLevels = 4096;
 }
 
 LimitEvaluator::LimitEvaluator(SubdivLevel base, std::vector<Point3> positions)
-    : base_(std::move(base)), positions_(std::move(positions)) {
+    : base_(std::move(base)), positions_(std::move(positions)), descent_(std::make_unique<DescentCache>()) {
   const PolyMesh& m = base_.mesh;
   if (static_cast<int>(positions_.size()) != m.num_vertices())
     throw std::invalid_argument("LimitEvaluator: one position per vertex expected");
@@ -887,7 +940,10 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
       }
     }
     if (fc.level1) {
-      LimitSample out = eval_general(fc.level1->level, fc.level1->pos, fc.first_child + k, s, t, A, method, 1);
+      // Key: a leading 1 bit, the cache slot, then 2 bits per level of the path.
+      const std::uint64_t key = ((std::uint64_t{1} << 24) + static_cast<std::uint64_t>(cache_index)) * 4 + static_cast<std::uint64_t>(k);
+      LimitSample out = eval_general(fc.level1->level, fc.level1->pos, fc.first_child + k, s, t, A, method, 1,
+                                     descent_.get(), cache_index < (1 << 24) ? key : 0);
       if (method && *method != LimitMethod::Fallback) *method = LimitMethod::Refined;
       return out;
     }

@@ -82,6 +82,12 @@ class LimitEvaluator {
   std::vector<int> ptex_face_;   ///< ptex -> base face
   std::vector<int> face_cache_;  ///< base face -> index into cache_ or -1
   std::vector<FaceCache> cache_;
+
+ public:
+  struct DescentCache;  ///< refined neighbourhoods shared by nearby queries (limit_evaluator.cpp)
+
+ private:
+  std::unique_ptr<DescentCache> descent_;
 };
 
 /// Principal curvatures etc. from derivatives (fills normal, k1, k2, mean, gauss).
