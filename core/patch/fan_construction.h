@@ -1,6 +1,6 @@
 // Construction Q around an irregular vertex, per fan of faces between its sharp edges
-// (docs/math.md, "Irregular vertices"): bicubic Bezier nets of the level-k quads at the vertex
-// that interpolate the limit point, share the limit tangent plane there, are exactly G1 across
+// (docs/patches.md, "Irregular vertices: fans"): bicubic Bezier nets of the level-k quads at
+// the vertex that interpolate the limit point, share the limit tangent plane there, are exactly G1 across
 // the smooth rays and C1 with the regular surface around the 2x2 zone of each sector.
 #pragma once
 

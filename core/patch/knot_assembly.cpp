@@ -335,7 +335,8 @@ double leaf_error_with(const PatchLeaf& leaf, const FastEvaluator& eval) {
 double leaf_error(const PatchLeaf& leaf, const NurbsPatch& patch) { return leaf_error_with(leaf, FastEvaluator(patch)); }
 
 AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::vector<double>& double_u,
-                             const std::vector<double>& double_v, double tolerance, NurbsPatch& patch) {
+                             const std::vector<double>& double_v, double tolerance, double check,
+                             NurbsPatch& patch) {
   AssemblyStats stats;
   if (leaves.size() == 1) {  // one bicubic: its Bezier net is the clamped single-span B-spline
     patch.knots_u = make_knots({0.0, 1.0}, {});
@@ -357,8 +358,10 @@ AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::ve
     x->erase(std::unique(x->begin(), x->end()), x->end());
   }
   // Remove simple knots across which the surface is one polynomial.
+  std::map<double, double> jumps_u, jumps_v;
   auto reduce = [&](std::vector<double>& values, const std::vector<double>& doubles, bool across_u) {
-    const std::map<double, double> jumps = knot_line_jumps(leaves, index, across_u);
+    std::map<double, double>& jumps = across_u ? jumps_u : jumps_v;
+    jumps = knot_line_jumps(leaves, index, across_u);
     std::vector<double> kept{values.front()};
     for (size_t i = 1; i + 1 < values.size(); ++i) {
       const double xi = values[i];
@@ -374,9 +377,8 @@ AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::ve
   std::vector<double> rv = reduce(vs, double_v, false);
   // The jump test is local: a knot whose pieces differ by a tiny c (u - xi)^3 at the pieces'
   // scale can still move the surface over the much longer span it is merged into. So the
-  // result is checked against every piece, and where a piece is missed the removed knot nearest
-  // the middle of its span is put back (bisecting), until every piece is reproduced.
-  const double check = tolerance;
+  // result is checked against every piece, and where a piece is missed the removed knot of its
+  // span with the largest jump is put back, until every piece is reproduced.
   for (int round = 0;; ++round) {
     fill_poles(leaves, index, ru, rv, double_u, double_v, patch);
     if (ru.size() == us.size() && rv.size() == vs.size()) break;  // nothing removed: exact by construction
@@ -391,20 +393,33 @@ AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::ve
     for (const PatchLeaf& l : leaves) {
       if (!merged(ru, us, l.u0 + l.size / 2) && !merged(rv, vs, l.v0 + l.size / 2)) continue;
       if (leaf_error_with(l, eval) <= check) continue;
+      // The one removed knot, in u or v, of the piece's spans with the largest jump.
+      double pick[2] = {-1, -1}, pick_jump[2] = {-1, -1};
       for (int dir = 0; dir < 2; ++dir) {
         const std::vector<double>& kept = dir == 0 ? ru : rv;
         const std::vector<double>& all = dir == 0 ? us : vs;
         const double mid = (dir == 0 ? l.u0 : l.v0) + l.size / 2;
         const auto hi = std::upper_bound(kept.begin(), kept.end(), mid);
         const double a = *(hi - 1), b = *hi;
-        double best = -1;
-        for (double x : all)
-          if (x > a && x < b && (best < 0 || std::abs(x - (a + b) / 2) < std::abs(best - (a + b) / 2))) best = x;
-        if (best >= 0) (dir == 0 ? add_u : add_v).push_back(best);
+        const std::map<double, double>& jumps = dir == 0 ? jumps_u : jumps_v;
+        double best = -1, best_jump = -1;
+        for (double x : all) {
+          if (!(x > a && x < b)) continue;
+          const auto it = jumps.find(x);
+          const double j = it == jumps.end() ? 0.0 : it->second;
+          if (j > best_jump) {
+            best = x;
+            best_jump = j;
+          }
+        }
+        pick[dir] = best;
+        pick_jump[dir] = best_jump;
       }
+      const int dir = pick_jump[0] >= pick_jump[1] ? 0 : 1;
+      if (pick[dir] >= 0) (dir == 0 ? add_u : add_v).push_back(pick[dir]);
     }
     if (add_u.empty() && add_v.empty()) break;
-    if (round > 64) {  // give up bisecting: keep every knot
+    if (round > 256) {  // give up: keep every knot
       ru = us;
       rv = vs;
       fill_poles(leaves, index, ru, rv, double_u, double_v, patch);

@@ -51,10 +51,11 @@ struct AssemblyStats {
 };
 
 /// Fills patch.knots_u/v, num_poles_u/v and poles from the pieces. Knot values in `double_u` /
-/// `double_v` get multiplicity 2; a simple knot is removed when its third_derivative_jump is
+/// `double_v` get multiplicity 2; a simple knot is removed when its knot_line_jumps value is
 /// at most `tolerance` (model units) and the patch without it still reproduces every piece
-/// within `tolerance` (leaf_error).
+/// within `check` (leaf_error).
 AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::vector<double>& double_u,
-                             const std::vector<double>& double_v, double tolerance, NurbsPatch& patch);
+                             const std::vector<double>& double_v, double tolerance, double check,
+                             NurbsPatch& patch);
 
 }  // namespace subd2nurbs

@@ -13,6 +13,7 @@
 #include "core/patch/regular_net.h"
 #include "core/polar/polar_separation.h"
 #include "core/util/eigen_point.h"
+#include "core/util/parallel.h"
 #include "core/util/tolerances.h"
 
 namespace subd2nurbs {
@@ -101,9 +102,19 @@ struct FanResults {
   std::vector<RayRecord> rays;  ///< per level-a edge and end: 2 e + (edge_vertex(e, 0) == v ? 0 : 1)
 };
 
+/// The fans of one coarse vertex, before they are numbered among all fans.
+struct VertexFans {
+  std::vector<IrregularFan> fans;  ///< `piece` is 0: the vertex's own piece
+  std::vector<FanPiece> pieces;    ///< none or one
+  std::vector<std::pair<std::array<int, 2>, Zone>> zones;  ///< (coarse face, corner) -> zone
+  std::vector<std::pair<int, RayRecord>> rays;              ///< FanResults::rays slot -> ray (local fan index)
+  int level = 0;
+};
+
 /// Builds the fans of coarse vertex v (if it has any once its semi-sharp tags decay).
-void build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, int min_level, int a,
-                   const std::vector<char>& capped_a, PatchBuild& out, FanResults& res) {
+VertexFans build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, int min_level, int a,
+                         int cage_vertices, const std::vector<char>& capped_a) {
+  VertexFans out;
   const PolyMesh& ma = la.mesh;
   std::vector<int> follow;
   LocalMesh piece = cut_out(la, xa, face_rings(ma, {v}, kFanRings));
@@ -131,7 +142,7 @@ void build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, 
                               return true;
                             }),
              fans.end());
-  if (fans.empty()) return;
+  if (fans.empty()) return out;
   const PolyMesh& m = piece.level.mesh;
   FanPiece fp;
   fp.vertex = lv;
@@ -145,21 +156,20 @@ void build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, 
     }
   const Point3 limit = vertex_limit(piece.level, piece.x, lv);
   FanBuilder fb(L, limit, fp.nets);
-  const int piece_index = static_cast<int>(out.fan_pieces.size());
   for (const Fan& fan : fans) {
     std::vector<RayKind> kinds;
     std::vector<int> ray_edges;
     IrregularFan rec;
     rec.vertex = v;
-    rec.base_vertex = a == 0 ? v : (v < out.refinement.levels[0].mesh.num_vertices() ? v : -1);
+    rec.base_vertex = a == 0 || v < cage_vertices ? v : -1;
     rec.mode = fan.mode;
     rec.valence = m.valence(lv);
     rec.sectors = static_cast<int>(fan.sectors.size());
     rec.c = fb.build(fan, kinds, ray_edges);
     rec.level = level;
-    rec.piece = piece_index;
-    out.info.fans.push_back(rec);
-    const int fan_index = static_cast<int>(out.info.fans.size()) - 1;
+    rec.piece = 0;
+    out.fans.push_back(rec);
+    const int fan_index = static_cast<int>(out.fans.size()) - 1;
     const int ns = static_cast<int>(fan.sectors.size());
     // Zones, keyed by coarse face and corner.
     std::vector<std::pair<int, int>> face_corner(ns);
@@ -180,8 +190,7 @@ void build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, 
         for (int x = 0; x < 4; ++x)
           for (int y = 0; y < 4; ++y) z.net[(3 * qa[k] + x) * 7 + 3 * qb[k] + y] = fp.nets[static_cast<size_t>(f) * 16 + face_net_index(r, x, y)];
       }
-      res.zone_of_corner[F][i] = static_cast<int>(res.zones.size());
-      res.zones.push_back(z);
+      out.zones.push_back({{F, i}, z});
     }
     // Rays: ray r < ns is sector r's x axis (edge i of its coarse face), the end ray of an
     // open fan is the last sector's y axis (the edge before corner i).
@@ -190,13 +199,14 @@ void build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, int v, 
       const auto [F, i] = face_corner[end ? ns - 1 : r];
       const int corner = ma.face_begin(F) + i;
       const int e = ma.corner_edge(end ? ma.prev(corner) : corner);
-      RayRecord& rr = res.rays[2 * e + (ma.edge_vertex(e, 0) == v ? 0 : 1)];
-      rr = {fan_index, kinds[r] == RayKind::G1 ? Continuity::G1 : Continuity::C0, rec.c};
+      out.rays.push_back({2 * e + (ma.edge_vertex(e, 0) == v ? 0 : 1),
+                          {fan_index, kinds[r] == RayKind::G1 ? Continuity::G1 : Continuity::C0, rec.c}});
     }
   }
   fp.mesh = std::move(piece);
-  out.fan_pieces.push_back(std::move(fp));
-  out.info.level = std::max(out.info.level, level);
+  out.pieces.push_back(std::move(fp));
+  out.level = level;
+  return out;
 }
 
 /// An active sub-quad of a coarse face: its frame corner in the current piece (x along u) and
@@ -438,11 +448,34 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     for (float& s : decayed.edge_sharpness) if (semi(s)) s = 0.0f;
     for (float& s : decayed.vertex_sharpness) if (semi(s)) s = 0.0f;
     const LevelView D{decayed, decayed.mesh, xa};
-    for (int v = 0; v < ma.num_vertices(); ++v) {
-      if (ma.vertex_face_count(v) == 0 || fans_at(D, v).empty()) continue;
+    std::vector<int> candidates;
+    for (int v = 0; v < ma.num_vertices(); ++v)
+      if (ma.vertex_face_count(v) > 0 && !fans_at(D, v).empty()) candidates.push_back(v);
+    std::vector<VertexFans> built(candidates.size());
+    parallel_for(static_cast<int>(candidates.size()), [&](int i) {
+      const int v = candidates[i];
       int extra = std::max(0, options.extra_levels);
       if (v < static_cast<int>(options.vertex_extra_levels.size())) extra += std::max(0, options.vertex_extra_levels[v]);
-      build_fans_at(la, xa, v, a + 2 + extra, a, capped_a, out, fans);
+      built[i] = build_fans_at(la, xa, v, a + 2 + extra, a, base.mesh.num_vertices(), capped_a);
+    });
+    // Number them in vertex order (the same whatever the threads did).
+    for (VertexFans& vf : built) {
+      if (vf.fans.empty()) continue;
+      const int first_fan = static_cast<int>(info.fans.size());
+      for (IrregularFan& f : vf.fans) {
+        f.piece = static_cast<int>(out.fan_pieces.size());
+        info.fans.push_back(f);
+      }
+      out.fan_pieces.push_back(std::move(vf.pieces.front()));
+      for (auto& [key, z] : vf.zones) {
+        fans.zone_of_corner[key[0]][key[1]] = static_cast<int>(fans.zones.size());
+        fans.zones.push_back(z);
+      }
+      for (auto& [slot, rr] : vf.rays) {
+        rr.fan += first_fan;
+        fans.rays[slot] = rr;
+      }
+      info.level = std::max(info.level, vf.level);
     }
   }
 
@@ -451,9 +484,19 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   std::vector<int> corner_of_vertex(ma.num_vertices(), -1);
   std::vector<int> curve_of_edge(ma.num_edges(), -1);
   const double knot_tolerance = tolerances::kKnotRemoval * model_size;
-  for (int F = 0; F < ma.num_faces(); ++F) {
-    if (la.face_hole[F] || capped_a[F]) continue;
-    std::vector<PatchLeaf> leaves = leaves_of(la, xa, F, a, fans, info.level);
+  const double same_surface = tolerances::kSameSurface * model_size;
+  struct FacePatch {
+    std::vector<PatchLeaf> leaves;
+    NurbsPatch patch;
+    int deepest = 0;
+    int removed_knots = 0;
+  };
+  std::vector<FacePatch> face_patches(ma.num_faces());
+  parallel_for(ma.num_faces(), [&](int F) {
+    if (la.face_hole[F] || capped_a[F]) return;
+    FacePatch& fpatch = face_patches[F];
+    fpatch.deepest = a;
+    fpatch.leaves = leaves_of(la, xa, F, a, fans, fpatch.deepest);
     // Zone lines: h and 2h from every corner with a zone.
     std::vector<double> du, dv;
     bool pccm = false;
@@ -468,10 +511,17 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
         dv.push_back(hi_v ? 1 - t : t);
       }
     }
-    NurbsPatch patch;
-    patch.kind = pccm ? PatchKind::Pccm : PatchKind::RegularBSpline;
-    const AssemblyStats st = assemble_patch(leaves, du, dv, knot_tolerance, patch);
-    info.removed_knots += st.removed_knots;
+    fpatch.patch.kind = pccm ? PatchKind::Pccm : PatchKind::RegularBSpline;
+    fpatch.removed_knots = assemble_patch(fpatch.leaves, du, dv, knot_tolerance, same_surface, fpatch.patch).removed_knots;
+  });
+  for (int F = 0; F < ma.num_faces(); ++F) {
+    if (la.face_hole[F] || capped_a[F]) continue;
+    FacePatch& fpatch = face_patches[F];
+    std::vector<PatchLeaf> leaves = std::move(fpatch.leaves);
+    NurbsPatch patch = std::move(fpatch.patch);
+    const bool pccm = patch.kind == PatchKind::Pccm;
+    info.level = std::max(info.level, fpatch.deepest);
+    info.removed_knots += fpatch.removed_knots;
     info.leaves += static_cast<long long>(leaves.size());
     patch.base_faces.push_back(a == 0 ? F : base.mesh.corner_face(F));  // level-1 face F = child of corner F
     (pccm ? info.pccm_patches : info.regular_patches)++;

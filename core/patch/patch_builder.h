@@ -1,5 +1,5 @@
 // Catmull-Clark cage -> PatchSet: one bicubic NURBS patch per quad of the coarsest all-quad
-// mesh, with only the knots its surface needs (docs/patches.md, docs/math.md).
+// mesh, with only the knots its surface needs (docs/patches.md).
 //
 // Pipeline (each phase has its own file in core/patch/):
 //   1. a := 0 if the cage is all quads (holes and polar caps aside), else 1 (one CC step

@@ -2,8 +2,8 @@
 //
 // A quad whose four corners are regular *for it* (smooth and 4-valent; a crease vertex with 2
 // faces on the quad's side; a corner vertex with 1 face) is exactly the bicubic B-spline of
-// its 4x4 neighbourhood, with phantom points 2 P0 - P1 across sharp sides (docs/math.md,
-// "Regular patches"). LevelView answers the topological questions on one level (the whole
+// its 4x4 neighbourhood, with phantom points 2 P0 - P1 across sharp sides (docs/patches.md,
+// "Regular pieces"). LevelView answers the topological questions on one level (the whole
 // coarse level or a local piece of a deeper one).
 #pragma once
 
