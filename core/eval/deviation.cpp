@@ -120,7 +120,9 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
       auto [it, inserted] = local_vertex.emplace(v, static_cast<int>(sub.positions.size()));
       if (inserted) {
         sub.positions.push_back(piece.mesh.x[v]);
-        if (lk.vertex_sharpness[v] > 0) sub.corners.push_back({it->second, lk.vertex_sharpness[v]});
+        // Semi-sharp tags are at least 3 rings from the vertex at its fan's level (its zone and
+        // the samples' neighbourhoods are clear of them): dropping them changes no sample.
+        if (lk.vertex_sharpness[v] >= kInfiniteSharpness) sub.corners.push_back({it->second, lk.vertex_sharpness[v]});
       }
       return it->second;
     };
@@ -135,7 +137,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
     for (const auto& [f, ring] : local)
       for (int h = mk.face_begin(f); h < mk.face_end(f); ++h) {
         const int e = mk.corner_edge(h);
-        if (lk.edge_sharpness[e] > 0 && !mk.is_boundary_edge(e) && mk.edge_corner(e) == h)
+        if (lk.edge_sharpness[e] >= kInfiniteSharpness && !mk.is_boundary_edge(e) && mk.edge_corner(e) == h)
           sub.creases.push_back({local_vertex[mk.edge_vertex(e, 0)], local_vertex[mk.edge_vertex(e, 1)], lk.edge_sharpness[e]});
       }
     // Refine the local cage, following the zone faces' descendants.
@@ -197,23 +199,24 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
   return out;
 }
 
+int fan_extra_levels_for_tolerance(const IrregularFan& fan, double max, double tolerance) {
+  if (max <= tolerance) return 0;
+  double rate = 2.0;
+  switch (fan.mode) {
+    case FanMode::Smooth:
+    case FanMode::Dart: rate = deviation_rate(fan.valence); break;
+    case FanMode::Crease: rate = deviation_rate(2 * fan.sectors); break;
+    case FanMode::Corner: rate = deviation_rate(4 * fan.sectors); break;
+    case FanMode::Approximate: rate = 2.0; break;
+  }
+  rate = std::max(rate, 1.2);
+  return static_cast<int>(std::ceil(std::log(max / tolerance) / std::log(rate) - 1e-9));
+}
+
 int extra_levels_for_tolerance(const PatchBuild& build, const DeviationReport& measured, double tolerance) {
   int extra = 0;
-  for (const FanDeviation& fd : measured.fans) {
-    if (fd.max <= tolerance) continue;
-    const IrregularFan& fan = build.info.fans[fd.fan];
-    double rate = 2.0;
-    switch (fan.mode) {
-      case FanMode::Smooth:
-      case FanMode::Dart: rate = deviation_rate(fan.valence); break;
-      case FanMode::Crease: rate = deviation_rate(2 * fan.sectors); break;
-      case FanMode::Corner: rate = deviation_rate(4 * fan.sectors); break;
-      case FanMode::Approximate: rate = 2.0; break;
-    }
-    rate = std::max(rate, 1.2);
-    const int j = static_cast<int>(std::ceil(std::log(fd.max / tolerance) / std::log(rate) - 1e-9));
-    extra = std::max(extra, j);
-  }
+  for (const FanDeviation& fd : measured.fans)
+    extra = std::max(extra, fan_extra_levels_for_tolerance(build.info.fans[fd.fan], fd.max, tolerance));
   return extra;
 }
 

@@ -37,6 +37,10 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels = 2
 /// interior vertex of valence n: 1 / max(lambda_n^2, mu_n) (MATH.md 5.3). 4 for n = 4.
 double deviation_rate(int valence);
 
+/// Extra levels after which one fan's deviation `max` falls to `tolerance`, extrapolated with
+/// its rate (deviation_rate of its valence; open and approximate fans as documented below).
+int fan_extra_levels_for_tolerance(const IrregularFan& fan, double max, double tolerance);
+
 /// Extra levels (beyond the build's) after which every fan's deviation, extrapolated with
 /// its valence's rate, is at most `tolerance` (model units). Fans of the open and
 /// approximate kinds use the rate of the smallest valence > 4 that bounds them (2, a

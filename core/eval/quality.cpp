@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/util/parallel.h"
 #include "core/util/tolerances.h"
 
 namespace subd2nurbs {
@@ -121,27 +122,50 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   CurvatureSummary& cs = q.curvature;
   cs.min_k = HUGE_VAL;
   cs.max_k = -HUGE_VAL;
-  for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
-    const NurbsPatch& patch = ps.patches[pi];
-    if (patch.kind == PatchKind::PolarCap) {  // Bi-cubic polar, not Catmull-Clark: not measured
-      ++q.polar_patches;
-      continue;
-    }
-    for (const std::array<double, 2>& st : quality_sample_parameters(b, static_cast<int>(pi), n)) {
-      {
-        DeviationSample d;
-        d.patch = static_cast<int>(pi);
+  // The limit is evaluated in parallel, a block of patches at a time; the samples are then
+  // taken in patch order, so the report does not depend on the threads.
+  struct Evaluated {
+    DeviationSample d;
+    LimitSample L;
+  };
+  const int num_patches = static_cast<int>(ps.patches.size());
+  constexpr int kBlock = 256;
+  std::vector<std::vector<Evaluated>> block(kBlock);
+  for (int first = 0; first < num_patches; first += kBlock) {
+    const int count = std::min(kBlock, num_patches - first);
+    parallel_for(count, [&](int i) {
+      const int pi = first + i;
+      std::vector<Evaluated>& out = block[i];
+      out.clear();
+      const NurbsPatch& patch = ps.patches[pi];
+      if (patch.kind == PatchKind::PolarCap) return;
+      for (const std::array<double, 2>& st : quality_sample_parameters(b, pi, n)) {
+        Evaluated e;
+        DeviationSample& d = e.d;
+        d.patch = pi;
         d.s = st[0];
         d.t = st[1];
         d.limit = patch_to_limit(b, d.patch, d.s, d.t);
         d.point = evaluate(patch, d.s, d.t).p;
-        const LimitSample L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
-        d.parametric = norm(sub(d.point, L.p));
+        e.L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
+        d.parametric = norm(sub(d.point, e.L.p));
         // The closest-point distance is at most the same-parameter one; searching for it only
         // pays where the patch is not the limit itself (Construction Q reparametrizes).
         d.distance = d.parametric > tolerances::kSameSurface * ps.model_size
                          ? std::min(d.parametric, closest_distance(limit, d.limit, d.point))
                          : d.parametric;
+        out.push_back(e);
+      }
+    });
+    for (int i = 0; i < count; ++i) {
+      const int pi = first + i;
+      if (ps.patches[pi].kind == PatchKind::PolarCap) {  // Bi-cubic polar, not Catmull-Clark: not measured
+        ++q.polar_patches;
+        continue;
+      }
+      for (const Evaluated& e : block[i]) {
+        const DeviationSample& d = e.d;
+        const LimitSample& L = e.L;
         ++q.deviation_samples;
         sum += d.distance;
         psum += d.parametric;
@@ -184,13 +208,19 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   for (const BoundaryCurve& c : ps.curves)
     if (c.uses.size() == 1) ++q.boundary_edges;
   const int m = 24;
-  for (const CurveMeasure& cm : continuity.curves) {
+  // Each shared curve's limit normal jump is measured in parallel, then taken in curve order.
+  const int num_curves = static_cast<int>(continuity.curves.size());
+  std::vector<EdgeQuality> measured(num_curves);
+  std::vector<char> measured_ok(num_curves, 0);
+  parallel_for(num_curves, [&](int ci) {
+    const CurveMeasure& cm = continuity.curves[ci];
     const BoundaryCurve& c = ps.curves[cm.curve];
-    if (c.uses.size() != 2) continue;
+    if (c.uses.size() != 2) return;
     if (ps.patches[c.uses[0].patch].kind == PatchKind::PolarCap ||
         ps.patches[c.uses[1].patch].kind == PatchKind::PolarCap)
-      continue;  // a polar cap's side: the limit there is BP subdivision's
-    EdgeQuality e;
+      return;  // a polar cap's side: the limit there is BP subdivision's
+    EdgeQuality& e = measured[ci];
+    measured_ok[ci] = 1;
     e.curve = cm.curve;
     e.claimed = cm.claimed;
     e.gap = cm.gap;
@@ -200,7 +230,6 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
     const int edge = La.mesh.corner_edge(La.mesh.face_begin(F) + u0.side);
     const bool crease = La.edge_sharpness[edge] >= static_cast<float>(kInfiniteSharpness);
     e.expected = crease ? "crease" : "smooth";
-    (crease ? q.crease_edges : q.smooth_edges)++;
     for (int i = 0; i < m; ++i) {
       const double s = (i + 0.5) / m;  // interior samples: the curve's ends may be singular
       Point3 pn[2], ln[2];
@@ -216,10 +245,16 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       e.limit_normal_jump_deg = std::max(e.limit_normal_jump_deg, lj);
       e.normal_jump_error_deg = std::max(e.normal_jump_error_deg, std::abs(pj - lj));
     }
+  });
+  for (int ci = 0; ci < num_curves; ++ci) {
+    if (!measured_ok[ci]) continue;
+    const EdgeQuality& e = measured[ci];
+    const bool crease = std::string(e.expected) == "crease";
+    (crease ? q.crease_edges : q.smooth_edges)++;
     q.max_gap = std::max(q.max_gap, e.gap);
     if (!crease) q.max_smooth_normal_jump_deg = std::max(q.max_smooth_normal_jump_deg, e.normal_jump_deg);
     q.max_normal_jump_error_deg = std::max(q.max_normal_jump_error_deg, e.normal_jump_error_deg);
-    if ((crease && cm.claimed != Continuity::C0) || (!crease && cm.claimed == Continuity::C0))
+    if ((crease && e.claimed != Continuity::C0) || (!crease && e.claimed == Continuity::C0))
       ++q.class_mismatches;
     q.edges.push_back(e);
   }

@@ -660,10 +660,11 @@ struct LimitEvaluator::DescentCache {
   struct Node {
     LocalLevel level;
     int first_child = 0;
+    std::array<Prepared, 4> children;  ///< prepare() of the four child faces
   };
   std::mutex mutex;
   std::unordered_map<std::uint64_t, std::shared_ptr<const Node>> nodes;
-  static constexpr size_t kMaxNodes = 2048;
+  static constexpr size_t kMaxNodes = 16384;
 
   template <class Make>
   std::shared_ptr<const Node> get(std::uint64_t key, Make&& make) {
@@ -697,7 +698,9 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
   double s = s0, t = t0;
   for (;; ++depth) {
     if (L->face_hole[f]) throw std::domain_error("limit: the point lies on a hole (no limit surface)");
-    Prepared pr = prepare(*L, *P, f);
+    Prepared fresh;
+    if (!cached) fresh = prepare(*L, *P, f);
+    const Prepared& pr = cached ? cached->children[f - cached->first_child] : fresh;
     if (pr.method != LimitMethod::Refined) {
       bool singular = false;
       const Derivs d = eval_prepared(pr, s, t, &singular);
@@ -754,6 +757,18 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
         ring.pos = *P;
         v = m.corner_vertex(m.face_begin(f) + k);
       }
+      // Only v's own tags decide its limit (its rule, its crease neighbours); clearing the
+      // others keeps limit_stencils on closed-form masks instead of refining past semi-sharp
+      // tags elsewhere in the ring.
+      {
+        const PolyMesh& rm = ring.level.mesh;
+        std::vector<char> at_v(rm.num_edges(), 0);
+        for_each_vertex_edge(rm, v, [&](int e, int) { at_v[e] = 1; });
+        for (int e = 0; e < rm.num_edges(); ++e)
+          if (!at_v[e] && semi(ring.level.edge_sharpness[e])) ring.level.edge_sharpness[e] = 0.0f;
+        for (int x = 0; x < rm.num_vertices(); ++x)
+          if (x != v && semi(ring.level.vertex_sharpness[x])) ring.level.vertex_sharpness[x] = 0.0f;
+      }
       const StencilTable lim = limit_stencils(ring.level);
       Point3 p{};
       for (int q = lim.offsets[v]; q < lim.offsets[v + 1]; ++q) axpy(p, lim.weights[q], ring.pos[lim.indices[q]]);
@@ -767,6 +782,7 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
       cached = cache->get(key, [&] {
         DescentCache::Node n;
         n.level = refine_local(*L, *P, f, n.first_child);
+        for (int c = 0; c < 4; ++c) n.children[c] = prepare(n.level.level, n.level.pos, n.first_child + c);
         return n;
       });
       key = key * 4 + static_cast<std::uint64_t>(k);
@@ -779,6 +795,7 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
       L = &cur.level;
       P = &cur.pos;
       key = 0;
+      cached = nullptr;
     }
     f = first_child + k;
     A = A.then(child_map(k));
@@ -940,10 +957,12 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
       }
     }
     if (fc.level1) {
-      // Key: a leading 1 bit, the cache slot, then 2 bits per level of the path.
-      const std::uint64_t key = ((std::uint64_t{1} << 24) + static_cast<std::uint64_t>(cache_index)) * 4 + static_cast<std::uint64_t>(k);
+      // Key: a leading 1 bit, the cache slot, 10 bits for the child (an n-gon has n), then 2
+      // bits per level of the path.
+      const std::uint64_t key =
+          ((std::uint64_t{1} << 24) + static_cast<std::uint64_t>(cache_index)) * 1024 + static_cast<std::uint64_t>(k);
       LimitSample out = eval_general(fc.level1->level, fc.level1->pos, fc.first_child + k, s, t, A, method, 1,
-                                     descent_.get(), cache_index < (1 << 24) ? key : 0);
+                                     descent_.get(), cache_index < (1 << 24) && k < 1024 ? key : 0);
       if (method && *method != LimitMethod::Fallback) *method = LimitMethod::Refined;
       return out;
     }
