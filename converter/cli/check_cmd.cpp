@@ -18,8 +18,11 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
       "Measure the conversion's patches against the exact limit surface: deviation, gaps and "
       "normal jumps per edge with the class each edge should have, curvature");
   c->add_option("MESH", o.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
-  c->add_option("--level", o.level, "Refinement levels beyond the minimum (as convert --level)")
-      ->check(CLI::Range(0, 12));
+  c->add_option("--level", o.level,
+                "Pin the refinement levels beyond the minimum (as convert --level; default: the "
+                "levels convert's default tolerance chooses)")
+      ->check(CLI::Range(0, 12))
+      ->each([&o](const std::string&) { o.level_given = true; });
   c->add_option("--json", o.json, "Write the quality report as JSON");
   c->add_option("--samples", o.samples, "Samples per patch side (default 9)")->check(CLI::Range(2, 64));
   c->add_flag("-q,--quiet", o.quiet, "No progress and no summary (warnings are still printed)");
@@ -39,7 +42,10 @@ void run_check(const CheckOptions& o, std::ostream& err) {
     throw UsageError("--level " + std::to_string(o.level) + " would refine " + o.mesh + " too far");
 
   pipeline::ConversionSettings settings;
-  settings.level = o.level;
+  settings.level = o.level_given ? o.level : 0;
+  settings.tolerance_given = !o.level_given;  // the same patches as convert without options
+  settings.tolerance = pipeline::kDefaultTolerance;
+  settings.tolerance_is_default = !o.level_given;
   settings.build_brep = false;
   pipeline::ConversionProgress progress;
   if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };

@@ -15,7 +15,8 @@ namespace subd2nurbs::cli {
 
 struct CheckOptions {
   std::string mesh;
-  int level = 0;
+  int level = 0;     ///< with level_given: pinned extra levels (else the default tolerance, as convert)
+  bool level_given = false;
   std::string json;  ///< output path, empty for none
   int samples = 9;   ///< per patch side
   bool quiet = false;

@@ -299,15 +299,16 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   CLI::Option* level_option =
       convert_command
           ->add_option("--level", convert.level,
-                       "Refinement levels beyond the minimum (default 0): each level shrinks the "
-                       "deviation near extraordinary vertices")
+                       "Pin the refinement levels beyond the minimum at every fan instead of "
+                       "choosing them from the tolerance: each level shrinks the deviation near "
+                       "extraordinary vertices")
           ->check(CLI::Range(0, 12));
   CLI::Option* tolerance_option =
       convert_command
           ->add_option("--tolerance", convert.tolerance,
-                       "Choose the level for this deviation from the limit surface, relative to "
-                       "the bounding-box diagonal (see --absolute); at most " +
-                           std::to_string(kMaxToleranceExtraLevels) + " extra levels")
+                       "Deviation from the limit surface to reach, relative to the bounding-box "
+                       "diagonal (see --absolute): each fan gets the levels it needs, at most " +
+                           std::to_string(kMaxFanExtraLevels) + " extra (default 1e-4 unless --level is given)")
           ->check(CLI::PositiveNumber)
           ->excludes(level_option);
   convert_command->add_flag("--absolute", convert.absolute, "--tolerance is in model units")

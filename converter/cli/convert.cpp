@@ -113,7 +113,8 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
   if (kind == OutputKind::Step) err << " " << occt::to_string(schema);
   err << ")\n";
   err << "  patches    " << ps.patches.size() << " (" << info.regular_patches << " regular, "
-      << info.pccm_patches << " pccm, " << info.caps.size() << " polar caps), level " << info.level
+      << info.pccm_patches << " pccm, " << info.caps.size() << " polar caps), " << info.total_poles
+      << " poles, deepest level " << info.level
       << " (coarse level " << info.coarse_level << ", " << c.extra_levels << " extra)\n";
   if (!c.caps.empty()) {
     double dist = 0, angle = 0, k_near = 0, k_far = 0;
@@ -159,8 +160,10 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
   }
   err << "\n";
   if (c.tolerance_given)
-    err << "  tolerance  " << short_number(c.tolerance.absolute) << " (model units): "
-        << (c.tolerance.met ? "met" : "NOT met") << "\n";
+    err << "  tolerance  " << short_number(c.tolerance.absolute) << " (model units"
+        << (c.tolerance.is_default ? ", the default 1e-4 of the model size" : "") << "): "
+        << (c.tolerance.met ? "met" : "NOT met") << "; " << c.tolerance.fans_deepened
+        << " vertices' fans deepened, by up to " << c.tolerance.used << " levels\n";
 }
 
 }  // namespace
@@ -208,15 +211,16 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
         << " fan vertices)\n";
 
   if (options.level_given && level_faces(base, options.level) > kMaxLevelFaces)
-    throw UsageError("--level " + std::to_string(options.level) + " would refine " + options.mesh +
-                     " to about " + short_number(level_faces(base, options.level)) +
-                     " faces (limit " + short_number(kMaxLevelFaces) + "); use a lower --level");
+    throw UsageError("--level " + std::to_string(options.level) + " could need about " +
+                     short_number(level_faces(base, options.level)) + " polynomial pieces for " + options.mesh +
+                     " (limit " + short_number(kMaxLevelFaces) + "); use a lower --level");
 
   // Patches, measures and (unless the output is patch JSON) the B-rep.
   pipeline::ConversionSettings settings;
   settings.level = options.level_given ? options.level : 0;
-  settings.tolerance_given = options.tolerance_given;
-  settings.tolerance = options.tolerance;
+  settings.tolerance_given = options.tolerance_given || !options.level_given;
+  settings.tolerance = options.tolerance_given ? options.tolerance : pipeline::kDefaultTolerance;
+  settings.tolerance_is_default = !options.tolerance_given && !options.level_given;
   settings.absolute = options.absolute;
   settings.build_brep = kind != OutputKind::Json;
   settings.patch.polar = options.polar == "on";

@@ -32,7 +32,7 @@ struct ConvertOptions {
 };
 
 /// Most extra levels --tolerance adds; a tolerance needing more is reported as capped.
-constexpr int kMaxToleranceExtraLevels = pipeline::kMaxToleranceExtraLevels;
+constexpr int kMaxFanExtraLevels = pipeline::kMaxFanExtraLevels;
 
 /// Converts a cage. Progress, warnings and the summary go to `err`.
 /// \throw UsageError (bad options, unknown output extension, a level too deep),

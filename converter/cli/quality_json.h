@@ -15,6 +15,9 @@ namespace subd2nurbs::cli {
 std::string quality_json(const QualityReport& q, double model_size, int indent);
 
 /// A copy of a JSON object text with `"quality": <quality>` added as its last member.
+/// `text` (a JSON object) with the member `name`: `value` appended.
+std::string add_member(const std::string& text, const std::string& name, const std::string& value);
+
 std::string add_quality_member(const std::string& object_text, const std::string& quality);
 
 /// measure_quality of a conversion's patches against the exact limit of its cage.

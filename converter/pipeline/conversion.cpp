@@ -46,9 +46,12 @@ std::string short_number(double x) {
 }
 
 double level_faces(const SubdivLevel& base, int extra) {
+  // Upper bound of the pieces: every coarse quad one bicubic, plus, at each of its corners that
+  // has a fan, 3 pieces per level down to the zone and the zone's 4 (semi-sharp creases add
+  // pieces along their edges, which the sharpness bounds: at most 11 levels).
   const PolyMesh& m = base.mesh;
   const double coarse_quads = m.all_quads() ? m.num_faces() : m.num_corners();
-  return coarse_quads * std::pow(4.0, 2 + extra);
+  return coarse_quads * (1 + 4 * (3.0 * (2 + extra) + 4));
 }
 
 namespace {
@@ -132,8 +135,8 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   };
   const int level = settings.tolerance_given ? 0 : settings.level;
   if (level > 0 && level_faces(base, level) > kMaxLevelFaces)
-    throw SettingsError("level " + std::to_string(level) + " would refine the cage to about " +
-                        short_number(level_faces(base, level)) + " faces (limit " +
+    throw SettingsError("level " + std::to_string(level) + " could need about " +
+                        short_number(level_faces(base, level)) + " polynomial pieces (limit " +
                         short_number(kMaxLevelFaces) + "); use a lower level");
 
   // Patches, at the level asked for or at the minimum level first for a tolerance.
@@ -156,29 +159,46 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   build(level);
 
   if (settings.tolerance_given) {
+    // Each fan gets the extra levels its own deviation needs (per-valence rates), so a
+    // tolerance deepens only the fans that miss it; measured again after each rebuild.
     ToleranceResult& tr = c.tolerance;
     tr.requested = settings.tolerance;
+    tr.is_default = settings.tolerance_is_default;
     tr.absolute = settings.absolute ? settings.tolerance : settings.tolerance * c.build.set.model_size;
     measure_deviation_now();
     tr.first_max = c.deviation.max;
-    tr.needed = std::max(0, extra_levels_for_tolerance(c.build, c.deviation, tr.absolute));
-    tr.used = std::min(tr.needed, kMaxToleranceExtraLevels);
-    if (tr.used < tr.needed) {
-      tr.capped = true;
-      tr.cap_reason = "at most " + std::to_string(kMaxToleranceExtraLevels) + " extra levels";
-    }
-    while (tr.used > 0 && level_faces(base, tr.used) > kMaxLevelFaces) {
-      --tr.used;
-      tr.capped = true;
-      tr.cap_reason = "at most " + short_number(kMaxLevelFaces) + " refined faces";
-    }
-    if (tr.capped)
-      warn("subd2nurbs: warning: the tolerance needs " + std::to_string(tr.needed) +
-           " extra levels; using " + std::to_string(tr.used) + " (" + tr.cap_reason + ")");
-    if (tr.used > 0) {
-      build(tr.used);
+    std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
+    for (int round = 0; round < kToleranceRounds; ++round) {
+      bool deeper = false;
+      for (const FanDeviation& fd : c.deviation.fans) {
+        if (fd.max <= tr.absolute) continue;
+        const IrregularFan& fan = c.build.info.fans[fd.fan];
+        const int want = extra[fan.vertex] + std::max(1, fan_extra_levels_for_tolerance(fan, fd.max, tr.absolute));
+        tr.needed = std::max(tr.needed, want);
+        const int use = std::min(want, kMaxFanExtraLevels);
+        if (use > extra[fan.vertex]) {
+          extra[fan.vertex] = use;
+          deeper = true;
+        } else if (want > kMaxFanExtraLevels) {
+          tr.capped = true;
+          tr.cap_reason = "at most " + std::to_string(kMaxFanExtraLevels) + " extra levels per fan";
+        }
+      }
+      if (!deeper) break;
+      PatchOptions po = settings.patch;
+      po.vertex_extra_levels = extra;
+      const auto t0 = Clock::now();
+      stage("building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
+            " vertices for the tolerance)");
+      c.build = build_patches(base, positions, po);
+      c.ms.patches += ms_since(t0);
       measure_deviation_now();
     }
+    tr.used = *std::max_element(extra.begin(), extra.end());
+    tr.fans_deepened = static_cast<int>(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; }));
+    if (tr.capped)
+      warn("subd2nurbs: warning: the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
+           std::to_string(tr.used) + " (" + tr.cap_reason + ")");
     tr.met = c.deviation.max <= tr.absolute;
     if (!tr.met)
       warn("subd2nurbs: warning: tolerance NOT met: deviation " + short_number(c.deviation.max) +
@@ -186,11 +206,6 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
            std::to_string(c.build.info.level));
   }
   const PatchBuildInfo& info = c.build.info;
-  if (info.sharpened_edges > 0 || info.sharpened_vertices > 0)
-    warn("subd2nurbs: warning: " + std::to_string(info.sharpened_edges) + " edges and " +
-         std::to_string(info.sharpened_vertices) +
-         " vertices were still semi-sharp at the level cap (level " + std::to_string(info.level) +
-         ") and were made infinitely sharp");
 
   // Measures.
   auto t = Clock::now();
@@ -249,7 +264,8 @@ std::string report_json(const ConversionResult& c) {
   line("  \"extra_levels\": " + std::to_string(c.extra_levels) + ",");
   line("  \"patches\": {\"total\": " + std::to_string(ps.patches.size()) + ", \"regular\": " +
        std::to_string(info.regular_patches) + ", \"pccm\": " + std::to_string(info.pccm_patches) +
-       ", \"polar_caps\": " + std::to_string(info.caps.size()) + "},");
+       ", \"polar_caps\": " + std::to_string(info.caps.size()) + ", \"poles\": " + std::to_string(info.total_poles) +
+       ", \"pieces\": " + std::to_string(info.leaves) + ", \"removed_knots\": " + std::to_string(info.removed_knots) + "},");
   const auto& cc = c.curves_by_continuity;
   line("  \"curves\": {\"total\": " + std::to_string(ps.curves.size()) + ", \"boundary\": " +
        std::to_string(cc[0]) + ", \"c0\": " + std::to_string(cc[1]) + ", \"g1\": " +
@@ -321,13 +337,24 @@ std::string report_json(const ConversionResult& c) {
   }
   line("    \"where\": " + (d.samples > 0 ? json_point(d.where) : std::string("null")) + ", \"worst_fan\": " + worst + ",");
   line("    \"samples\": " + std::to_string(d.samples) + ", \"sample_levels\": " + std::to_string(d.sample_levels) + ",");
+  std::string per_fan = "    \"fans\": [";
+  for (size_t i = 0; i < d.fans.size(); ++i) {
+    const FanDeviation& fd = d.fans[i];
+    const IrregularFan& f = info.fans[fd.fan];
+    per_fan += std::string(i ? ",\n      " : "\n      ") + "{\"base_vertex\": " + std::to_string(f.base_vertex) +
+               ", \"valence\": " + std::to_string(f.valence) + ", \"mode\": " + json_string(to_string(f.mode)) +
+               ", \"level\": " + std::to_string(f.level) + ", \"max\": " + json_number(fd.max) + "}";
+  }
+  line(per_fan + (d.fans.empty() ? "]," : "\n    ],"));
   if (c.tolerance_given) {
     const ToleranceResult& t = c.tolerance;
-    line("    \"tolerance\": {\"requested\": " + json_number(t.requested) + ", \"units\": " +
+    line("    \"tolerance\": {\"requested\": " + json_number(t.requested) + ", \"default\": " +
+         json_bool(t.is_default) + ", \"units\": " +
          json_string(c.tolerance_absolute ? "model" : "relative") + ", \"requested_model_units\": " +
          json_number(t.absolute) + ",");
     line("      \"initial_max\": " + json_number(t.first_max) + ", \"extra_levels_needed\": " +
          std::to_string(t.needed) + ", \"extra_levels_used\": " + std::to_string(t.used) +
+         ", \"fans_deepened\": " + std::to_string(t.fans_deepened) +
          ", \"capped\": " + json_bool(t.capped) + ",");
     line("      \"achieved\": " + json_number(d.max) + ", \"achieved_relative\": " + relative(d.max) +
          ", \"met\": " + json_bool(t.met) + "}},");

@@ -19,11 +19,18 @@
 
 namespace subd2nurbs::pipeline {
 
-/// Level-k faces above which a conversion is refused (level) or its levels capped
-/// (tolerance): the level-k Bezier nets alone take 384 bytes per face.
-constexpr double kMaxLevelFaces = 4e6;
-/// Most extra levels a tolerance adds; a tolerance needing more is reported as capped.
-constexpr int kMaxToleranceExtraLevels = 4;
+/// Polynomial pieces (level_faces) above which a conversion with a level is refused: each
+/// takes about half a kilobyte while the patches are built.
+constexpr double kMaxLevelFaces = 2e7;
+/// The deviation tolerance used when neither a level nor a tolerance is given (relative to the
+/// bounding-box diagonal).
+constexpr double kDefaultTolerance = 1e-4;
+/// Most extra levels a tolerance adds at one fan (each costs a few knots in the patches at that
+/// vertex); a tolerance needing more is reported as capped.
+constexpr int kMaxFanExtraLevels = 12;
+/// Rebuilds a tolerance may take (the per-valence rates are asymptotic, so a fan may need a
+/// second look).
+constexpr int kToleranceRounds = 4;
 /// Samples per shared curve for the continuity measures.
 constexpr int kContinuitySamples = 24;
 /// Extra levels of refinement for the deviation samples.
@@ -37,6 +44,7 @@ struct ConversionSettings {
   bool tolerance_given = false;  ///< choose the level so that the deviation is <= tolerance
   double tolerance = 0;         ///< > 0 when given
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
+  bool tolerance_is_default = false;  ///< the tolerance is kDefaultTolerance, not the user's
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
 };
 
@@ -62,10 +70,12 @@ struct Timings {
 
 struct ToleranceResult {
   double requested = 0;  ///< as given
+  bool is_default = false;  ///< kDefaultTolerance (neither a level nor a tolerance was given)
+  int fans_deepened = 0;    ///< coarse vertices whose fans got extra levels
   double absolute = 0;   ///< in model units
   double first_max = 0;  ///< deviation at the minimum level
-  int needed = 0;        ///< extra levels extra_levels_for_tolerance asked for
-  int used = 0;          ///< after the cap
+  int needed = 0;        ///< most extra levels any fan asked for
+  int used = 0;          ///< most extra levels any fan got (after the cap)
   bool capped = false;
   std::string cap_reason;
   bool met = false;
@@ -112,7 +122,8 @@ struct ConversionResult {
   Timings ms;             ///< load and write are the caller's to fill
 };
 
-/// Level-k faces of a build with `extra` levels: one coarse quad becomes 4^(2 + extra).
+/// An upper bound of the polynomial pieces of a build with `extra` levels (every corner of
+/// every coarse quad irregular).
 double level_faces(const SubdivLevel& base, int extra);
 
 /// Checks `settings` on their own (level >= 0, a positive finite tolerance).

@@ -212,7 +212,15 @@ def convert_cage(cage, level, tolerance, polar, progress=True, **options):
         raise subd2nurbs.SettingsError("PolarHandling must be one of %s" % ", ".join(POLAR))
     if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
         raise subd2nurbs.SettingsError("polar caps are not available in this subd2nurbs build: use Catmull-Clark")
-    kwargs = {"tolerance": tolerance} if tolerance and tolerance > 0 else {"level": int(level)}
+    # Tolerance > 0 chooses the levels; else a nonzero Level pins them (a negative one is
+    # refused by the converter); else (both 0) the default tolerance, as the command line and
+    # the Python module do.
+    if tolerance and tolerance > 0:
+        kwargs = {"tolerance": tolerance}
+    elif level:
+        kwargs = {"level": int(level)}
+    else:
+        kwargs = {}
     kwargs["polar"] = polar == "Polar caps"
     kwargs.update(options)
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
@@ -237,10 +245,12 @@ class NurbsFeature(_Stateless):
     def setup(obj):
         g = "Conversion"
         _add(obj, "App::PropertyLink", "Source", g, "The Cage or Mesh::Feature to convert")
-        _add(obj, "App::PropertyInteger", "Level", g, "Extra refinement levels (0 = the minimum)")
+        _add(obj, "App::PropertyInteger", "Level", g,
+             "If > 0: extra refinement levels at every irregular vertex (0 with Tolerance 0: the "
+             "default tolerance, 1e-4 of the model size)")
         _add(obj, "App::PropertyFloat", "Tolerance", g,
-             "If > 0: choose the level so that the deviation from the limit surface is at most this "
-             "(relative to the model size); Level is then ignored")
+             "If > 0: the deviation from the limit surface to reach (relative to the model size); "
+             "each irregular vertex gets the levels it needs, and Level is ignored")
         if "PolarHandling" not in obj.PropertiesList:
             _add(obj, "App::PropertyEnumeration", "PolarHandling", g,
                  "Polar structures (triangle fans around a pole): one singular polar cap each, or "

@@ -27,6 +27,10 @@ import numpy as np
 from .errors import CageError, ConversionError, SettingsError, Subd2NurbsError, WriteError
 from . import _subd2nurbs
 
+#: The deviation tolerance (relative to the bounding-box diagonal) convert() uses when neither a
+#: level nor a tolerance is given; the command line's default too.
+DEFAULT_TOLERANCE = 1e-4
+
 __version__ = _subd2nurbs.__version__
 #: The OpenCASCADE version the module is linked with (FreeCAD must use the same one to read
 #: our BREP text: see occt_compatible).
@@ -346,10 +350,11 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
             preview=None, preview_samples=16):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
-    level: extra refinement levels beyond the minimum (>= 0; default 0), as --level.
-    tolerance: choose the level so that the deviation from the limit surface is at most this
-        (relative to the bounding-box diagonal, or in model units with absolute=True), as
-        --tolerance / --absolute. Excludes level.
+    level: pin the extra refinement levels beyond the minimum at every fan (>= 0), as --level.
+    tolerance: the deviation from the limit surface to reach (relative to the bounding-box
+        diagonal, or in model units with absolute=True); each fan gets the levels it needs, as
+        --tolerance / --absolute. Excludes level. With neither: DEFAULT_TOLERANCE (1e-4), as the
+        command line does.
     polar: polar structures (triangle fans around a pole, MATH.md 3.1) become one singular
         polar cap each (as --polar on, the default); False: Catmull-Clark everywhere.
     radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
@@ -365,6 +370,10 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     cage = _cage(cage)
     if level is not None and tolerance is not None:
         raise SettingsError("level and tolerance exclude each other (tolerance chooses the level)")
+    if absolute and tolerance is None:
+        raise SettingsError("absolute needs a tolerance")
+    if level is None and tolerance is None:
+        tolerance = DEFAULT_TOLERANCE
     if level is None:
         level = 0
     if not _is_int(level) or level < 0:

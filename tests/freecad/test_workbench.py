@@ -89,12 +89,16 @@ class Workbench(unittest.TestCase):
     def test_properties_and_source_changes_recompute(self):
         cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
         nurbs = s2n.make_nurbs(cage, progress=False)
-        poles0, area0 = first_face_poles(nurbs.Shape), nurbs.Shape.Area
+        area0 = nurbs.Shape.Area
         nurbs.Level = 1
         self.doc.recompute()
-        # One face per cage quad at every level; the level refines each face's B-spline.
         self.assertSolid(nurbs.Shape, 6)
-        self.assertGreater(first_face_poles(nurbs.Shape), poles0)
+        poles1 = first_face_poles(nurbs.Shape)
+        nurbs.Level = 2
+        self.doc.recompute()
+        # One face per cage quad at every level; each level adds knots towards the corners.
+        self.assertSolid(nurbs.Shape, 6)
+        self.assertGreater(first_face_poles(nurbs.Shape), poles1)
         # Moving a cage vertex recomputes the NURBS object through the link.
         coords = list(cage.Coordinates)
         coords[0] -= 0.5

@@ -79,6 +79,47 @@ inline double max_corner_limit_error(const PatchBuild& b) {
   return worst;
 }
 
+/// For every simple interior knot of every patch (both directions): the largest third-derivative
+/// jump across its line, computed from the patch alone (third differences at 4 points of each
+/// adjacent span, exact for a cubic, with coordinates relative to the patch's first pole), as a
+/// position at the patch's own scale: |jump| h^3 / 6, h the smaller adjacent span. Calls
+/// fn(patch, across_u, knot, position_jump, coarse_jump) with coarse_jump in patch parameters.
+template <class Fn>
+void for_each_simple_knot_jump(const PatchBuild& b, Fn&& fn) {
+  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
+    const NurbsPatch& p = b.set.patches[pi];
+    if (p.kind == PatchKind::PolarCap) continue;
+    const Eigen::Vector3d o = ev(p.poles[0]);
+    for (int dir = 0; dir < 2; ++dir) {
+      const KnotVector& kv = dir == 0 ? p.knots_u : p.knots_v;
+      const KnotVector& other = dir == 0 ? p.knots_v : p.knots_u;
+      for (size_t k = 1; k + 1 < kv.knots.size(); ++k) {
+        if (kv.mults[k] != 1) continue;
+        const double a = kv.knots[k - 1], xi = kv.knots[k], c = kv.knots[k + 1];
+        double worst_pos = 0, worst_coarse = 0;
+        for (size_t m = 0; m + 1 < other.knots.size(); ++m)
+          for (double f : {0.2, 0.5, 0.8}) {
+            const double t = other.knots[m] + f * (other.knots[m + 1] - other.knots[m]);
+            auto at = [&](double x) {
+              const SurfaceDerivs d = dir == 0 ? evaluate(p, x, t) : evaluate(p, t, x);
+              return Eigen::Vector3d(ev(d.p) - o);
+            };
+            auto third = [&](double lo, double hi) {
+              const double step = (hi - lo) / 3;
+              const Eigen::Vector3d d3 = at(hi) - 3 * at(lo + 2 * step) + 3 * at(lo + step) - at(lo);
+              return Eigen::Vector3d(d3 / (step * step * step));
+            };
+            const double jump = (third(xi, c) - third(a, xi)).norm();
+            const double h = std::min(xi - a, c - xi);
+            worst_pos = std::max(worst_pos, jump * h * h * h / 6);
+            worst_coarse = std::max(worst_coarse, jump);
+          }
+        fn(static_cast<int>(pi), dir == 0, xi, worst_pos, worst_coarse);
+      }
+    }
+  }
+}
+
 /// Max over the G1 rays of |D + E - 2c(1-t)^2 e'| / |e'| on the first level-k segment
 /// (MATH.md 5.3 and 9), D and E the cross derivatives into the two patches, e' the derivative
 /// along the ray away from the extraordinary vertex. All three are taken in patch parameters,

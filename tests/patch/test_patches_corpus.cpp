@@ -89,20 +89,44 @@ void check_shape(const std::string& name) {
 
   // Semi-sharp creases are refined exactly, whatever their sharpness: none is made sharp.
   EXPECT_EQ(b.info.sharpened_edges + b.info.sharpened_vertices, 0);
-  // OpenSubdiv oracle on the exact part: every piece but the Construction Q zones (all-quad
-  // cages, where OpenSubdiv's ptex faces are the cage's faces).
-  if (b.info.coarse_level != 0) return;
+  // Minimal knots: every simple knot left carries a third-derivative jump above rounding
+  // (measured on the patch itself); a regular coarse quad is exactly 16 poles.
+  int simple_knots = 0, tiny_coarse_jumps = 0;
+  double smallest = HUGE_VAL;
+  for_each_simple_knot_jump(b, [&](int pi, bool across_u, double xi, double pos, double coarse) {
+    ++simple_knots;
+    smallest = std::min(smallest, pos / diag);
+    if (coarse < 1e-9 * diag) ++tiny_coarse_jumps;
+    EXPECT_GT(pos, 1e-13 * diag) << "patch " << pi << (across_u ? " u = " : " v = ") << xi;
+  });
+  long long poles = 0;
+  for (size_t pi = 0; pi < b.set.patches.size(); ++pi) {
+    const NurbsPatch& p = b.set.patches[pi];
+    poles += static_cast<long long>(p.poles.size());
+    if (b.leaves[pi].size() == 1) EXPECT_EQ(p.poles.size(), 16u) << "patch " << pi;
+  }
+  EXPECT_EQ(poles, b.info.total_poles);
+  ::testing::Test::RecordProperty("poles", std::to_string(poles));
+  ::testing::Test::RecordProperty("simple_knots", simple_knots);
+  ::testing::Test::RecordProperty("smallest_knot_jump_relative", sci(smallest));
+  ::testing::Test::RecordProperty("knots_with_coarse_jump_below_1e-9", tiny_coarse_jumps);
+
+  // OpenSubdiv oracle on the exact part: every piece but the Construction Q zones, at the
+  // ptex face each patch parameter maps to (the cage's faces, or the sub-faces of its n-gons).
   const OsdLimitEvaluator osd(cage.input, 10);
   ASSERT_TRUE(osd.ok());
+  std::vector<int> first_ptex(base.mesh.num_faces() + 1, 0);
+  for (int f = 0; f < base.mesh.num_faces(); ++f)
+    first_ptex[f + 1] = first_ptex[f] + (base.mesh.face_size(f) == 4 ? 1 : base.mesh.face_size(f));
   double worst = 0;
   int compared = 0;
   for_each_leaf(b, [&](int pi, const PatchLeaf& leaf) {
     if (leaf.zone) return;
-    const int F = b.set.patches[pi].base_faces[0];
     for (double s : {0.0, 0.3, 0.75})
       for (double t : {0.0, 0.6, 1.0}) {
         const double u = leaf.u0 + s * leaf.size, v = leaf.v0 + t * leaf.size;
-        const OsdLimitEvaluator::Sample o = osd.eval(F, u, v);
+        const LimitParam lp = patch_to_limit(b, pi, u, v);
+        const OsdLimitEvaluator::Sample o = osd.eval(first_ptex[lp.face] + lp.sub, lp.u, lp.v);
         if (!o.regular_patch) continue;
         const SurfaceDerivs d = evaluate(b.set.patches[pi], u, v);
         worst = std::max(worst, (ev(d.p) - ev(o.p)).norm());
@@ -111,7 +135,9 @@ void check_shape(const std::string& name) {
   });
   ::testing::Test::RecordProperty("osd_points", compared);
   ::testing::Test::RecordProperty("osd_max_relative_error", sci(worst / diag));
-  EXPECT_LT(worst, 1e-12 * diag) << compared << " points compared";
+  // Deep pieces (semi-sharp creases decay over up to 10 levels) carry the rounding of as many
+  // refinement steps, ours and OpenSubdiv's: 1e-9 there, 1e-12 where nothing is semi-sharp.
+  EXPECT_LT(worst, (base.max_semi_sharpness() > 0 ? 1e-9 : 1e-12) * diag) << compared << " points compared";
 }
 
 class CorpusPatches : public ::testing::TestWithParam<std::string> {};
