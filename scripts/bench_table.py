@@ -140,24 +140,24 @@ if convert:
 
     # --- table 2 ------------------------------------------------------------------------
     print("### 2. Cage -> patches, against OpenSubdiv building its own patches\n")
-    print("| cage | ours: cage -> PatchSet (ms) | of which refinement (ms) | OpenSubdiv adaptive patch table (ms) | OpenSubdiv uniform level 2 (ms) | ours / OSD adaptive | ours / OSD uniform |")
-    print("|---|---|---|---|---|---|---|")
+    print("| cage | ours: cage -> PatchSet (ms) | of which from_input (ms) | poles | OpenSubdiv adaptive patch table (ms) | OpenSubdiv uniform level 2 (ms) | ours / OSD adaptive | ours / OSD uniform |")
+    print("|---|---|---|---|---|---|---|---|")
     for cage, label in CAGES:
         o = per10k(med(convert, "patches/ours/" + cage), cage)
         rf = per10k(med(convert, "patches/ours_refine/" + cage), cage)
         a = per10k(med(convert, "patches/osd_adaptive/" + cage), cage)
         u = per10k(med(convert, "patches/osd_uniform/" + cage), cage)
-        print("| %s | %s | %s | %s | %s | %s | %s |"
-              % (label, fmt(o), fmt(rf), fmt(a, 2), fmt(u), ratio(o, a, 1), ratio(o, u, 1)))
+        print("| %s | %s | %s | %s | %s | %s | %s | %s |"
+              % (label, fmt(o), fmt(rf), fmt(counter("patches/ours/" + cage, "poles"), 0), fmt(a, 2), fmt(u),
+                 ratio(o, a, 1), ratio(o, u, 1)))
     print("""
-- **ours**: `SubdivLevel::from_input` + `build_patches` with default options, from the cage's
-  arrays to the finished `PatchSet` (one bicubic B-spline per coarse quad, 7 x 7 poles for a
-  regular one, plus the shared corners and boundary curves). Both cages are all quads, so the
-  patches are built from level k = 2.
-- **of which refinement**: `from_input` + `refine_uniform(k)` + positions of every level alone,
-  i.e. what `bench_refine` measures, at this size; the rest of the previous column is building
-  the level-k Bezier nets, the fan constructions, merging them into one B-spline per coarse
-  quad and the boundary topology.
+- **ours**: `SubdivLevel::from_input` + `build_patches` with default options (`--level 0`), from
+  the cage's arrays to the finished `PatchSet`: one bicubic B-spline per coarse quad with only
+  the knots its surface needs (16 poles for a regular quad, nested knots towards an
+  extraordinary corner), plus the shared corners and boundary curves. Nothing is refined
+  whole: each fan's 5 rings are refined locally to level 2, and each quad at an extraordinary
+  vertex walks its quadtree of pieces (docs/patches.md). **poles**: of the whole PatchSet.
+- **of which from_input**: validating the cage and building its connectivity and tags alone.
 - **OpenSubdiv adaptive patch table**: what OpenSubdiv does to get its own patches of the same
   limit surface: `TopologyRefinerFactory::Create` + `RefineAdaptive` (isolation level 2, the same
   level) + `PatchTableFactory::Create` (Gregory-basis end caps, double precision, the options of

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""Real models through the command line, as a user runs them: table 6 of docs/benchmarks.md.
+
+Usage: scripts/bench_models.py SUBD2NURBS CORPUS_DIR REPS > table.md
+
+Each model is converted REPS times (`convert X -o X.step --report r.json`, the defaults) under
+/usr/bin/time; the table gives the median wall time and peak RSS, the STEP size, the faces and
+the poles (from the report), and the report's own timings. Generated cages, written to a
+temporary directory: a regular 100 000-quad torus (500 x 200) and the triangle mesh of
+catmark_car (every face split into triangles, as a game asset or a scan would give it).
+"""
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def torus_obj(path, nu, nv, major=3.0, minor=1.0):
+    with open(path, "w") as f:
+        for i in range(nu):
+            a = 2 * math.pi * i / nu
+            for j in range(nv):
+                b = 2 * math.pi * j / nv
+                r = major + minor * math.cos(b)
+                f.write("v %.17g %.17g %.17g\n" % (r * math.cos(a), r * math.sin(a), minor * math.sin(b)))
+        for i in range(nu):
+            for j in range(nv):
+                def idx(x, y):
+                    return (x % nu) * nv + (y % nv) + 1
+                f.write("f %d %d %d %d\n" % (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)))
+
+
+def triangulated_obj(src, dst):
+    """Every face split into a fan of triangles; tags dropped (a mesh, not a cage)."""
+    with open(src) as f, open(dst, "w") as g:
+        for line in f:
+            if line.startswith("v "):
+                g.write(line)
+            elif line.startswith("f "):
+                ids = [t.split("/")[0] for t in line.split()[1:]]
+                for k in range(1, len(ids) - 1):
+                    g.write("f %s %s %s\n" % (ids[0], ids[k], ids[k + 1]))
+
+
+def run(cli, obj, out_dir):
+    step = os.path.join(out_dir, "out.step")
+    report = os.path.join(out_dir, "r.json")
+    timing = os.path.join(out_dir, "time.txt")
+    cmd = ["/usr/bin/time", "-f", "%e %M", "-o", timing, cli, "convert", obj, "-o", step,
+           "--report", report, "-q"]
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(timing) as f:
+        wall, rss_kb = f.read().split()[-2:]
+    with open(report) as f:
+        r = json.load(f)
+    return float(wall), int(rss_kb) / 1024.0, os.path.getsize(step) / 1e6, r
+
+
+def main():
+    cli, corpus, reps = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    with tempfile.TemporaryDirectory() as tmp:
+        torus = os.path.join(tmp, "torus_100k.obj")
+        torus_obj(torus, 500, 200)
+        car_tris = os.path.join(tmp, "car_triangles.obj")
+        triangulated_obj(os.path.join(corpus, "catmark_car.obj"), car_tris)
+        models = [("catmark_bishop", os.path.join(corpus, "catmark_bishop.obj")),
+                  ("catmark_rook", os.path.join(corpus, "catmark_rook.obj")),
+                  ("catmark_car", os.path.join(corpus, "catmark_car.obj")),
+                  ("catmark_pawn", os.path.join(corpus, "catmark_pawn.obj")),
+                  ("catmark_helmet", os.path.join(corpus, "catmark_helmet.obj")),
+                  ("catmark_car as triangles", car_tris),
+                  ("100 000-quad regular torus", torus)]
+        print("| model (cage faces) | wall, median (s) | peak RSS, median (MB) | STEP (MB) | B-rep faces | poles | poles per face | of the wall: patches / quality report (s) |")
+        print("|---|---|---|---|---|---|---|---|")
+        for label, obj in models:
+            with open(obj) as f:
+                faces = sum(1 for line in f if line.startswith("f "))
+            runs = [run(cli, obj, tmp) for _ in range(reps)]
+            wall = statistics.median(x[0] for x in runs)
+            rss = statistics.median(x[1] for x in runs)
+            size, r = runs[-1][2], runs[-1][3]
+            ms = r["timings_ms"]
+            quality_s = r.get("quality_ms", 0.0) / 1000.0
+            poles = r["patches"]["poles"]
+            nfaces = r["brep"]["faces"]
+            print("| %s (%d) | %.2f | %.0f | %.1f | %d | %d | %.1f | %.2f / %.2f |"
+                  % (label, faces, wall, rss, size, nfaces, poles, poles / nfaces,
+                     ms["patches"] / 1000.0, quality_s))
+
+
+if __name__ == "__main__":
+    main()
