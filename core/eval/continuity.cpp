@@ -1,5 +1,7 @@
 #include "core/eval/continuity.h"
 
+#include "core/util/parallel.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -64,9 +66,15 @@ CurveMeasure measure_curve(const PatchSet& ps, int ci, int samples) {
 
 ContinuityReport measure_continuity(const PatchSet& ps, int samples) {
   ContinuityReport r;
-  for (int ci = 0; ci < static_cast<int>(ps.curves.size()); ++ci) {
+  // Curves are measured in parallel and summarised in curve order.
+  const int n = static_cast<int>(ps.curves.size());
+  std::vector<CurveMeasure> measured(n);
+  parallel_for(n, [&](int ci) {
+    if (ps.curves[ci].uses.size() >= 2) measured[ci] = measure_curve(ps, ci, samples);
+  });
+  for (int ci = 0; ci < n; ++ci) {
     if (ps.curves[ci].uses.size() < 2) continue;
-    CurveMeasure m = measure_curve(ps, ci, samples);
+    const CurveMeasure& m = measured[ci];
     r.max_gap = std::max(r.max_gap, m.gap);
     const Continuity c = m.claimed;
     if (c == Continuity::G1 || c == Continuity::C1 || c == Continuity::C2) {

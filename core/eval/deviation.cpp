@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include "core/patch/quad_frames.h"
+#include "core/util/parallel.h"
 
 namespace subd2nurbs {
 namespace {
@@ -104,9 +105,18 @@ double deviation_rate(int n) {
 DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
   DeviationReport out;
   out.sample_levels = sample_levels;
-  double sum = 0;
-  for (size_t fi = 0; fi < build.info.fans.size(); ++fi) {
+  // Fans are measured in parallel, then summarised in fan order (the result does not depend on
+  // the threads).
+  struct PerFan {
+    FanDeviation fd;
+    double sum = 0, max = 0;
+    Point3 where{};
+  };
+  std::vector<PerFan> per_fan(build.info.fans.size());
+  parallel_for(static_cast<int>(build.info.fans.size()), [&](int fi) {
     const IrregularFan& fan = build.info.fans[fi];
+    FanDeviation& fd = per_fan[fi].fd;
+    double& sum = per_fan[fi].sum;
     const FanPiece& piece = build.fan_pieces.at(static_cast<size_t>(fan.piece));
     const SubdivLevel& lk = piece.mesh.level;
     const PolyMesh& mk = lk.mesh;
@@ -166,8 +176,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
     limit_stencils(level).apply(x, limit);
     // Samples: the vertices of the descendant faces, each measured against its root face's
     // net and the nets of the faces sharing an edge with it.
-    FanDeviation fd;
-    fd.fan = static_cast<int>(fi);
+    fd.fan = fi;
     std::vector<char> done(level.mesh.num_vertices(), 0);
     for (size_t i = 0; i < faces.size(); ++i) {
       const int root = roots[i];
@@ -182,18 +191,24 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
         double d = 1e300;
         for (int c : candidates)
           if (piece.has_net[c]) d = std::min(d, distance_to_net(&piece.nets[static_cast<size_t>(c) * 16], q));
+        if (d > fd.max) per_fan[fi].where = limit[v];
         fd.max = std::max(fd.max, d);
         ++fd.samples;
         sum += d;
-        if (d > out.max) {
-          out.max = d;
-          out.where = limit[v];
-          out.worst_fan = static_cast<int>(fi);
-        }
       }
     }
-    out.samples += fd.samples;
-    out.fans.push_back(fd);
+  });
+  double sum = 0;
+  for (size_t fi = 0; fi < per_fan.size(); ++fi) {
+    const PerFan& pf = per_fan[fi];
+    sum += pf.sum;
+    if (pf.fd.max > out.max) {
+      out.max = pf.fd.max;
+      out.where = pf.where;
+      out.worst_fan = static_cast<int>(fi);
+    }
+    out.samples += pf.fd.samples;
+    out.fans.push_back(pf.fd);
   }
   out.mean = out.samples ? sum / out.samples : 0;
   return out;
