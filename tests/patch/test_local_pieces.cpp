@@ -1,0 +1,184 @@
+// The phases of the patch builder on their own:
+// - local refinement (core/patch/local_mesh): a cut-out 2-ring refined alone gives exactly the
+//   points the whole cage's uniform refinement gives, two levels down, with semi-sharp creases
+//   of both decay rules (an edge point's rule reads the child sharpness of both halves, and
+//   the Chaikin rule for the far half reads the edges at the far end: hence 2 rings, not 1);
+// - knot assembly (core/patch/knot_assembly): pieces cut from one polynomial merge back into
+//   16 poles; pieces of a B-spline with real knots keep exactly those knots; double knots stay.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/eval/nurbs_eval.h"
+#include "core/patch/knot_assembly.h"
+#include "core/patch/local_mesh.h"
+#include "io/obj_reader.h"
+
+namespace subd2nurbs::testing {
+namespace {
+
+double dist(const Point3& a, const Point3& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+// Cuts the 2-ring of every face of the cage, refines it twice (cutting the 2-ring of the
+// children in between) and compares the grandchildren's corners with the uniform refinement.
+double worst_local_refinement_error(const std::string& name, int rings = 2) {
+  const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj");
+  const SubdivLevel base = load_and_validate(cage);
+  const std::vector<Point3> x0(cage.input.positions.begin(), cage.input.positions.end());
+  const Refinement r = refine_uniform(base, 2);
+  const std::vector<std::vector<Point3>> X = r.positions(x0);
+  const PolyMesh& m0 = base.mesh;
+  const PolyMesh& m1 = r.levels[1].mesh;
+  const PolyMesh& m2 = r.levels[2].mesh;
+  double worst = 0;
+  for (int F = 0; F < m0.num_faces(); ++F) {
+    const std::vector<int> faces = face_rings(m0, vertices_of(m0, {F}), rings);
+    const int local_F = static_cast<int>(std::lower_bound(faces.begin(), faces.end(), F) - faces.begin());
+    const LocalMesh piece0 = cut_out(base, x0, faces);
+    const LocalMesh piece1 = refine_piece(piece0);
+    // Children of F: face index = corner index, in the whole level and in the piece.
+    std::vector<int> children_local, children_global;
+    for (int k = 0; k < m0.face_size(F); ++k) {
+      children_local.push_back(piece0.level.mesh.face_begin(local_F) + k);
+      children_global.push_back(m0.face_begin(F) + k);
+    }
+    const std::vector<int> faces1 = face_rings(piece1.level.mesh, vertices_of(piece1.level.mesh, children_local), rings);
+    const LocalMesh cut1 = cut_out(piece1, faces1);
+    const LocalMesh piece2 = refine_piece(cut1);
+    for (size_t c = 0; c < children_local.size(); ++c) {
+      const int local1 = static_cast<int>(std::lower_bound(faces1.begin(), faces1.end(), children_local[c]) - faces1.begin());
+      for (int k = 0; k < 4; ++k) {
+        const int g_face = m1.face_begin(children_global[c]) + k;  // grandchild, whole level 2
+        const int l_face = cut1.level.mesh.face_begin(local1) + k;  // grandchild, in the piece
+        for (int j = 0; j < 4; ++j) {
+          const Point3& g = X[2][m2.corner_vertex(m2.face_begin(g_face) + j)];
+          const Point3& l = piece2.x[piece2.level.mesh.corner_vertex(piece2.level.mesh.face_begin(l_face) + j)];
+          worst = std::max(worst, dist(g, l));
+        }
+      }
+    }
+  }
+  return worst;
+}
+
+TEST(LocalRefinement, CutOutTwoRingsRefineLikeTheWholeCage) {
+  // Uniform and Chaikin semi-sharp creases, boundaries, n-gons, an extraordinary vertex.
+  for (const char* name : {"catmark_chaikin1", "catmark_torus_creases1", "catmark_nonquads", "catmark_edgecorner",
+                           "catmark_cube_creases1", "catmark_xord_interior", "catmark_chaikin2",
+                           "catmark_helmet"}) {
+    SCOPED_TRACE(name);
+    EXPECT_LT(worst_local_refinement_error(name), 1e-14);
+  }
+}
+
+// A bicubic polynomial (Bezier net on [0,1]^2) restricted to [u0, u0 + s] x [v0, v0 + s].
+PatchLeaf sub_leaf(const std::array<Point3, 16>& net, double u0, double v0, double s) {
+  PatchLeaf l;
+  l.u0 = u0;
+  l.v0 = v0;
+  l.size = s;
+  // The restriction's Bezier points: blossoms at (a, a, a), (a, a, b), (a, b, b), (b, b, b).
+  auto blossom_1d = [](const double args[3], double w[4]) {
+    w[0] = 1;
+    w[1] = w[2] = w[3] = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double t = args[k];
+      for (int q = k + 1; q >= 0; --q) w[q] = (q <= k ? w[q] * (1 - t) : 0) + (q > 0 ? w[q - 1] * t : 0);
+    }
+  };
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      double au[3], av[3];
+      for (int k = 0; k < 3; ++k) {
+        au[k] = u0 + (k < 3 - i ? 0 : s);
+        av[k] = v0 + (k < 3 - j ? 0 : s);
+      }
+      double wu[4], wv[4];
+      blossom_1d(au, wu);
+      blossom_1d(av, wv);
+      Point3 p{0, 0, 0};
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          for (int d = 0; d < 3; ++d) p[d] += wu[a] * wv[b] * net[a * 4 + b][d];
+      l.net[i * 4 + j] = p;
+    }
+  return l;
+}
+
+std::array<Point3, 16> some_net() {
+  std::array<Point3, 16> net;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      net[i * 4 + j] = {i + 0.1 * j * j, j - 0.2 * i * j, std::sin(1.0 + i) * std::cos(0.5 * j)};
+  return net;
+}
+
+TEST(KnotAssembly, PiecesOfOnePolynomialMergeBackIntoSixteenPoles) {
+  const std::array<Point3, 16> net = some_net();
+  // A quadtree: a quarter split twice more towards the corner (0, 0).
+  std::vector<PatchLeaf> leaves;
+  for (const auto& q : std::vector<std::array<double, 3>>{{0.5, 0, 0.5}, {0, 0.5, 0.5}, {0.5, 0.5, 0.5},
+                                                          {0.25, 0, 0.25}, {0, 0.25, 0.25}, {0.25, 0.25, 0.25},
+                                                          {0, 0, 0.125}, {0.125, 0, 0.125}, {0, 0.125, 0.125},
+                                                          {0.125, 0.125, 0.125}})
+    leaves.push_back(sub_leaf(net, q[0], q[1], q[2]));
+  NurbsPatch patch;
+  const AssemblyStats st = assemble_patch(leaves, {}, {}, 1e-14, 1e-13, patch);
+  EXPECT_EQ(patch.num_poles_u, 4);
+  EXPECT_EQ(patch.num_poles_v, 4);
+  EXPECT_EQ(st.removed_knots, 6);  // 1/8, 1/4, 1/2 in each direction
+  for (int i = 0; i < 16; ++i) EXPECT_LT(dist(patch.poles[i], net[i]), 1e-14);
+}
+
+TEST(KnotAssembly, RealKnotsAndZoneKnotsStay) {
+  // Two different polynomials left and right of u = 1/2 joined C2: a cubic B-spline with one
+  // interior knot, cut into pieces. The knot at 1/2 stays, the piece boundaries at 1/4, 3/4
+  // and v = 1/2 go; a double knot requested at v = 1/4 (a zone line) stays double.
+  NurbsPatch spline;
+  spline.knots_u = {{0, 0.5, 1}, {4, 1, 4}, false};
+  spline.knots_v = {{0, 1}, {4, 4}, false};
+  spline.num_poles_u = 5;
+  spline.num_poles_v = 4;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 4; ++j) spline.poles.push_back({double(i), double(j), (i == 2 ? 1.0 : 0.0) + 0.1 * i * j});
+  // Pieces: squares of 1/4, each the spline's polynomial there (interpolated at 4 x 4 points).
+  std::vector<PatchLeaf> leaves;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      PatchLeaf l;
+      l.u0 = a * 0.25;
+      l.v0 = b * 0.25;
+      l.size = 0.25;
+      // Interpolate the spline's polynomial on this square (it is one polynomial there).
+      const double t[4] = {0.0, 1.0 / 3, 2.0 / 3, 1.0};
+      Point3 s[4][4];
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) s[i][j] = evaluate(spline, l.u0 + t[i] * l.size, l.v0 + t[j] * l.size).p;
+      // Inverse of the Bernstein matrix at 0, 1/3, 2/3, 1.
+      const double Bi[4][4] = {{1, 0, 0, 0}, {-5.0 / 6, 3, -3.0 / 2, 1.0 / 3}, {1.0 / 3, -3.0 / 2, 3, -5.0 / 6}, {0, 0, 0, 1}};
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+          Point3 p{0, 0, 0};
+          for (int x = 0; x < 4; ++x)
+            for (int y = 0; y < 4; ++y)
+              for (int d = 0; d < 3; ++d) p[d] += Bi[i][x] * Bi[j][y] * s[x][y][d];
+          l.net[i * 4 + j] = p;
+        }
+      leaves.push_back(l);
+    }
+  NurbsPatch patch;
+  assemble_patch(leaves, {}, {0.25}, 1e-13, 1e-12, patch);
+  EXPECT_EQ(patch.knots_u.knots, (std::vector<double>{0, 0.5, 1}));
+  EXPECT_EQ(patch.knots_u.mults, (std::vector<int>{4, 1, 4}));
+  EXPECT_EQ(patch.knots_v.knots, (std::vector<double>{0, 0.25, 1}));
+  EXPECT_EQ(patch.knots_v.mults, (std::vector<int>{4, 2, 4}));
+  for (double u : {0.0, 0.1, 0.37, 0.5, 0.81, 1.0})
+    for (double v : {0.0, 0.2, 0.6, 1.0}) EXPECT_LT(dist(evaluate(patch, u, v).p, evaluate(spline, u, v).p), 1e-13);
+}
+
+}  // namespace
+}  // namespace subd2nurbs::testing
