@@ -187,10 +187,12 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       if (!deeper) break;
       PatchOptions po = settings.patch;
       po.vertex_extra_levels = extra;
+      po.reuse = &c.build;  // only the quads at deepened vertices are rebuilt
       const auto t0 = Clock::now();
       stage("building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
             " vertices for the tolerance)");
-      c.build = build_patches(base, positions, po);
+      PatchBuild deeper_build = build_patches(base, positions, po);
+      c.build = std::move(deeper_build);
       c.ms.patches += ms_since(t0);
       measure_deviation_now();
     }

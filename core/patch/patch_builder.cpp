@@ -433,6 +433,10 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   const std::vector<Point3>& xa = out.coarse_positions;
   const double model_size = positions.empty() ? 1.0 : bounding_diagonal(positions);
 
+  out.vertex_extra.assign(ma.num_vertices(), std::max(0, options.extra_levels));
+  for (int v = 0; v < ma.num_vertices() && v < static_cast<int>(options.vertex_extra_levels.size()); ++v)
+    out.vertex_extra[v] += std::max(0, options.vertex_extra_levels[v]);
+
   // Fans: every coarse vertex that stays irregular for some quad once its semi-sharp tags have
   // decayed (those tags count as smooth in this view; infinitely sharp ones stay).
   FanResults fans;
@@ -454,9 +458,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     std::vector<VertexFans> built(candidates.size());
     parallel_for(static_cast<int>(candidates.size()), [&](int i) {
       const int v = candidates[i];
-      int extra = std::max(0, options.extra_levels);
-      if (v < static_cast<int>(options.vertex_extra_levels.size())) extra += std::max(0, options.vertex_extra_levels[v]);
-      built[i] = build_fans_at(la, xa, v, a + 2 + extra, a, base.mesh.num_vertices(), capped_a);
+      built[i] = build_fans_at(la, xa, v, a + 2 + out.vertex_extra[v], a, base.mesh.num_vertices(), capped_a);
     });
     // Number them in vertex order (the same whatever the threads did).
     for (VertexFans& vf : built) {
@@ -492,9 +494,32 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     int removed_knots = 0;
   };
   std::vector<FacePatch> face_patches(ma.num_faces());
+  // A previous build of the same cage: its patch per coarse quad, where the quad's corners kept
+  // their extra levels.
+  const PatchBuild* reuse = options.reuse;
+  std::vector<int> reuse_patch;
+  if (reuse && reuse->vertex_extra.size() == out.vertex_extra.size()) {
+    reuse_patch.assign(ma.num_faces(), -1);
+    for (size_t pi = 0; pi < reuse->coarse_face.size(); ++pi)
+      if (reuse->coarse_face[pi] >= 0) reuse_patch[reuse->coarse_face[pi]] = static_cast<int>(pi);
+  }
   parallel_for(ma.num_faces(), [&](int F) {
     if (la.face_hole[F] || capped_a[F]) return;
     FacePatch& fpatch = face_patches[F];
+    if (!reuse_patch.empty() && reuse_patch[F] >= 0) {
+      bool same = true;
+      for (int h = ma.face_begin(F); h < ma.face_end(F); ++h)
+        same = same && reuse->vertex_extra[ma.corner_vertex(h)] == out.vertex_extra[ma.corner_vertex(h)];
+      if (same) {
+        const int pi = reuse_patch[F];
+        fpatch.leaves = reuse->leaves[pi];
+        fpatch.patch = reuse->set.patches[pi];
+        fpatch.patch.base_faces.clear();
+        fpatch.deepest = reuse->patch_deepest[pi];
+        fpatch.removed_knots = reuse->patch_removed_knots[pi];
+        return;
+      }
+    }
     fpatch.deepest = a;
     fpatch.leaves = leaves_of(la, xa, F, a, fans, fpatch.deepest);
     // Zone lines: h and 2h from every corner with a zone.
@@ -527,6 +552,8 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     (pccm ? info.pccm_patches : info.regular_patches)++;
     out.coarse_face.push_back(F);
     out.leaves.push_back(std::move(leaves));
+    out.patch_deepest.push_back(fpatch.deepest);
+    out.patch_removed_knots.push_back(fpatch.removed_knots);
 
     const int pi = static_cast<int>(ps.patches.size());
     // Corners and boundary curves.
@@ -627,6 +654,8 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     ci.patch = pi;
     out.coarse_face.push_back(-1);
     out.leaves.emplace_back();
+    out.patch_deepest.push_back(a);
+    out.patch_removed_knots.push_back(0);
     ps.patches.push_back(std::move(patch));
   }
 

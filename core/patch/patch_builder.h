@@ -42,6 +42,10 @@ struct PatchOptions {
   /// Further levels per coarse vertex (index: level-a vertex; missing entries are 0), added to
   /// extra_levels for the fans at that vertex: a tolerance deepens only the fans that need it.
   std::vector<int> vertex_extra_levels;
+  /// A build of the same cage with the same options but other extra levels: every coarse quad
+  /// none of whose corners changed its extra levels is copied from it instead of rebuilt (the
+  /// quad depends only on its own pieces and the zones at its corners).
+  const struct PatchBuild* reuse = nullptr;
   /// Polar structures of the cage (MATH.md 3.1) become one singular polar cap each (MATH.md
   /// 4); off: every vertex goes through Catmull-Clark, poles included.
   bool polar = true;
@@ -140,6 +144,9 @@ struct PatchBuild {
   std::vector<int> coarse_face;          ///< per patch: its level-a face, -1 for a polar cap
   std::vector<std::vector<PatchLeaf>> leaves;  ///< per patch: its pieces (empty for a polar cap)
   std::vector<FanPiece> fan_pieces;      ///< one per irregular vertex with fans
+  std::vector<int> vertex_extra;         ///< per level-a vertex: the extra levels its fans were asked for
+  std::vector<int> patch_deepest;        ///< per patch: the deepest level of its pieces (a for a cap)
+  std::vector<int> patch_removed_knots;  ///< per patch: simple knots removed (0 for a cap)
 };
 
 /// Builds the patches of a validated cage. Positions are the cage's vertex positions.

@@ -14,6 +14,7 @@
 #include "core/eval/nurbs_eval.h"
 #include "core/patch/knot_assembly.h"
 #include "core/patch/local_mesh.h"
+#include "core/patch/patch_builder.h"
 #include "io/obj_reader.h"
 
 namespace subd2nurbs::testing {
@@ -178,6 +179,38 @@ TEST(KnotAssembly, RealKnotsAndZoneKnotsStay) {
   EXPECT_EQ(patch.knots_v.mults, (std::vector<int>{4, 2, 4}));
   for (double u : {0.0, 0.1, 0.37, 0.5, 0.81, 1.0})
     for (double v : {0.0, 0.2, 0.6, 1.0}) EXPECT_LT(dist(evaluate(patch, u, v).p, evaluate(spline, u, v).p), 1e-13);
+}
+
+}  // namespace
+}  // namespace subd2nurbs::testing
+
+namespace subd2nurbs::testing {
+namespace {
+
+TEST(PatchReuse, RebuildingOnlyTheDeepenedCornersGivesTheSamePatches) {
+  // A tolerance rebuilds with more levels at some vertices, reusing the other quads: the result
+  // must equal a build from scratch with the same levels, pole for pole.
+  const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/catmark_xord_interior.obj");
+  const SubdivLevel base = load_and_validate(cage);
+  const std::vector<Point3> x(cage.input.positions.begin(), cage.input.positions.end());
+  const PatchBuild first = build_patches(base, x);
+  ASSERT_FALSE(first.info.fans.empty());
+  PatchOptions deeper;
+  deeper.vertex_extra_levels.assign(base.mesh.num_vertices(), 0);
+  deeper.vertex_extra_levels[first.info.fans[0].vertex] = 2;
+  const PatchBuild scratch = build_patches(base, x, deeper);
+  deeper.reuse = &first;
+  const PatchBuild reused = build_patches(base, x, deeper);
+  ASSERT_EQ(scratch.set.patches.size(), reused.set.patches.size());
+  int changed = 0;
+  for (size_t i = 0; i < scratch.set.patches.size(); ++i) {
+    EXPECT_EQ(scratch.set.patches[i].poles, reused.set.patches[i].poles) << "patch " << i;
+    EXPECT_EQ(scratch.set.patches[i].base_faces, reused.set.patches[i].base_faces) << "patch " << i;
+    changed += scratch.set.patches[i].poles != first.set.patches[i].poles;
+  }
+  EXPECT_GT(changed, 0);  // the deepened vertex's quads did change
+  EXPECT_EQ(scratch.info.total_poles, reused.info.total_poles);
+  EXPECT_EQ(scratch.info.removed_knots, reused.info.removed_knots);
 }
 
 }  // namespace
