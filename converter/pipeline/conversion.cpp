@@ -150,10 +150,12 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     c.extra_levels = extra;
     c.ms.patches += ms_since(t0);
   };
-  auto measure_deviation_now = [&] {
+  // Measures every fan, or (with `remeasure`) only those, keeping the others' last values.
+  auto measure_deviation_now = [&](const std::vector<char>* remeasure = nullptr) {
     const auto t0 = Clock::now();
     stage("measuring the deviation from the limit surface");
-    c.deviation = measure_deviation(c.build, kDeviationSampleLevels);
+    DeviationReport d = measure_deviation(c.build, kDeviationSampleLevels, remeasure ? &c.deviation : nullptr, remeasure);
+    c.deviation = std::move(d);
     c.ms.deviation += ms_since(t0);
   };
   build(level);
@@ -169,6 +171,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     tr.first_max = c.deviation.max;
     std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
     for (int round = 0; round < kToleranceRounds; ++round) {
+      const std::vector<int> before = extra;
       bool deeper = false;
       for (const FanDeviation& fd : c.deviation.fans) {
         if (fd.max <= tr.absolute) continue;
@@ -194,7 +197,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       PatchBuild deeper_build = build_patches(base, positions, po);
       c.build = std::move(deeper_build);
       c.ms.patches += ms_since(t0);
-      measure_deviation_now();
+      std::vector<char> remeasure(c.build.info.fans.size(), 0);
+      for (size_t fi = 0; fi < remeasure.size(); ++fi) remeasure[fi] = extra[c.build.info.fans[fi].vertex] != before[c.build.info.fans[fi].vertex];
+      measure_deviation_now(&remeasure);
     }
     tr.used = *std::max_element(extra.begin(), extra.end());
     tr.fans_deepened = static_cast<int>(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; }));

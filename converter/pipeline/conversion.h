@@ -29,8 +29,8 @@ constexpr double kDefaultTolerance = 1e-4;
 /// vertex); a tolerance needing more is reported as capped.
 constexpr int kMaxFanExtraLevels = 12;
 /// Rebuilds a tolerance may take (the per-valence rates are asymptotic, so a fan may need a
-/// second look).
-constexpr int kToleranceRounds = 4;
+/// second look; each round rebuilds and measures only the fans it deepens).
+constexpr int kToleranceRounds = 8;
 /// Samples per shared curve for the continuity measures.
 constexpr int kContinuitySamples = 24;
 /// Extra levels of refinement for the deviation samples.

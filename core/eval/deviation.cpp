@@ -102,21 +102,23 @@ double deviation_rate(int n) {
   return 1.0 / std::max(lambda * lambda, mu);
 }
 
-DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
+DeviationReport measure_deviation(const PatchBuild& build, int sample_levels, const DeviationReport* previous,
+                                  const std::vector<char>* remeasure) {
   DeviationReport out;
   out.sample_levels = sample_levels;
   // Fans are measured in parallel, then summarised in fan order (the result does not depend on
   // the threads).
-  struct PerFan {
-    FanDeviation fd;
-    double sum = 0, max = 0;
-    Point3 where{};
-  };
-  std::vector<PerFan> per_fan(build.info.fans.size());
+  std::vector<FanDeviation> per_fan(build.info.fans.size());
+  const bool incremental = previous && remeasure && previous->fans.size() == per_fan.size() &&
+                           remeasure->size() == per_fan.size() && previous->sample_levels == sample_levels;
   parallel_for(static_cast<int>(build.info.fans.size()), [&](int fi) {
+    FanDeviation& fd = per_fan[fi];
+    if (incremental && !(*remeasure)[fi]) {
+      fd = previous->fans[fi];
+      return;
+    }
     const IrregularFan& fan = build.info.fans[fi];
-    FanDeviation& fd = per_fan[fi].fd;
-    double& sum = per_fan[fi].sum;
+    double& sum = fd.sum;
     const FanPiece& piece = build.fan_pieces.at(static_cast<size_t>(fan.piece));
     const SubdivLevel& lk = piece.mesh.level;
     const PolyMesh& mk = lk.mesh;
@@ -191,7 +193,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
         double d = 1e300;
         for (int c : candidates)
           if (piece.has_net[c]) d = std::min(d, distance_to_net(&piece.nets[static_cast<size_t>(c) * 16], q));
-        if (d > fd.max) per_fan[fi].where = limit[v];
+        if (d > fd.max) fd.where = limit[v];
         fd.max = std::max(fd.max, d);
         ++fd.samples;
         sum += d;
@@ -200,15 +202,15 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels) {
   });
   double sum = 0;
   for (size_t fi = 0; fi < per_fan.size(); ++fi) {
-    const PerFan& pf = per_fan[fi];
-    sum += pf.sum;
-    if (pf.fd.max > out.max) {
-      out.max = pf.fd.max;
-      out.where = pf.where;
+    const FanDeviation& fd = per_fan[fi];
+    sum += fd.sum;
+    if (fd.max > out.max) {
+      out.max = fd.max;
+      out.where = fd.where;
       out.worst_fan = static_cast<int>(fi);
     }
-    out.samples += pf.fd.samples;
-    out.fans.push_back(pf.fd);
+    out.samples += fd.samples;
+    out.fans.push_back(fd);
   }
   out.mean = out.samples ? sum / out.samples : 0;
   return out;

@@ -18,6 +18,8 @@ struct FanDeviation {
   int fan = -1;        ///< index into PatchBuildInfo::fans
   double max = 0;      ///< model units
   int samples = 0;
+  double sum = 0;      ///< of the sample distances (for the mean)
+  Point3 where{};      ///< the sample with the largest distance
 };
 
 struct DeviationReport {
@@ -30,8 +32,12 @@ struct DeviationReport {
   std::vector<FanDeviation> fans;
 };
 
-/// Closest-point deviation in the zones of every irregular-vertex fan.
-DeviationReport measure_deviation(const PatchBuild& build, int sample_levels = 2);
+/// Closest-point deviation in the zones of every irregular-vertex fan. With `previous` (a
+/// report on a build of the same cage, whose fans are numbered alike), only the fans with
+/// `remeasure[fan]` set are measured again; the others keep their previous values.
+DeviationReport measure_deviation(const PatchBuild& build, int sample_levels = 2,
+                                  const DeviationReport* previous = nullptr,
+                                  const std::vector<char>* remeasure = nullptr);
 
 /// Asymptotic factor by which Construction Q's deviation falls per extra level at an
 /// interior vertex of valence n: 1 / max(lambda_n^2, mu_n) (MATH.md 5.3). 4 for n = 4.
