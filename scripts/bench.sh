@@ -5,6 +5,8 @@
 #   bench_convert  the conversion pipeline on 10k-quad cages: cage -> patches (vs OpenSubdiv's
 #                  patch tables), PatchSet -> B-rep (and BRepCheck alone), STEP (ours vs OCCT's
 #                  plain STEPControl_Writer)
+#   bench_models   real models through the command line (scripts/bench_models.py): wall time,
+#                  peak RSS, STEP size, faces and poles; 3 runs each (MODEL_REPS)
 # Each binary runs every benchmark REPS times, repetitions randomly interleaved.
 # Usage: scripts/bench.sh [repetitions]    (default 9: about 8 minutes on the 2-core machine)
 #   BUILD_DIR=DIR scripts/bench.sh N   builds only the benchmarks in DIR (configured with tests
@@ -17,7 +19,7 @@ if [ "$build" = build ]; then
   scripts/bootstrap.sh
 else
   cmake -S . -B "$build" -DSUBD2NURBS_BUILD_TESTS=OFF -DSUBD2NURBS_BUILD_BENCH=ON >&2
-  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit >&2
+  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit subd2nurbs >&2
 fi
 refine_json=$(mktemp)
 convert_json=$(mktemp)
@@ -31,5 +33,29 @@ common=(--benchmark_repetitions="$reps" --benchmark_enable_random_interleaving=t
 "$build"/bench/bench_convert "${common[@]}" --benchmark_out="$convert_json" >&2
 "$build"/bench/bench_limit "${common[@]}" --benchmark_out="$limit_json" >&2
 python3 scripts/bench_table.py "$refine_json" "$reps" "$convert_json" "$limit_json" > docs/benchmarks.md.tmp
+{
+  echo
+  echo "## 6. Real models through the command line (\`scripts/bench_models.py\`)"
+  echo
+  echo "\`subd2nurbs convert X.obj -o X.step --report r.json -q\` with the defaults (deviation tolerance"
+  echo "1e-4 of the diagonal), ${MODEL_REPS:-3} runs each, medians; the time of the quality report"
+  echo "(\`quality_ms\` of the report) is part of the wall time and shown on its own."
+  echo
+  python3 scripts/bench_models.py "$build/subd2nurbs" tests/data/corpus "${MODEL_REPS:-3}"
+  cat <<'BEFORE'
+
+Before issue #11 (every patch with all the uniform spans of level k, semi-sharp creases capped
+at level a + 5), as the issue measured it on the landed main (wall on an idle machine, in
+brackets on a busy one):
+
+| cage (faces) | wall | peak RSS | STEP | faces | poles per face |
+|---|---|---|---|---|---|
+| catmark_bishop (968) | 40 s (111 s) | 5.3 GB | 432 MB | 3 406 | 1 225 |
+| catmark_rook | 29 s (153 s) | 4.5 GB | 387 MB | 3 064 | 1 225 |
+| catmark_car | 25 s (45 s) | 2.4 GB | 212 MB | 1 575 | - |
+| catmark_pawn | (8 s) | 0.9 GB | 72 MB | 588 | 1 237 |
+| 100 000-quad regular torus | (117 s) | 8.0 GB | 870 MB | 100 000 | 49 |
+BEFORE
+} >> docs/benchmarks.md.tmp
 mv docs/benchmarks.md.tmp docs/benchmarks.md
 cat docs/benchmarks.md
