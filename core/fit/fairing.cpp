@@ -176,7 +176,7 @@ FairResult fair(const SubdivLevel& level, const std::vector<Point3>& start, cons
       (!options.keep.empty() && static_cast<int>(options.keep.size()) != n))
     throw std::invalid_argument("fairing: one start position, target and keep flag per cage vertex");
   const SparseMatrix K = energy_matrix(level, options.energy);
-  const LimitRows lr = limit_rows(level);
+  const LimitRows lr = limit_rows(level, options.polar.empty() ? nullptr : &options.polar);
   const SparseMatrix L = fit_detail::to_sparse(lr.rows);
   const SparseMatrix A = SparseMatrix(L.transpose() * L) + options.weight * K;
   const Eigen::MatrixX3d c = fit_detail::to_matrix(targets);
@@ -229,6 +229,12 @@ FairResult fair(const SubdivLevel& level, const std::vector<Point3>& start, cons
   out.energy_after = energy(K, out.positions);
   const Eigen::MatrixX3d r = L * fit_detail::to_matrix(out.positions) - c;
   out.data_after = r.squaredNorm();
+  std::vector<Point3> lim;
+  lr.rows.apply(out.positions, lim);
+  std::vector<char> skip(static_cast<size_t>(n), 0);
+  for (int v : lr.no_surface) skip[static_cast<size_t>(v)] = 1;
+  out.residual = field_stats(lim, targets, &skip);
+  out.displacement = field_stats(out.positions, start);
   return out;
 }
 

@@ -19,6 +19,8 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
+#include "core/fit/interpolate.h"
+#include "core/polar/polar_structure.h"
 #include "core/refine/refiner.h"
 
 namespace subd2nurbs {
@@ -51,17 +53,21 @@ struct FairOptions {
   EnergyOptions energy;
   double weight = 1.0;            ///< W > 0: weight of the energy against the data term
   std::vector<char> keep;         ///< per vertex: fixed to its start position (empty: none)
+  /// Polar structures whose limit rows in the data term are BP's (as InterpolationOptions).
+  std::vector<PolarStructure> polar;
 };
 
 struct FairResult {
   std::vector<Point3> positions;  ///< kept vertices copied bit for bit from `start`
   double energy_before = 0, energy_after = 0;
   double data_after = 0;          ///< sum |L P - c|^2
+  FieldStats residual;            ///< |(L P)_v - c_v| over the vertices with a limit surface
+  FieldStats displacement;        ///< |P_v - start_v|
   int kept = 0, free = 0;
 };
 
 /// Minimises  sum_v |(L P)_v - c_v|^2 + W E(P)  over the free vertices (L: limit_rows of the
-/// level, Catmull-Clark everywhere), the kept ones fixed at `start`. With c = the limit points
+/// level, with options.polar), the kept ones fixed at `start`. With c = the limit points
 /// of `start` this smooths a surface while keeping it close to where it was (`fair`); with c =
 /// the cage's own vertices it is interpolation regularised by the energy (`--fair W`).
 /// energy_before is E(start). \throw std::invalid_argument (W <= 0, sizes), FitError (the
