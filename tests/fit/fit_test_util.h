@@ -13,6 +13,7 @@
 #include "common/corpus.h"
 #include "core/limit/limit_evaluator.h"
 #include "io/obj_reader.h"
+#include "limit/limit_test_util.h"  // limit_corpus_path, diagonal, dist, positions_of
 
 namespace subd2nurbs::testing {
 
@@ -23,26 +24,6 @@ inline std::vector<std::string> manifold_corpus_shapes() {
       out.push_back(e.path().stem().string());
   std::sort(out.begin(), out.end());
   return out;
-}
-
-inline std::string corpus_path(const std::string& name) {
-  return std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj";
-}
-
-inline double diag_of(const std::vector<Point3>& p) {
-  Point3 lo = p[0], hi = p[0];
-  for (const Point3& q : p)
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], q[k]);
-      hi[k] = std::max(hi[k], q[k]);
-    }
-  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
-}
-
-inline double distance(const Point3& a, const Point3& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                   (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 /// Where the limit surface of a face has a vertex: ptex sub-face and (u, v) at that corner.

@@ -16,8 +16,6 @@ using namespace subd2nurbs::testing;
 
 namespace {
 
-std::vector<Point3> positions_of(const MeshInput& in) { return {in.positions.begin(), in.positions.end()}; }
-
 /// Thin-plate and membrane integrals of the limit surface, by 6 x 6 Gauss-Legendre quadrature
 /// per ptex face of our exact evaluator's derivatives (exact for bicubic pieces).
 std::pair<double, double> quadrature_energy(const SubdivLevel& level, const std::vector<Point3>& p) {
@@ -41,7 +39,7 @@ std::pair<double, double> quadrature_energy(const SubdivLevel& level, const std:
 }
 
 MeshInput wavy_torus() {
-  LoadedCage cage = read_obj(corpus_path("catmark_torus"));
+  LoadedCage cage = read_obj(limit_corpus_path("catmark_torus"));
   MeshInput in = cage.input;
   for (size_t i = 0; i < in.positions.size(); ++i) {
     in.positions[i][0] += 0.05 * std::sin(3.0 * i);
@@ -146,7 +144,7 @@ TEST(FairingEnergy, SeedTwoGridMasks) {
 // fair(): the energy of the result decreases monotonically as the weight grows, the data term
 // increases, and kept vertices are bit-identical.
 TEST(Fairing, MonotoneInWeightAndKeepsVertices) {
-  const LoadedCage cage = read_obj(corpus_path("catmark_square_hedit0"));
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_square_hedit0"));
   MeshInput in = cage.input;
   for (size_t i = 0; i < in.positions.size(); ++i) in.positions[i][2] += 0.1 * std::sin(7.0 * i);
   const SubdivLevel level = SubdivLevel::from_input(in);
@@ -173,7 +171,7 @@ TEST(Fairing, MonotoneInWeightAndKeepsVertices) {
       if (opt.keep[v]) {
         EXPECT_EQ(std::memcmp(&r.positions[v], &p[v], sizeof(Point3)), 0) << "vertex " << v;
       } else {
-        moved += distance(r.positions[v], p[v]) > 0;
+        moved += dist(r.positions[v], p[v]) > 0;
       }
     }
     EXPECT_GT(moved, 0);
@@ -181,7 +179,7 @@ TEST(Fairing, MonotoneInWeightAndKeepsVertices) {
 }
 
 TEST(Fairing, RejectsNonPositiveWeight) {
-  const LoadedCage cage = read_obj(corpus_path("catmark_torus"));
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_torus"));
   const SubdivLevel level = load_and_validate(cage);
   const std::vector<Point3> p = positions_of(cage.input);
   for (double w : {0.0, -1.0, std::nan("")}) {

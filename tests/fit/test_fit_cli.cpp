@@ -51,13 +51,13 @@ Distances brep_distances(const TopoDS_Shape& shape, const std::vector<Point3>& p
 // The B-rep written with --fit interpolate passes through the input vertices (OCCT's distance
 // from each vertex to the shape), where the approximating conversion misses them visibly.
 TEST(FitPipeline, BrepPassesThroughTheInputVertices) {
-  for (const std::string& path : {corpus_path("catmark_xord_interior"), corpus_path("catmark_pyramid_creases1"),
-                                  corpus_path("catmark_cube_creases1"), corpus_path("catmark_nonquads"),
-                                  corpus_path("catmark_helmet")}) {
+  for (const std::string& path : {limit_corpus_path("catmark_xord_interior"), limit_corpus_path("catmark_pyramid_creases1"),
+                                  limit_corpus_path("catmark_cube_creases1"), limit_corpus_path("catmark_nonquads"),
+                                  limit_corpus_path("catmark_helmet")}) {
     const LoadedCage cage = read_obj(path);
     const SubdivLevel level = load_and_validate(cage);
     const std::vector<Point3> pts(cage.input.positions.begin(), cage.input.positions.end());
-    const double diag = diag_of(pts);
+    const double diag = diagonal(pts);
     pipeline::ConversionSettings settings;
     const pipeline::ConversionResult approx = pipeline::convert(level, pts, settings);
     settings.fit.mode = pipeline::FitMode::Interpolate;
@@ -86,7 +86,7 @@ TEST(FitPipeline, PolarCapsPassThroughThePoles) {
   const LoadedCage cage = read_obj(sample_path("capped_cylinder.obj"));
   const SubdivLevel level = load_and_validate(cage);
   const std::vector<Point3> pts(cage.input.positions.begin(), cage.input.positions.end());
-  const double diag = diag_of(pts);
+  const double diag = diagonal(pts);
   pipeline::ConversionSettings settings;
   settings.fit.mode = pipeline::FitMode::Interpolate;
   const pipeline::ConversionResult c = pipeline::convert(level, pts, settings);
@@ -110,7 +110,7 @@ TEST(FitPipeline, PolarCapsPassThroughThePoles) {
 TEST(FitCli, ConvertInterpolateReportAndErrors) {
   TempDir dir;
   const std::string step = dir.file("o.step"), report = dir.file("r.json");
-  CommandResult r = run_command(quote(kExe) + " convert " + quote(corpus_path("catmark_xord_interior")) +
+  CommandResult r = run_command(quote(kExe) + " convert " + quote(limit_corpus_path("catmark_xord_interior")) +
                                 " --fit interpolate -o " + quote(step) + " --report " + quote(report));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("  fit        interpolate: residual max"), std::string::npos) << r.err;
@@ -121,16 +121,16 @@ TEST(FitCli, ConvertInterpolateReportAndErrors) {
   for (const std::string& args : {std::string(" --fair 1"), std::string(" --fit interpolate --fair 0"),
                                   std::string(" --fit interpolate --fair -2"),
                                   std::string(" --fit interpolate --separate-poles")}) {
-    r = run_command(quote(kExe) + " convert " + quote(corpus_path("catmark_xord_interior")) + args + " -o " + quote(step));
+    r = run_command(quote(kExe) + " convert " + quote(limit_corpus_path("catmark_xord_interior")) + args + " -o " + quote(step));
     EXPECT_EQ(r.exit_code, 1) << args << ": " << r.err;
   }
   // No interpolant: exit 2, the vertices named.
-  r = run_command(quote(kExe) + " convert " + quote(corpus_path("catmark_val2_back2back")) +
+  r = run_command(quote(kExe) + " convert " + quote(limit_corpus_path("catmark_val2_back2back")) +
                   " --fit interpolate -o " + quote(step));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("at vertices 2, 0, 1"), std::string::npos) << r.err;
   // A fair fit accepts it.
-  r = run_command(quote(kExe) + " convert " + quote(corpus_path("catmark_val2_back2back")) +
+  r = run_command(quote(kExe) + " convert " + quote(limit_corpus_path("catmark_val2_back2back")) +
                   " --fit interpolate --fair 0.01 -o " + quote(step));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("(fair, weight 0.01)"), std::string::npos) << r.err;
@@ -140,7 +140,7 @@ TEST(FitCli, ConvertInterpolateReportAndErrors) {
 TEST(FitCli, FairKeepsVerticesAndLowersTheEnergy) {
   TempDir dir;
   const std::string out = dir.file("f.obj"), report = dir.file("f.json");
-  const std::string in = corpus_path("catmark_fvar_bound2");
+  const std::string in = limit_corpus_path("catmark_fvar_bound2");
   CommandResult r = run_command(quote(kExe) + " fair " + quote(in) + " -o " + quote(out) +
                                 " --weight 0.5 --keep boundary --keep tagged --report " + quote(report));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -154,7 +154,7 @@ TEST(FitCli, FairKeepsVerticesAndLowersTheEnergy) {
       ++kept;
       EXPECT_EQ(std::memcmp(&a.input.positions[v], &b.input.positions[v], sizeof(Point3)), 0) << "vertex " << v;
     } else {
-      moved += distance(a.input.positions[v], b.input.positions[v]) > 0;
+      moved += dist(a.input.positions[v], b.input.positions[v]) > 0;
     }
   }
   EXPECT_GT(kept, 0);

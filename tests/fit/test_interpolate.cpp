@@ -39,7 +39,7 @@ struct Measured {
 Measured measure(const LoadedCage& cage, const SubdivLevel& level, const std::vector<Point3>& solved,
                  const std::vector<Point3>& targets) {
   Measured r;
-  const double diag = diag_of(targets);
+  const double diag = diagonal(targets);
   const LimitEvaluator ours(level, solved);
   MeshInput in = cage.input;
   for (size_t i = 0; i < solved.size(); ++i) in.positions[i] = solved[i];
@@ -50,10 +50,10 @@ Measured measure(const LoadedCage& cage, const SubdivLevel& level, const std::ve
     if (cp.face < 0) continue;
     ++r.compared;
     const Point3 p = ours.evaluate(cp.face, cp.sub, cp.u, cp.v).p;
-    r.ours = std::max(r.ours, distance(p, targets[v]) / diag);
+    r.ours = std::max(r.ours, dist(p, targets[v]) / diag);
     if (!osd.ok()) continue;
     const Point3 q = osd.eval(ours.first_ptex(cp.face) + cp.sub, cp.u, cp.v).p;
-    const double e = distance(q, targets[v]) / diag;
+    const double e = dist(q, targets[v]) / diag;
     if (osd_approximates(level, v)) {
       ++r.special;
       r.osd_special = std::max(r.osd_special, e);
@@ -83,7 +83,7 @@ const std::map<std::string, std::string>& no_interpolant_shapes() {
 }  // namespace
 
 TEST_P(CorpusInterpolation, LimitPassesThroughEveryVertex) {
-  const LoadedCage cage = read_obj(corpus_path(GetParam()));
+  const LoadedCage cage = read_obj(limit_corpus_path(GetParam()));
   const SubdivLevel level = load_and_validate(cage);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   if (no_interpolant_shapes().count(GetParam())) {
@@ -108,11 +108,11 @@ TEST_P(CorpusInterpolation, LimitPassesThroughEveryVertex) {
   RecordProperty("residual_exact_evaluator", std::to_string(m.ours));
   RecordProperty("residual_osd", std::to_string(m.osd));
   RecordProperty("residual_osd_dart_val2", std::to_string(m.osd_special));
-  RecordProperty("displacement_max", std::to_string(res.displacement.max / diag_of(targets)));
+  RecordProperty("displacement_max", std::to_string(res.displacement.max / diagonal(targets)));
   RecordProperty("local_rows", res.local_rows);
   std::printf("%-28s n=%5d  exact %.2e  osd %.2e  osd(dart/val2: %d) %.2e  cond %.3g  moved %.3g  local %d\n",
               GetParam().c_str(), level.mesh.num_vertices(), m.ours, m.osd, m.special, m.osd_special,
-              res.condition, res.displacement.max / diag_of(targets), res.local_rows);
+              res.condition, res.displacement.max / diagonal(targets), res.local_rows);
 }
 
 INSTANTIATE_TEST_SUITE_P(OpenSubdivCorpus, CorpusInterpolation, ::testing::ValuesIn(manifold_corpus_shapes()),
@@ -126,7 +126,7 @@ TEST(LimitRows, LocalFanRefinementEqualsGlobalRefinement) {
   int shapes = 0;
   double worst = 0;
   for (const std::string& name : manifold_corpus_shapes()) {
-    const LoadedCage cage = read_obj(corpus_path(name));
+    const LoadedCage cage = read_obj(limit_corpus_path(name));
     const SubdivLevel level = load_and_validate(cage);
     const double s = level.max_semi_sharpness();
     if (s == 0.0 || level.mesh.num_faces() * std::pow(4.0, std::ceil(s) + 1) > 2e5) continue;
@@ -190,7 +190,7 @@ TEST(PolarInterpolation, BpLimitPassesThroughPoleAndRings) {
     const LoadedCage cage = read_obj(sample_path(name));
     const SubdivLevel level = load_and_validate(cage);
     const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
-    const double diag = diag_of(targets);
+    const double diag = diagonal(targets);
     InterpolationOptions opt;
     opt.polar = detect_polar_structures(level).structures;
     ASSERT_FALSE(opt.polar.empty()) << name;
@@ -205,15 +205,15 @@ TEST(PolarInterpolation, BpLimitPassesThroughPoleAndRings) {
         it = radial_step(it);
         it.rings.resize(static_cast<size_t>(3 * it.n));
       }
-      pole_err = std::max(pole_err, distance(it.pole, targets[s.pole]) / diag);
+      pole_err = std::max(pole_err, dist(it.pole, targets[s.pole]) / diag);
       in_polar[s.pole] = 1;
       for (int r = 1; r <= 2; ++r)
         for (int j = 0; j < s.valence; ++j) {
           const std::vector<Point3> est = bp_ring_limit_by_iteration(net, r, j, kLevels);
           const int v = s.rings[r - 1][j];
           in_polar[v] = 1;
-          ring_err = std::max(ring_err, distance(est[kLevels], targets[v]) / diag);
-          ring_err_prev = std::max(ring_err_prev, distance(est[kLevels - 1], targets[v]) / diag);
+          ring_err = std::max(ring_err, dist(est[kLevels], targets[v]) / diag);
+          ring_err_prev = std::max(ring_err_prev, dist(est[kLevels - 1], targets[v]) / diag);
         }
     }
     // Radial refinement converges like 4^-k at these vertices.
@@ -226,7 +226,7 @@ TEST(PolarInterpolation, BpLimitPassesThroughPoleAndRings) {
       if (in_polar[v]) continue;
       const CornerPtex cp = corner_ptex(level, v);
       if (cp.face < 0) continue;
-      cc_err = std::max(cc_err, distance(ours.evaluate(cp.face, cp.sub, cp.u, cp.v).p, targets[v]) / diag);
+      cc_err = std::max(cc_err, dist(ours.evaluate(cp.face, cp.sub, cp.u, cp.v).p, targets[v]) / diag);
     }
     EXPECT_LE(cc_err, 1e-9) << name;
     std::printf("%s: %zu structures, pole %.2e, rings 1-2 %.2e (previous level %.2e), elsewhere %.2e\n", name,
@@ -262,7 +262,7 @@ TEST(PolarInterpolation, RingTwoRowIsTheCatmullClarkRow) {
 // the error names the cube's vertices. Targets without it (the cube itself) have many; the one
 // nearest to the targets is returned, flagged singular.
 TEST(InterpolationErrors, SingularSystemNamesVertices) {
-  const LoadedCage cage = read_obj(corpus_path("catmark_cube"));
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_cube"));
   const SubdivLevel level = load_and_validate(cage);
   std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const InterpolationResult ok = interpolate(level, targets);
@@ -272,7 +272,7 @@ TEST(InterpolationErrors, SingularSystemNamesVertices) {
   // (9 v + 4 sum e + sum d) / 24 with sum e = v, sum d = -v about the centre), so the cage
   // 2 c interpolates, and its displacement c is orthogonal to the checkerboard mode.
   for (size_t v = 0; v < targets.size(); ++v)
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(ok.positions[v][c], 2.0 * targets[v][c], 1e-9 * diag_of(targets));  // regularisation drift
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(ok.positions[v][c], 2.0 * targets[v][c], 1e-9 * diagonal(targets));  // regularisation drift
   // Two-colour the cube's vertices along its edges: the checkerboard mode.
   const PolyMesh& m = level.mesh;
   std::vector<int> colour(targets.size(), -1);
@@ -297,7 +297,7 @@ TEST(InterpolationErrors, SingularSystemNamesVertices) {
 // The regularised path (taken when the condition estimate exceeds max_condition) gives the
 // same cage as the LU solve on a well-conditioned system.
 TEST(InterpolationErrors, RegularisedPathAgreesWithLu) {
-  const LoadedCage cage = read_obj(corpus_path("catmark_xord_interior"));
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_xord_interior"));
   const SubdivLevel level = load_and_validate(cage);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const InterpolationResult a = interpolate(level, targets);
@@ -307,14 +307,14 @@ TEST(InterpolationErrors, RegularisedPathAgreesWithLu) {
   EXPECT_FALSE(a.singular);
   EXPECT_TRUE(b.singular);
   double d = 0;
-  for (size_t v = 0; v < targets.size(); ++v) d = std::max(d, distance(a.positions[v], b.positions[v]));
-  EXPECT_LE(d, 1e-11 * diag_of(targets));
+  for (size_t v = 0; v < targets.size(); ++v) d = std::max(d, dist(a.positions[v], b.positions[v]));
+  EXPECT_LE(d, 1e-11 * diagonal(targets));
 }
 
 TEST(InterpolationErrors, ConditionOfRegularPartIsSmall) {
   // On a regular closed grid the limit operator is the tensor mask (1, 4, 1)/6 (x) (1, 4, 1)/6,
   // eigenvalues (2 + cos a)(2 + cos b)/9 in [1/9, 1]: condition number <= 9.
-  const LoadedCage cage = read_obj(corpus_path("catmark_torus"));
+  const LoadedCage cage = read_obj(limit_corpus_path("catmark_torus"));
   const SubdivLevel level = load_and_validate(cage);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const InterpolationResult r = interpolate(level, targets);
@@ -331,10 +331,10 @@ TEST(InterpolationErrors, ConditionOfRegularPartIsSmall) {
 TEST(CorpusInterpolationSpecial, OpenSubdivConvergesToTargetsAtDartsAndValenceTwo) {
   int vertices = 0;
   for (const char* name : {"catmark_cubes_infsharp", "catmark_inf_crease0", "catmark_inf_crease1"}) {
-    const LoadedCage cage = read_obj(corpus_path(name));
+    const LoadedCage cage = read_obj(limit_corpus_path(name));
     const SubdivLevel level = load_and_validate(cage);
     const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
-    const double diag = diag_of(targets);
+    const double diag = diagonal(targets);
     const InterpolationResult res = interpolate(level, targets);
     MeshInput in = cage.input;
     for (size_t i = 0; i < targets.size(); ++i) in.positions[i] = res.positions[i];
@@ -349,7 +349,7 @@ TEST(CorpusInterpolationSpecial, OpenSubdivConvergesToTargetsAtDartsAndValenceTw
       ASSERT_TRUE(osd.refiner);
       const OsdMapping map = map_to_osd(refine_uniform(level, K), *osd.refiner);
       double e = 0;
-      for (int v : special) e = std::max(e, distance(osd.limit[map.vertex[K][v]], targets[v]) / diag);
+      for (int v : special) e = std::max(e, dist(osd.limit[map.vertex[K][v]], targets[v]) / diag);
       err.push_back(e);
     }
     std::printf("%s: %zu darts/valence-2, OpenSubdiv limit at levels 2..8 misses by", name, special.size());
