@@ -5,6 +5,9 @@
 #   bench_convert  the conversion pipeline on 10k-quad cages: cage -> patches (vs OpenSubdiv's
 #                  patch tables), PatchSet -> B-rep (and BRepCheck alone), STEP (ours vs OCCT's
 #                  plain STEPControl_Writer)
+#   bench_fit.py   convert --fit interpolate against a plain convert, 10k- and 100k-quad tori
+#                  (wall time and peak memory of separate processes; FIT_REPS repetitions,
+#                  default 3, about 10 minutes)
 # Each binary runs every benchmark REPS times, repetitions randomly interleaved.
 # Usage: scripts/bench.sh [repetitions]    (default 9: about 8 minutes on the 2-core machine)
 #   BUILD_DIR=DIR scripts/bench.sh N   builds only the benchmarks in DIR (configured with tests
@@ -17,7 +20,7 @@ if [ "$build" = build ]; then
   scripts/bootstrap.sh
 else
   cmake -S . -B "$build" -DSUBD2NURBS_BUILD_TESTS=OFF -DSUBD2NURBS_BUILD_BENCH=ON >&2
-  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit >&2
+  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit bench_fit subd2nurbs >&2
 fi
 refine_json=$(mktemp)
 convert_json=$(mktemp)
@@ -31,5 +34,6 @@ common=(--benchmark_repetitions="$reps" --benchmark_enable_random_interleaving=t
 "$build"/bench/bench_convert "${common[@]}" --benchmark_out="$convert_json" >&2
 "$build"/bench/bench_limit "${common[@]}" --benchmark_out="$limit_json" >&2
 python3 scripts/bench_table.py "$refine_json" "$reps" "$convert_json" "$limit_json" > docs/benchmarks.md.tmp
+{ echo; python3 scripts/bench_fit.py "$build" "${FIT_REPS:-3}"; } >> docs/benchmarks.md.tmp
 mv docs/benchmarks.md.tmp docs/benchmarks.md
 cat docs/benchmarks.md
