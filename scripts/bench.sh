@@ -7,6 +7,9 @@
 #                  plain STEPControl_Writer)
 #   bench_models   real models through the command line (scripts/bench_models.py): wall time,
 #                  peak RSS, STEP size, faces and poles; 3 runs each (MODEL_REPS)
+#   bench_fit.py   convert --fit interpolate against a plain convert, 10k- and 100k-quad tori
+#                  (wall time and peak memory of separate processes; FIT_REPS repetitions,
+#                  default 3, about 10 minutes)
 # Each binary runs every benchmark REPS times, repetitions randomly interleaved.
 # Usage: scripts/bench.sh [repetitions]    (default 9: about 8 minutes on the 2-core machine)
 #   BUILD_DIR=DIR scripts/bench.sh N   builds only the benchmarks in DIR (configured with tests
@@ -19,7 +22,7 @@ if [ "$build" = build ]; then
   scripts/bootstrap.sh
 else
   cmake -S . -B "$build" -DSUBD2NURBS_BUILD_TESTS=OFF -DSUBD2NURBS_BUILD_BENCH=ON >&2
-  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit subd2nurbs >&2
+  cmake --build "$build" -j"$(nproc)" --target bench_refine bench_convert bench_limit bench_fit subd2nurbs >&2
 fi
 refine_json=$(mktemp)
 convert_json=$(mktemp)
@@ -35,7 +38,7 @@ common=(--benchmark_repetitions="$reps" --benchmark_enable_random_interleaving=t
 python3 scripts/bench_table.py "$refine_json" "$reps" "$convert_json" "$limit_json" > docs/benchmarks.md.tmp
 {
   echo
-  echo "## 6. Real models through the command line (\`scripts/bench_models.py\`)"
+  echo "## 7. Real models through the command line (\`scripts/bench_models.py\`)"
   echo
   echo "\`subd2nurbs convert X.obj -o X.step --report r.json -q\` with the defaults (deviation tolerance"
   echo "1e-4 of the diagonal), ${MODEL_REPS:-3} runs each, medians; the time of the quality report"
@@ -57,5 +60,6 @@ brackets on a busy one):
 | 100 000-quad regular torus | (117 s) | 8.0 GB | 870 MB | 100 000 | 49 |
 BEFORE
 } >> docs/benchmarks.md.tmp
+{ echo; python3 scripts/bench_fit.py "$build" "${FIT_REPS:-3}"; } >> docs/benchmarks.md.tmp
 mv docs/benchmarks.md.tmp docs/benchmarks.md
 cat docs/benchmarks.md

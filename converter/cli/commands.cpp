@@ -14,6 +14,8 @@
 #include "converter/cli/convert.h"
 #include "converter/cli/limit_cmd.h"
 #include "converter/cli/check_cmd.h"
+#include "converter/cli/fair_cmd.h"
+#include "core/fit/interpolate.h"
 #include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/polar/polar_refine.h"
@@ -335,6 +337,14 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   convert_command->add_option("--preview-samples", convert.preview_samples,
                               "Preview vertices per patch side (default 12)")
       ->check(CLI::Range(2, 64));
+  convert_command->add_option("--fit", convert.fit,
+                              "approximate (default: the cage's own limit surface, which misses its "
+                              "vertices) or interpolate (solve for the cage whose limit passes through them)")
+      ->check(CLI::IsMember({"approximate", "interpolate"}));
+  CLI::Option* fair_option = convert_command->add_option(
+      "--fair", convert.fair,
+      "With --fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
+      "interpolation (noisy points give a smooth surface)");
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress and no summary on stderr (warnings are still printed)");
 
@@ -342,6 +352,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   CLI::App* limit_command = add_limit_command(app, limit);
   CheckOptions check;
   CLI::App* check_command = add_check_command(app, check);
+  FairCommandOptions fair;
+  CLI::App* fair_command = add_fair_command(app, fair);
 
   try {
     app.parse(argc, argv);
@@ -355,9 +367,11 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
     if (*refine_command) run_refine(refine, err);
     if (*limit_command) run_limit(limit, std::cin, out, err);
     if (*check_command) run_check(check, err);
+    if (*fair_command) run_fair(fair, err);
     if (*convert_command) {
       convert.level_given = level_option->count() > 0;
       convert.tolerance_given = tolerance_option->count() > 0;
+      convert.fair_given = fair_option->count() > 0;
       convert.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       run_convert(convert, err);
     }
@@ -375,6 +389,9 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   } catch (const occt::ExportError& e) {
     err << "subd2nurbs: export failed: " << e.what() << "\n";
     return kInternalError;
+  } catch (const FitError& e) {
+    err << "subd2nurbs: error: " << e.what() << "\n";
+    return kInvalidInput;
   } catch (const std::bad_alloc&) {
     err << "subd2nurbs: out of memory\n";
     return kInternalError;

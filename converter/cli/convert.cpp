@@ -159,6 +159,19 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
     err << " (valence " << f.valence << ")";
   }
   err << "\n";
+  if (c.fit.mode == pipeline::FitMode::Interpolate) {
+    const pipeline::FitReport& f = c.fit;
+    err << "  fit        interpolate" << (f.fair_weight > 0 ? " (fair, weight " + short_number(f.fair_weight) + ")" : "")
+        << ": residual max " << short_number(f.residual.max) << " (" << short_number(f.residual.max / size)
+        << " of the model size) at vertex " << f.residual.where << ", mean " << short_number(f.residual.mean)
+        << "; cage moved max " << short_number(f.displacement.max) << " at vertex " << f.displacement.where
+        << ", mean " << short_number(f.displacement.mean);
+    if (f.fair_weight > 0)
+      err << "; energy " << short_number(f.energy_before) << " -> " << short_number(f.energy_after);
+    else
+      err << "; condition ~" << short_number(f.condition) << (f.singular ? " (singular)" : "");
+    err << "\n";
+  }
   if (c.tolerance_given)
     err << "  tolerance  " << short_number(c.tolerance.absolute) << " (model units"
         << (c.tolerance.is_default ? ", the default 1e-4 of the model size" : "") << "): "
@@ -182,6 +195,14 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
   if (options.radial_steps != 1 && options.radial_steps != 2) throw UsageError("--radial-steps must be 1 or 2");
   if (!(options.lambda > 0 && std::isfinite(options.lambda))) throw UsageError("--lambda must be a positive number");
+  if (options.fit != "approximate" && options.fit != "interpolate")
+    throw UsageError("--fit must be approximate or interpolate");
+  if (options.fair_given && options.fit != "interpolate") throw UsageError("--fair needs --fit interpolate");
+  if (options.fair_given && !(options.fair > 0 && std::isfinite(options.fair)))
+    throw UsageError("--fair must be a positive number (the weight of the fairing energy)");
+  if (options.fit == "interpolate" && options.separate_poles)
+    throw UsageError("--fit interpolate does not support --separate-poles (the separating step changes the "
+                     "subdivision rule the fit solves for)");
 
   const OutputKind kind = output_kind(options.output);
   const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
@@ -227,6 +248,8 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   settings.patch.cap.radial_steps = options.radial_steps;
   settings.patch.cap.lambda = options.lambda;
   settings.patch.separate_poles = options.separate_poles;
+  settings.fit.mode = options.fit == "interpolate" ? pipeline::FitMode::Interpolate : pipeline::FitMode::Approximate;
+  settings.fit.fair_weight = options.fair_given ? options.fair : 0.0;
   if (options.separate_poles && options.polar == "off") throw UsageError("--separate-poles needs --polar on");
   pipeline::ConversionProgress callbacks;
   std::function<void(double)> brep_percent;  // started with the B-rep stage (percent() times it)
@@ -274,10 +297,10 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   }
 
   if (!options.report.empty()) {
-    const std::string text = report_with_quality(pipeline::report_json(c), base, positions, c, err, options.quiet);
+    const std::string text = report_with_quality(pipeline::report_json(c), base, c.cage, c, err, options.quiet);
     write_file_atomically(options.report, [&](std::ostream& out) { out << text; });
   }
-  if (!options.preview.empty()) write_preview(options, base, positions, c, err);
+  if (!options.preview.empty()) write_preview(options, base, c.cage, c, err);
   if (!options.quiet) print_summary(err, c, kind, schema);
 }
 

@@ -29,6 +29,9 @@ struct ConvertOptions {
   std::string preview_color = "curvature";  ///< deviation, curvature or zebra
   int preview_samples = 12;   ///< per patch side
   bool progress_tty = false;  ///< stderr is a terminal: show the B-rep percentage in place
+  std::string fit = "approximate";  ///< approximate (the cage's own limit) or interpolate
+  double fair = 0;            ///< > 0: fair fit with this weight (needs fit == "interpolate")
+  bool fair_given = false;
 };
 
 /// Most extra levels --tolerance adds; a tolerance needing more is reported as capped.

@@ -108,7 +108,26 @@ void measure_caps(ConversionResult& c) {
   }
 }
 
+namespace {
+std::string index_list(const std::vector<int>& v) {
+  std::string s;
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
+  return s;
+}
+}  // namespace
+
+const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
+
 void check_settings(const ConversionSettings& settings) {
+  const FitSettings& fit = settings.fit;
+  if (!(fit.fair_weight >= 0 && std::isfinite(fit.fair_weight)))
+    throw SettingsError("the fairing weight must be a positive number");
+  if (fit.fair_weight > 0 && fit.mode != FitMode::Interpolate)
+    throw SettingsError("a fairing weight needs the interpolating fit");
+  if (fit.mode == FitMode::Interpolate && settings.patch.separate_poles)
+    throw SettingsError("the interpolating fit does not support the separating first step (separate poles): "
+                        "it changes the subdivision rule the fit solves for");
+  if (fit.energy.levels < 0 || fit.energy.levels > 4) throw SettingsError("the fairing energy levels must be 0 .. 4");
   if (settings.level < 0) throw SettingsError("the level must be >= 0");
   if (settings.patch.cap.radial_steps < 1 || settings.patch.cap.radial_steps > 4)
     throw SettingsError("the radial pre-steps of polar caps must be 1 .. 4");
@@ -139,6 +158,48 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                         short_number(level_faces(base, level)) + " polynomial pieces (limit " +
                         short_number(kMaxLevelFaces) + "); use a lower level");
 
+  // The fit: the cage whose limit passes through the input's vertices (or a fair fit).
+  c.cage = positions;
+  if (settings.fit.mode == FitMode::Interpolate) {
+    const auto t0 = Clock::now();
+    FitReport& fr = c.fit;
+    fr.mode = FitMode::Interpolate;
+    fr.fair_weight = settings.fit.fair_weight;
+    std::vector<PolarStructure> polar;
+    if (settings.patch.polar) polar = detect_polar_structures(base).structures;
+    if (settings.fit.fair_weight > 0) {
+      stage("fitting the cage to its vertices (fairing weight " + short_number(settings.fit.fair_weight) + ")");
+      FairOptions fo;
+      fo.weight = settings.fit.fair_weight;
+      fo.energy = settings.fit.energy;
+      fo.polar = polar;
+      const FairResult r = fair(base, positions, positions, fo);
+      c.cage = r.positions;
+      fr.residual = r.residual;
+      fr.energy_before = r.energy_before;
+      fr.energy_after = r.energy_after;
+    } else {
+      stage("solving for the cage whose limit passes through its vertices");
+      InterpolationOptions io;
+      io.polar = polar;
+      const InterpolationResult r = interpolate(base, positions, io);
+      c.cage = r.positions;
+      fr.residual = r.residual;
+      fr.condition = r.condition;
+      fr.singular = r.singular;
+      fr.null_vertices = r.null_vertices;
+      fr.no_surface = static_cast<int>(r.no_surface.size());
+      if (r.singular)
+        warn("subd2nurbs: warning: the interpolation system is singular near vertices " + index_list(r.null_vertices) +
+             ": the interpolating cage is not unique, the one nearest to the input was used");
+    }
+    fr.polar_vertices = 0;
+    for (const PolarStructure& s : polar) fr.polar_vertices += 1 + 2 * s.valence;
+    fr.displacement = field_stats(c.cage, positions);
+    c.ms.fit = ms_since(t0);
+  }
+  const std::vector<Point3>& cage = c.cage;
+
   // Patches, at the level asked for or at the minimum level first for a tolerance.
   auto build = [&](int extra) {
     const auto t0 = Clock::now();
@@ -146,7 +207,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                      : "building patches (" + std::to_string(extra) + " extra levels)");
     PatchOptions po = settings.patch;
     po.extra_levels = extra;
-    c.build = build_patches(base, positions, po);
+    c.build = build_patches(base, cage, po);
     c.extra_levels = extra;
     c.ms.patches += ms_since(t0);
   };
@@ -313,6 +374,28 @@ std::string report_json(const ConversionResult& c) {
              ", \"valence\": " + std::to_string(r.valence) + ", \"reason\": " + json_string(r.reason) + "}";
   }
   line(polar + (info.rejected_poles.empty() ? "]" : "\n    ]") + "},");
+  {
+    const FitReport& f = c.fit;
+    const bool on = f.mode == FitMode::Interpolate;
+    auto stats = [&](const FieldStats& st) {
+      if (!on) return std::string("null");
+      return "{\"max\": " + json_number(st.max) + ", \"mean\": " + json_number(st.mean) + ", \"where\": " +
+             (st.where >= 0 ? std::to_string(st.where) : std::string("null")) + ", \"max_relative\": " +
+             relative(st.max) + "}";
+    };
+    auto optional_number = [&](bool given, double x) { return given ? json_number(x) : std::string("null"); };
+    std::string nulls;
+    for (size_t i = 0; i < f.null_vertices.size(); ++i) nulls += (i ? ", " : "") + std::to_string(f.null_vertices[i]);
+    line("  \"fit\": {\"mode\": " + json_string(to_string(f.mode)) + ", \"fair_weight\": " +
+         optional_number(on && f.fair_weight > 0, f.fair_weight) + ",");
+    line("    \"residual\": " + stats(f.residual) + ",");
+    line("    \"displacement\": " + stats(f.displacement) + ",");
+    line("    \"condition\": " + optional_number(on && f.fair_weight == 0, f.condition) + ", \"singular\": " +
+         json_bool(f.singular) + ", \"null_vertices\": [" + nulls + "], \"polar_vertices\": " +
+         std::to_string(f.polar_vertices) + ", \"no_surface\": " + std::to_string(f.no_surface) + ",");
+    line("    \"energy_before\": " + optional_number(f.energy_before >= 0, f.energy_before) +
+         ", \"energy_after\": " + optional_number(f.energy_after >= 0, f.energy_after) + "},");
+  }
   line("  \"sharpened_edges\": " + std::to_string(info.sharpened_edges) + ",");
   line("  \"sharpened_vertices\": " + std::to_string(info.sharpened_vertices) + ",");
   if (c.has_brep) {
@@ -369,7 +452,7 @@ std::string report_json(const ConversionResult& c) {
     line("    \"tolerance\": null},");
   }
   const Timings& ms = c.ms;
-  line("  \"timings_ms\": {\"load\": " + json_number(ms.load) + ", \"patches\": " + json_number(ms.patches) +
+  line("  \"timings_ms\": {\"load\": " + json_number(ms.load) + ", \"fit\": " + json_number(ms.fit) + ", \"patches\": " + json_number(ms.patches) +
        ", \"continuity\": " + json_number(ms.continuity) + ", \"deviation\": " + json_number(ms.deviation) +
        ", \"brep\": " + json_number(ms.brep) + ", \"write\": " + json_number(ms.write) + "}");
   line("}");

@@ -14,6 +14,8 @@
 #include "converter/occt/brep_builder.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
+#include "core/fit/fairing.h"
+#include "core/fit/interpolate.h"
 #include "core/patch/patch_builder.h"
 #include "core/refine/refiner.h"
 
@@ -36,6 +38,19 @@ constexpr int kContinuitySamples = 24;
 /// Extra levels of refinement for the deviation samples.
 constexpr int kDeviationSampleLevels = 2;
 
+/// Which surface the cage stands for: its own limit surface (approximate: the NURBS misses the
+/// cage's vertices), or the limit surface of the cage solved so that it passes through them
+/// (interpolate; core/fit, docs/fitting.md), optionally traded for fairness (fair_weight > 0:
+/// least squares with the thin-plate energy as regulariser).
+enum class FitMode { Approximate, Interpolate };
+const char* to_string(FitMode mode);
+
+struct FitSettings {
+  FitMode mode = FitMode::Approximate;
+  double fair_weight = 0;  ///< > 0: the fair fit with this weight (Interpolate only); 0: exact
+  EnergyOptions energy;    ///< the fairing energy of a fair fit
+};
+
 /// What to convert with. `patch` is handed to build_patches untouched, except that its
 /// extra_levels is set from `level` or chosen by `tolerance`.
 struct ConversionSettings {
@@ -46,6 +61,7 @@ struct ConversionSettings {
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
   bool tolerance_is_default = false;  ///< the tolerance is kDefaultTolerance, not the user's
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
+  FitSettings fit;
 };
 
 /// A setting that cannot be used (negative level, bad tolerance, a level too deep for the cage).
@@ -65,7 +81,21 @@ struct ConversionProgress {
 };
 
 struct Timings {
-  double load = 0, patches = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
+  double load = 0, fit = 0, patches = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
+};
+
+/// What the fit did (FitMode::Interpolate), in model units.
+struct FitReport {
+  FitMode mode = FitMode::Approximate;
+  double fair_weight = 0;
+  FieldStats residual;       ///< |limit of the fitted cage at v - input vertex v|
+  FieldStats displacement;   ///< |fitted cage vertex - input vertex|
+  double condition = 0;      ///< estimate for the limit operator (exact interpolation), else 0
+  bool singular = false;     ///< the interpolant is not unique (InterpolationResult::singular)
+  std::vector<int> null_vertices;
+  int polar_vertices = 0;    ///< vertices interpolated with BP's limit
+  int no_surface = 0;        ///< vertices without limit surface (left in place)
+  double energy_before = -1, energy_after = -1;  ///< fairing energy of the input / fitted cage (fair fit)
 };
 
 struct ToleranceResult {
@@ -119,6 +149,8 @@ struct ConversionResult {
   std::vector<CapMeasure> caps;    ///< one per PatchBuildInfo::caps
   bool has_brep = false;
   occt::BrepResult brep;  ///< check brep.valid: an invalid B-rep is returned, not thrown
+  FitReport fit;
+  std::vector<Point3> cage;  ///< the cage converted: the input's positions, or the fitted cage
   Timings ms;             ///< load and write are the caller's to fill
 };
 
@@ -133,6 +165,7 @@ void check_settings(const ConversionSettings& settings);
 /// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
 /// result's warning list.
 /// \throw SettingsError (see check_settings; a level refining past kMaxLevelFaces),
+///        FitError (FitMode::Interpolate: no cage interpolates the vertices; names them),
 ///        std::invalid_argument (topology the patch builder does not support),
 ///        occt::ExportError (OCCT failed while building the B-rep)
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,

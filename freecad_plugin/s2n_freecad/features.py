@@ -16,6 +16,9 @@ BOUNDARY = ["edge-and-corner", "edge-only", "none"]
 CREASE_METHOD = ["uniform", "chaikin"]
 TRIANGLES = ["catmark", "smooth"]
 POLAR = ["Polar caps", "Catmull-Clark"]
+#: Which surface the cage stands for: its own limit (which misses its vertices) or the limit of
+#: the cage solved to pass through them (subd2nurbs.convert(fit="interpolate")).
+FIT = ["Approximate", "Interpolate"]
 OUTPUT = ["Solid", "Shell"]
 
 
@@ -206,8 +209,15 @@ class _Progress:
         self.indicator.stop()
 
 
-def convert_cage(cage, level, tolerance, polar, progress=True, **options):
-    """subd2nurbs.convert with the NURBS object's settings (and further convert options)."""
+def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate", fair_weight=0.0, **options):
+    """subd2nurbs.convert with the NURBS object's settings (and further convert options).
+    fit: "Approximate" or "Interpolate"; fair_weight > 0 (with "Interpolate"): a fair fit."""
+    if fit not in FIT:
+        raise subd2nurbs.SettingsError("Fit must be one of %s" % ", ".join(FIT))
+    if fair_weight < 0:
+        raise subd2nurbs.SettingsError("FairWeight must be >= 0 (0: exact interpolation)")
+    if fair_weight > 0 and fit != "Interpolate":
+        raise subd2nurbs.SettingsError("FairWeight needs Fit = Interpolate")
     if polar not in POLAR:
         raise subd2nurbs.SettingsError("PolarHandling must be one of %s" % ", ".join(POLAR))
     if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
@@ -222,6 +232,9 @@ def convert_cage(cage, level, tolerance, polar, progress=True, **options):
     else:
         kwargs = {}
     kwargs["polar"] = polar == "Polar caps"
+    kwargs["fit"] = fit.lower()
+    if fair_weight > 0:
+        kwargs["fair"] = float(fair_weight)
     kwargs.update(options)
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
@@ -259,6 +272,14 @@ class NurbsFeature(_Stateless):
         if "OutputType" not in obj.PropertiesList:
             _add(obj, "App::PropertyEnumeration", "OutputType", g, "A solid (closed cages) or a shell")
             obj.OutputType = OUTPUT
+        if "Fit" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "Fit", g,
+                 "Approximate: the cage's own limit surface (it misses the cage's vertices); Interpolate: "
+                 "the surface passes through every cage vertex (the cage is solved for first)")
+            obj.Fit = FIT
+        _add(obj, "App::PropertyFloat", "FairWeight", g,
+             "With Fit = Interpolate: if > 0, trade exact interpolation for fairness (least squares with "
+             "the thin-plate energy weighted this much); 0: exact")
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
         r = "Result"
         _add(obj, "App::PropertyInteger", "Patches", r, "NURBS patches (= faces)", read_only=True)
@@ -271,14 +292,23 @@ class NurbsFeature(_Stateless):
              read_only=True)
         _add(obj, "App::PropertyFloat", "MaxDeviation", r, "Largest deviation from the limit surface",
              read_only=True)
+        _add(obj, "App::PropertyFloat", "MaxResidual", r,
+             "Fit = Interpolate: largest distance from a cage vertex to the surface's point for it", read_only=True)
+        _add(obj, "App::PropertyFloat", "MaxCageMove", r,
+             "Fit = Interpolate: largest move of a cage vertex by the fit (model units)", read_only=True)
         _add(obj, "App::PropertyStringList", "Warnings", r, "Conversion warnings", read_only=True)
 
     @staticmethod
-    def signature(cage, level, tolerance, polar):
+    def signature(cage, level, tolerance, polar, fit="Approximate", fair_weight=0.0):
         """What a conversion depends on: a result can be reused while this is unchanged."""
         return (cage.vertices.tobytes(), cage.face_sizes.tobytes(), cage.face_indices.tobytes(),
                 tuple(cage.creases), tuple(cage.corners), tuple(cage.holes), tuple(sorted(cage.options.items())),
-                int(level), float(tolerance), polar)
+                int(level), float(tolerance), polar, fit, float(fair_weight))
+
+    @staticmethod
+    def fit_settings(obj):
+        """(Fit, FairWeight) of a NURBS object (documents saved before they existed: Approximate)."""
+        return getattr(obj, "Fit", "Approximate"), float(getattr(obj, "FairWeight", 0.0))
 
     def prepare(self, signature, result):
         """A result computed before the object existed (make_nurbs), used by the first recompute."""
@@ -290,10 +320,13 @@ class NurbsFeature(_Stateless):
             raise ValueError("%s: no Source" % obj.Label)
         cage = cage_of(obj.Source)
         prepared, self._prepared = getattr(self, "_prepared", None), None
-        if prepared and prepared[0] == self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling):
+        fit, fair_weight = self.fit_settings(obj)
+        if prepared and prepared[0] == self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling, fit,
+                                                      fair_weight):
             result = prepared[1]
         else:
-            result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress)
+            result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress,
+                                  fit=fit, fair_weight=fair_weight)
         shape = Part.Shape()
         shape.importBrepFromString(result.brep_text)
         if obj.OutputType == "Shell" and shape.Solids:
@@ -310,6 +343,9 @@ class NurbsFeature(_Stateless):
         obj.MaxGap = r["continuity"]["max_gap"] or 0.0
         obj.MaxNormalAngle = r["continuity"]["max_normal_angle_deg"] or 0.0
         obj.MaxDeviation = r["deviation"]["max"] or 0.0
+        f = r.get("fit") or {}
+        obj.MaxResidual = (f.get("residual") or {}).get("max") or 0.0
+        obj.MaxCageMove = (f.get("displacement") or {}).get("max") or 0.0
         obj.Warnings = [str(w) for w in result.warnings]
         self._result = result
         if q:
@@ -322,8 +358,9 @@ class NurbsFeature(_Stateless):
     def result(self, obj):
         """The last subd2nurbs.ConversionResult (converted again after a reload)."""
         if getattr(self, "_result", None) is None:
+            fit, fair_weight = self.fit_settings(obj)
             self._result = convert_cage(cage_of(obj.Source), obj.Level, obj.Tolerance, obj.PolarHandling,
-                                        progress=obj.ShowProgress)
+                                        progress=obj.ShowProgress, fit=fit, fair_weight=fair_weight)
         return self._result
 
     def onDocumentRestored(self, obj):
@@ -379,8 +416,10 @@ class ColorMapFeature(_Stateless):
         if obj.Samples < 2:
             raise ValueError("%s: Samples must be >= 2" % obj.Label)
         cage = cage_of(nurbs.Source)
+        fit, fair_weight = NurbsFeature.fit_settings(nurbs)
         result = convert_cage(cage, nurbs.Level, nurbs.Tolerance, nurbs.PolarHandling, progress=nurbs.ShowProgress,
-                              brep=False, preview=obj.Coloring.lower(), preview_samples=obj.Samples)
+                              fit=fit, fair_weight=fair_weight, brep=False, preview=obj.Coloring.lower(),
+                              preview_samples=obj.Samples)
         p = result.preview
         obj.Points = [App.Vector(*map(float, q)) for q in p["positions"]]
         obj.Triangles = [int(i) for i in p["triangles"].reshape(-1)]

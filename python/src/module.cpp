@@ -27,6 +27,8 @@
 #include "converter/pipeline/conversion.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/eval/preview_mesh.h"
+#include "core/fit/fairing.h"
+#include "core/fit/interpolate.h"
 #include "core/limit/limit_evaluator.h"
 #include "core/mesh/errors.h"
 #include "core/refine/refiner.h"
@@ -85,6 +87,10 @@ void translate(std::exception_ptr p) {
     raise("WriteError", e.what(), a);
   } catch (const pipeline::SettingsError& e) {
     raise("SettingsError", e.what());
+  } catch (const FitError& e) {
+    py::dict a;
+    a["vertices"] = e.vertices();
+    raise("FitError", e.what(), a);
   } catch (const occt::ExportError& e) {
     py::dict a;
     a["stage"] = e.stage;
@@ -334,6 +340,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                  const py::dict& options, int level, double tolerance, bool absolute, bool build_brep,
                  bool polar, int radial_steps, double polar_lambda, bool separate_poles,
+                 const std::string& fit, double fair_weight,
                  const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
                  const std::function<void(const std::string&, double)>& progress) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
@@ -351,6 +358,10 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   settings.patch.cap.radial_steps = radial_steps;
   settings.patch.cap.lambda = polar_lambda;
   settings.patch.separate_poles = separate_poles;
+  if (fit != "approximate" && fit != "interpolate")
+    throw pipeline::SettingsError("fit must be 'approximate' or 'interpolate', not '" + fit + "'");
+  settings.fit.mode = fit == "interpolate" ? pipeline::FitMode::Interpolate : pipeline::FitMode::Approximate;
+  settings.fit.fair_weight = fair_weight;
   pipeline::ConversionProgress callbacks;
   std::string current;
   if (progress) {
@@ -370,7 +381,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   if (!preview_color.empty()) {  // the patches tessellated and coloured as convert --preview does
     const PreviewColor color = preview_color_from_string(preview_color);
     std::unique_ptr<LimitEvaluator> limit;
-    if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, points);
+    if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, c.cage);
     const PreviewMesh mesh = build_preview(c.build, limit.get(), color, preview_samples);
     const auto n = static_cast<py::ssize_t>(mesh.values.size());
     auto rows = [&](const std::vector<float>& v) { return py::array_t<float>({n, static_cast<py::ssize_t>(3)}, v.data()); };
@@ -390,6 +401,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   for (const NurbsPatch& p : c.build.set.patches) patches.append(patch_dict(p));
   d["patches"] = patches;
   d["warnings"] = c.warnings;
+  d["cage_vertices"] = points_array(c.cage);
   d["model_size"] = c.build.set.model_size;
   d["closed"] = c.build.set.closed;
 
@@ -434,6 +446,46 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
     d["brep"] = py::none();
     d["brep_text"] = py::none();
   }
+  return d;
+}
+
+/// Fairs a cage (as `subd2nurbs fair`): the free vertices minimise the thin-plate (+ membrane)
+/// energy, the limit points stay close to where they were; kept vertices are copied.
+py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                   const std::vector<std::tuple<int, int, double>>& creases,
+                   const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                   const py::dict& options, double weight, const std::vector<std::string>& keep, int levels,
+                   double membrane) {
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  const SubdivLevel level = SubdivLevel::from_input(in);
+  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
+  KeepSet ks;
+  for (const std::string& k : keep) {
+    if (k == "boundary") ks.boundary = true;
+    else if (k == "creases") ks.creases = true;
+    else if (k == "tagged") ks.tagged = true;
+    else throw pipeline::SettingsError("keep: expected boundary, creases or tagged, not '" + k + "'");
+  }
+  if (!(weight > 0 && std::isfinite(weight))) throw pipeline::SettingsError("weight must be a positive number");
+  if (!(membrane >= 0 && std::isfinite(membrane))) throw pipeline::SettingsError("membrane must be >= 0");
+  if (levels < 0 || levels > 4) throw pipeline::SettingsError("levels must be 0 .. 4");
+  FairOptions fo;
+  fo.weight = weight;
+  fo.energy.levels = levels;
+  fo.energy.membrane = membrane;
+  fo.keep = kept_vertices(level, ks);
+  std::vector<Point3> targets;
+  limit_rows(level).rows.apply(start, targets);
+  const FairResult r = fair(level, start, targets, fo);
+  py::dict d;
+  d["vertices"] = points_array(r.positions);
+  d["energy_before"] = r.energy_before;
+  d["energy_after"] = r.energy_after;
+  d["limit_moved_max"] = r.residual.max;
+  d["limit_moved_mean"] = r.residual.mean;
+  d["cage_moved_max"] = r.displacement.max;
+  d["kept"] = r.kept;
+  d["free"] = r.free;
   return d;
 }
 
@@ -486,6 +538,7 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.def("info", &info);
   m.def("refine", &refine);
   m.def("convert", &convert);
+  m.def("fair", &fair_cage);
   m.def("brep_summary", &brep_summary, py::arg("text"));
   m.def("write_shape", &write_shape_file);
   m.def("file_summary", &file_summary, py::arg("path"));

@@ -12,6 +12,8 @@ The same code as the ``subd2nurbs`` command line, from Python::
     result.patches[0]["poles"]                         # numpy (nu, nv, 3)
     result.brep_text                                   # OCCT BREP text of the checked B-rep
     result.report                                      # the quality report as a dict
+    through = subd2nurbs.convert(cage, fit="interpolate")  # the limit passes through the vertices
+    smooth, info = subd2nurbs.fair(cage, weight=0.1, keep="boundary")  # a faired cage
 
 Arguments are checked here, in Python, before the compiled part (``_subd2nurbs``) sees them;
 errors are :class:`CageError` / :class:`SettingsError` (both ``ValueError``) and
@@ -24,7 +26,7 @@ import numbers
 
 import numpy as np
 
-from .errors import CageError, ConversionError, SettingsError, Subd2NurbsError, WriteError
+from .errors import CageError, ConversionError, FitError, SettingsError, Subd2NurbsError, WriteError
 from . import _subd2nurbs
 
 #: The deviation tolerance (relative to the bounding-box diagonal) convert() uses when neither a
@@ -37,9 +39,9 @@ __version__ = _subd2nurbs.__version__
 OCC_VERSION = _subd2nurbs.OCC_VERSION
 
 __all__ = [
-    "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "brep_summary",
-    "file_summary",
-    "occt_compatible", "CageError", "SettingsError", "ConversionError", "WriteError",
+    "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "fair",
+    "brep_summary", "file_summary",
+    "occt_compatible", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
 ]
 
@@ -316,6 +318,9 @@ class ConversionResult:
         self.model_size = d["model_size"]
         self.closed = d["closed"]
         self.preview = d.get("preview")  # convert(preview=...): the coloured tessellation, else None
+        #: The cage that was converted (numpy (n, 3)): the input's vertices, or with
+        #: fit="interpolate" the cage whose limit passes through them.
+        self.cage_vertices = d["cage_vertices"]
 
     def write(self, path, schema="ap214"):
         """Writes the B-rep as STEP (.step/.stp, schema "ap214" or "ap242"), IGES (.iges/.igs)
@@ -347,7 +352,7 @@ class ConversionResult:
 
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
             progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
-            preview=None, preview_samples=16):
+            preview=None, preview_samples=16, fit="approximate", fair=None):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
     level: pin the extra refinement levels beyond the minimum at every fan (>= 0), as --level.
@@ -360,6 +365,13 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
     separate_poles: poles of valence 3..5 or too close to another get the separating first
         step and become caps too (as --separate-poles; needs polar).
+    fit: "approximate" (default: the cage's own limit surface, which misses its vertices) or
+        "interpolate": solve for the cage whose exact limit surface passes through every vertex
+        (as --fit interpolate); the result's cage_vertices is that cage and report["fit"] says
+        how well (residual, displacement, condition). Raises FitError naming the vertices when
+        no cage interpolates.
+    fair: with fit="interpolate", a weight W > 0: least squares with the thin-plate energy as
+        regulariser instead of exact interpolation (as --fair W): noisy points, smooth surface.
     preview: "deviation", "curvature" or "zebra": also tessellate the patches with per-vertex
         colours, as convert --preview / --color / --preview-samples do; the result's `preview`
         is then a dict of numpy arrays (positions, normals, colors, values, triangles) and the
@@ -391,6 +403,17 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         raise SettingsError("polar_lambda must be a positive number, not %r" % (polar_lambda,))
     if separate_poles and not polar:
         raise SettingsError("separate_poles needs polar")
+    if fit not in ("approximate", "interpolate"):
+        raise SettingsError("fit must be 'approximate' or 'interpolate', not %r" % (fit,))
+    if fair is not None:
+        if fit != "interpolate":
+            raise SettingsError("fair needs fit='interpolate'")
+        if isinstance(fair, bool) or not isinstance(fair, numbers.Real) or not math.isfinite(fair) or fair <= 0:
+            raise SettingsError("fair must be a positive number (the weight of the fairing energy), not %r" % (fair,))
+        if separate_poles:
+            raise SettingsError("fit='interpolate' does not support separate_poles")
+    if fit == "interpolate" and separate_poles:
+        raise SettingsError("fit='interpolate' does not support separate_poles")
     if preview not in (None, "deviation", "curvature", "zebra"):
         raise SettingsError("preview must be None, 'deviation', 'curvature' or 'zebra', not %r" % (preview,))
     if not _is_int(preview_samples) or preview_samples < 2:
@@ -399,11 +422,37 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         raise TypeError("progress must be callable(stage, fraction)")
     d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
                             bool(polar), int(radial_steps), float(polar_lambda), bool(separate_poles),
-                            preview or "", int(preview_samples), cage.name, cage.warnings, progress)
+                            fit, float(fair or 0.0), preview or "", int(preview_samples), cage.name, cage.warnings, progress)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")
     return result
+
+
+def fair(cage, weight=1.0, keep=(), levels=2, membrane=0.0):
+    """Fairs a cage (as `subd2nurbs fair`): moves its free vertices to minimise the thin-plate
+    (+ membrane) energy of the limit surface while keeping the limit points close to where they
+    were. keep: any of "boundary", "creases", "tagged" (those vertices stay fixed, bit for bit).
+    Returns (Cage with the same faces and tags, info dict: energy_before, energy_after,
+    limit_moved_max, limit_moved_mean, cage_moved_max, kept, free)."""
+    cage = _cage(cage)
+    if isinstance(weight, bool) or not isinstance(weight, numbers.Real) or not math.isfinite(weight) or weight <= 0:
+        raise SettingsError("weight must be a positive number, not %r" % (weight,))
+    if isinstance(keep, str):
+        keep = (keep,)
+    for k in keep:
+        if k not in ("boundary", "creases", "tagged"):
+            raise SettingsError("keep: expected 'boundary', 'creases' or 'tagged', not %r" % (k,))
+    if not _is_int(levels) or not 0 <= levels <= 4:
+        raise SettingsError("levels must be an integer 0 .. 4, not %r" % (levels,))
+    if isinstance(membrane, bool) or not isinstance(membrane, numbers.Real) or not math.isfinite(membrane) \
+            or membrane < 0:
+        raise SettingsError("membrane must be a number >= 0, not %r" % (membrane,))
+    d = _subd2nurbs.fair(*cage._args(), float(weight), list(keep), int(levels), float(membrane))
+    o = cage.options
+    out = Cage(d.pop("vertices"), cage.faces, cage.creases, cage.corners, cage.holes, o["boundary"],
+               o["crease_method"], o["triangles"], name="%s (faired)" % cage.name)
+    return out, d
 
 
 def brep_summary(text):

@@ -32,6 +32,14 @@ class SettingsError(Subd2NurbsError, ValueError):
     deep for the cage, unknown boundary rule)."""
 
 
+class FitError(Subd2NurbsError, ValueError):
+    """No cage has a limit surface through the given points (fit="interpolate"): the limit
+    system is singular or badly conditioned and the points leave its range. ``vertices``
+    names where (a fair fit, ``fair=W``, accepts such points)."""
+
+    vertices = ()
+
+
 class ConversionError(Subd2NurbsError, RuntimeError):
     """The conversion failed: the patch builder does not support the topology, OCCT failed,
     or the B-rep is not valid. ``stage`` and ``patch`` say where, when known."""

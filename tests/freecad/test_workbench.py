@@ -197,6 +197,32 @@ class Workbench(unittest.TestCase):
                     self.assertEqual(len(nurbs.Shape.Solids), 0)
                     self.assertEqual(len(nurbs.Shape.Faces), expected_faces(path))
 
+    def test_fit_interpolate_passes_through_the_cage_vertices(self):
+        """The NURBS object's Fit property: Interpolate makes the shape pass through the cage's
+        vertices (FreeCAD's own distance from each vertex to the shape), Approximate does not;
+        FairWeight > 0 gives a fair fit."""
+        path = os.path.join(SAMPLES, "rounded_box.obj")
+        cage = s2n.make_cage(path, doc=self.doc)
+        nurbs = s2n.make_nurbs(cage, progress=False)
+        self.assertEqual(nurbs.Fit, "Approximate")
+        points = [App.Vector(*map(float, p)) for p in subd2nurbs.read_cage(path).vertices]
+        size = nurbs.Shape.BoundBox.DiagonalLength
+
+        def miss():
+            return max(nurbs.Shape.distToShape(Part.Vertex(p))[0] for p in points) / size
+
+        self.assertGreater(miss(), 1e-3)
+        nurbs.Fit = "Interpolate"
+        self.doc.recompute()
+        self.assertTrue(nurbs.Shape.isValid())
+        self.assertLess(miss(), 1e-7)
+        self.assertLess(nurbs.MaxResidual, 1e-9 * size)
+        self.assertGreater(nurbs.MaxCageMove, 0)
+        nurbs.FairWeight = 0.1
+        self.doc.recompute()
+        self.assertTrue(nurbs.Shape.isValid())
+        self.assertGreater(nurbs.MaxResidual, 1e-9 * size)
+
     def test_polar_handling_and_a_triangulated_pole(self):
         """samples/capped_cylinder.obj: two 16-triangle fans (poles) and 112 quads."""
         path = os.path.join(SAMPLES, "capped_cylinder.obj")

@@ -369,5 +369,55 @@ class Versions(unittest.TestCase):
         self.assertFalse(s2n.occt_compatible("7.5.0"))
 
 
+class Fitting(unittest.TestCase):
+    """convert(fit="interpolate"[, fair=W]) and fair(): the limit surface through the vertices."""
+
+    def test_interpolating_patches_pass_through_the_vertices(self):
+        # A regular torus: every patch is a bicubic B-spline whose corners are limit points, so
+        # the patch corners (clamped: the corner poles) must be cage vertices after the fit, and
+        # not before.
+        cage = s2n.read_cage(corpus("catmark_torus"))
+        size = float(np.linalg.norm(cage.vertices.max(0) - cage.vertices.min(0)))
+
+        def miss(result):
+            corners = np.concatenate([p["poles"][[0, 0, -1, -1], [0, -1, 0, -1]] for p in result.patches])
+            d = np.linalg.norm(cage.vertices[None, :, :] - corners[:, None, :], axis=2).min(axis=0)
+            return d.max() / size
+
+        plain = s2n.convert(cage, brep=False)
+        fitted = s2n.convert(cage, fit="interpolate", brep=False)
+        self.assertGreater(miss(plain), 1e-2)
+        self.assertLess(miss(fitted), 1e-12)
+        f = fitted.report["fit"]
+        self.assertEqual(f["mode"], "interpolate")
+        self.assertLess(f["residual"]["max_relative"], 1e-12)
+        self.assertEqual(fitted.cage_vertices.shape, cage.vertices.shape)
+        self.assertIsNone(plain.report["fit"]["residual"])
+
+    def test_fair_fit_and_errors(self):
+        cage = s2n.read_cage(corpus("catmark_val2_back2back"))
+        with self.assertRaises(s2n.FitError) as e:
+            s2n.convert(cage, fit="interpolate", brep=False)
+        self.assertEqual(sorted(e.exception.vertices), [0, 1, 2])
+        r = s2n.convert(cage, fit="interpolate", fair=0.01, brep=False)
+        self.assertEqual(r.report["fit"]["fair_weight"], 0.01)
+        for bad in ({"fair": 1.0}, {"fit": "interpolate", "fair": 0}, {"fit": "interpolate", "fair": -1},
+                    {"fit": "exact"}):
+            with self.assertRaises(s2n.SettingsError):
+                s2n.convert(cage, brep=False, **bad)
+
+    def test_fair_keeps_vertices_bit_for_bit(self):
+        cage = s2n.read_cage(corpus("catmark_fvar_bound2"))
+        faired, info = s2n.fair(cage, weight=0.5, keep="boundary")
+        self.assertLess(info["energy_after"], info["energy_before"])
+        self.assertGreater(info["kept"], 0)
+        moved = np.any(faired.vertices != cage.vertices, axis=1)
+        self.assertEqual(int((~moved).sum()) >= info["kept"], True)
+        self.assertTrue(moved.any())
+        self.assertEqual(faired.creases, cage.creases)
+        with self.assertRaises(s2n.SettingsError):
+            s2n.fair(cage, weight=0)
+
+
 if __name__ == "__main__":
     unittest.main()

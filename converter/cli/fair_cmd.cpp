@@ -1,0 +1,92 @@
+#include "converter/cli/fair_cmd.h"
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+
+#include "converter/cli/commands.h"
+#include "converter/pipeline/conversion.h"
+#include "core/fit/fairing.h"
+#include "io/atomic_file.h"
+#include "io/obj_writer.h"
+
+namespace subd2nurbs::cli {
+
+CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& o) {
+  CLI::App* c = app.add_subcommand(
+      "fair",
+      "Fair a cage: move its free vertices to minimise the thin-plate energy of the limit surface, "
+      "keeping the limit points close to where they were; write the cage as OBJ");
+  c->add_option("MESH", o.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
+      ->required();
+  c->add_option("-o,--output", o.output, "Output OBJ file (same topology and tags)")->required();
+  c->add_option("--weight", o.weight, "Weight W > 0 of the energy against keeping the limit points (default 1)");
+  c->add_option("--keep", o.keep, "Vertices kept fixed (repeatable): boundary, creases (ends of tagged crease "
+                                  "edges) or tagged (creases and corner tags)")
+      ->check(CLI::IsMember({"boundary", "creases", "tagged"}));
+  c->add_option("--levels", o.levels, "Refinement levels of the energy near extraordinary vertices (0..4, default 2)")
+      ->check(CLI::Range(0, 4));
+  c->add_option("--membrane", o.membrane, "Weight of the membrane term (>= 0, default 0; thin plate has 1)");
+  c->add_option("--report", o.report, "Also write a JSON report (energies, displacement, kept vertices)");
+  c->add_flag("-q,--quiet", o.quiet, "No summary on stderr (warnings are still printed)");
+  return c;
+}
+
+void run_fair(const FairCommandOptions& o, std::ostream& err) {
+  if (!(o.weight > 0 && std::isfinite(o.weight))) throw UsageError("--weight must be a positive number");
+  if (!(o.membrane >= 0 && std::isfinite(o.membrane))) throw UsageError("--membrane must be a number >= 0");
+  check_output_directory(o.output);
+  if (!o.report.empty()) check_output_directory(o.report);
+  const LoadedInput loaded = load_input(o.mesh);
+  for (const std::string& w : loaded.warnings) err << w << "\n";
+  const SubdivLevel& level = loaded.level;
+  const std::vector<Point3> start = loaded.positions();
+
+  KeepSet keep;
+  for (const std::string& k : o.keep) {
+    if (k == "boundary") keep.boundary = true;
+    if (k == "creases") keep.creases = true;
+    if (k == "tagged") keep.tagged = true;
+  }
+  FairOptions fo;
+  fo.weight = o.weight;
+  fo.energy.levels = o.levels;
+  fo.energy.membrane = o.membrane;
+  fo.keep = kept_vertices(level, keep);
+  // The data term keeps the limit points where they were.
+  std::vector<Point3> targets;
+  limit_rows(level).rows.apply(start, targets);
+  const auto t = std::chrono::steady_clock::now();
+  const FairResult r = fair(level, start, targets, fo);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+  write_obj(o.output, r.positions, level);
+
+  using pipeline::json_number;
+  using pipeline::short_number;
+  if (!o.report.empty()) {
+    auto stats = [](const FieldStats& s) {
+      return "{\"max\": " + json_number(s.max) + ", \"mean\": " + json_number(s.mean) + ", \"where\": " +
+             (s.where >= 0 ? std::to_string(s.where) : std::string("null")) + "}";
+    };
+    std::string keep_list;
+    for (size_t i = 0; i < o.keep.size(); ++i) keep_list += (i ? ", " : "") + pipeline::json_string(o.keep[i]);
+    const std::string text =
+        "{\n  \"format\": \"subd2nurbs-fair\",\n  \"version\": 1,\n  \"input\": " + pipeline::json_string(o.mesh) +
+        ",\n  \"output\": " + pipeline::json_string(o.output) + ",\n  \"weight\": " + json_number(o.weight) +
+        ",\n  \"membrane\": " + json_number(o.membrane) + ",\n  \"levels\": " + std::to_string(o.levels) +
+        ",\n  \"keep\": [" + keep_list + "],\n  \"kept_vertices\": " + std::to_string(r.kept) +
+        ",\n  \"free_vertices\": " + std::to_string(r.free) + ",\n  \"energy_before\": " +
+        json_number(r.energy_before) + ",\n  \"energy_after\": " + json_number(r.energy_after) +
+        ",\n  \"limit_moved\": " + stats(r.residual) + ",\n  \"cage_moved\": " + stats(r.displacement) +
+        ",\n  \"solve_ms\": " + json_number(ms) + "\n}\n";
+    write_file_atomically(o.report, [&](std::ostream& out) { out << text; });
+  }
+  if (!o.quiet)
+    err << "subd2nurbs: wrote " << o.output << ": energy " << short_number(r.energy_before) << " -> "
+        << short_number(r.energy_after) << "; limit points moved max " << short_number(r.residual.max)
+        << " (vertex " << r.residual.where << "), mean " << short_number(r.residual.mean) << "; cage moved max "
+        << short_number(r.displacement.max) << "; " << r.kept << " kept, " << r.free << " free vertices\n";
+}
+
+}  // namespace subd2nurbs::cli
