@@ -10,7 +10,7 @@
 //   vertex tag is left at v; then the closed-form mask applies. The cost is a few tiny
 //   refinements per vertex, whatever the sharpness (the global version in limit_stencils
 //   refines the whole cage ceil(s) + 1 times).
-// * Polar structures (when given): the BP limit (MATH-free summary in docs/fitting.md):
+// * Polar structures (when given): the BP limit (docs/fitting.md):
 //   pole (p0 + m) / 2, ring-1 and ring-2 vertices the tensor bicubic limit of their
 //   vertex-children after two radial BP steps.
 // Vertices without limit surface (unused, or every incident face a hole) get the identity row

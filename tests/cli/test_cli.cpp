@@ -327,7 +327,7 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",
       "r['deviation']['worst_fan']['valence'] == 3 and r['deviation']['samples'] > 0",
       "r['deviation']['sample_levels'] == 2 and len(r['deviation']['fans']) == 8",
-      "sorted(r['timings_ms']) == sorted(['load', 'patches', 'continuity', 'deviation', 'brep', 'write'])",
+      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'continuity', 'deviation', 'brep', 'write'])",
       "r['sharpened_edges'] == 0 and r['sharpened_vertices'] == 0 and r['warnings'] == []",
   };
   for (const char* condition : conditions)
