@@ -255,7 +255,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       const auto t0 = Clock::now();
       stage("building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
             " vertices for the tolerance)");
-      PatchBuild deeper_build = build_patches(base, positions, po);
+      PatchBuild deeper_build = build_patches(base, c.cage, po);
       c.build = std::move(deeper_build);
       c.ms.patches += ms_since(t0);
       std::vector<char> remeasure(c.build.info.fans.size(), 0);
