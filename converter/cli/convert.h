@@ -6,6 +6,7 @@
 #include <ostream>
 #include <string>
 
+#include "converter/cli/commands.h"
 #include "converter/pipeline/conversion.h"
 
 namespace subd2nurbs::cli {
@@ -29,13 +30,17 @@ struct ConvertOptions {
   std::string preview_color = "curvature";  ///< deviation, curvature or zebra
   int preview_samples = 12;   ///< per patch side
   bool progress_tty = false;  ///< stderr is a terminal: show the B-rep percentage in place
+  LimitOptionValues limits;   ///< --max-faces, --max-memory
 };
 
 /// Most extra levels --tolerance adds; a tolerance needing more is reported as capped.
 constexpr int kMaxToleranceExtraLevels = pipeline::kMaxToleranceExtraLevels;
 
 /// Converts a cage. Progress, warnings and the summary go to `err`.
-/// \throw UsageError (bad options, unknown output extension, a level too deep),
+/// Every output (-o, --report, --preview) is computed first and written only when all of
+/// them are ready (io/atomic_file.h StagedFile), so a failure leaves every file as it was.
+/// \throw UsageError (bad options, unknown output extension, an output that is the input),
+///        pipeline::ResourceError (the estimate exceeds --max-faces / --max-memory),
 ///        InputError (the cage), WriteError (the output or report file),
 ///        occt::ExportError (OCCT failed, or the B-rep is not valid: nothing is written)
 void run_convert(const ConvertOptions& options, std::ostream& err);

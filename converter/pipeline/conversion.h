@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "converter/occt/brep_builder.h"
+#include "converter/pipeline/resources.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
 #include "core/patch/patch_builder.h"
@@ -19,9 +20,6 @@
 
 namespace subd2nurbs::pipeline {
 
-/// Level-k faces above which a conversion is refused (level) or its levels capped
-/// (tolerance): the level-k Bezier nets alone take 384 bytes per face.
-constexpr double kMaxLevelFaces = 4e6;
 /// Most extra levels a tolerance adds; a tolerance needing more is reported as capped.
 constexpr int kMaxToleranceExtraLevels = 4;
 /// Samples per shared curve for the continuity measures.
@@ -38,6 +36,9 @@ struct ConversionSettings {
   double tolerance = 0;         ///< > 0 when given
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
+  /// Refused before any work when estimate_conversion exceeds them (resources.h); with a
+  /// tolerance, the extra levels are capped to stay within them.
+  ResourceLimits limits;
 };
 
 /// A setting that cannot be used (negative level, bad tolerance, a level too deep for the cage).
@@ -112,16 +113,14 @@ struct ConversionResult {
   Timings ms;             ///< load and write are the caller's to fill
 };
 
-/// Level-k faces of a build with `extra` levels: one coarse quad becomes 4^(2 + extra).
-double level_faces(const SubdivLevel& base, int extra);
-
 /// Checks `settings` on their own (level >= 0, a positive finite tolerance).
 /// \throw SettingsError
 void check_settings(const ConversionSettings& settings);
 
 /// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
 /// result's warning list.
-/// \throw SettingsError (see check_settings; a level refining past kMaxLevelFaces),
+/// \throw SettingsError (see check_settings), ResourceError (the estimate exceeds
+///        settings.limits, resources.h), InvalidMeshError (every face is a hole: no surface),
 ///        std::invalid_argument (topology the patch builder does not support),
 ///        occt::ExportError (OCCT failed while building the B-rep)
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,

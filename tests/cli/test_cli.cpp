@@ -419,7 +419,7 @@ TEST(CliConvert, UsageErrorsExitWith1AndWriteNothing) {
   EXPECT_EQ(run("convert " + in + " -o " + out + " --schema ap203").exit_code, 1);
   const Result deep = run("convert " + in + " -o " + out + " --level 12");
   EXPECT_EQ(deep.exit_code, 1);
-  EXPECT_NE(deep.err.find("lower --level"), std::string::npos) << deep.err;
+  EXPECT_NE(deep.err.find("use a lower level"), std::string::npos) << deep.err;
   EXPECT_TRUE(dir.entries().empty());
 }
 

@@ -1,0 +1,73 @@
+// Resource guards: what a conversion or a refinement will need, estimated from the cage
+// before any heavy work, and the limits it is checked against. One place, so that the
+// estimate can follow the patch builder (adaptive refinement will make it smaller).
+// Used by the CLI, the Python module and (through it) the FreeCAD workbench.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "core/refine/refiner.h"
+
+namespace subd2nurbs::pipeline {
+
+/// Default face limits. Convert / check: faces of the refined mesh the patches are built
+/// from (the level-k mesh, ~400 bytes each for the Bezier nets alone). Refine: output faces.
+constexpr double kDefaultMaxConvertFaces = 4e6;
+constexpr double kDefaultMaxRefineFaces = 2e7;
+
+/// Measured peak memory per face (Release build, Debian 12, x86-64; docs/hardening.md): a
+/// conversion per level-k face with the B-rep (patches, measures, OCCT faces and the STEP
+/// writer: 4.5-4.8 KB measured on 10k- and 62k-quad grids) and without it (patch JSON, check:
+/// 1.15-1.4 KB), a refinement per output face (all levels, stencils, the OBJ text: 370-420
+/// bytes).
+constexpr double kConvertBytesPerFace = 5000;
+constexpr double kConvertBytesPerFaceNoBrep = 1500;
+constexpr double kRefineBytesPerFace = 450;
+
+/// What the user allows; 0 means "the default".
+struct ResourceLimits {
+  double max_faces = 0;   ///< 0: kDefaultMaxConvertFaces or kDefaultMaxRefineFaces
+  double max_memory = 0;  ///< bytes; 0: default_max_memory()
+};
+
+/// 3/4 of the physical memory, or of the address-space / data-size limit (ulimit -v / -d)
+/// when that is lower; at least 256 MiB.
+double default_max_memory();
+
+struct ResourceEstimate {
+  double faces = 0;    ///< refined faces the work runs on (refine: output faces, exact)
+  double patches = 0;  ///< NURBS patches (convert), 0 for refine
+  double poles = 0;    ///< their control points
+  double bytes = 0;    ///< peak memory, roughly
+};
+
+/// Conversion with `extra_levels` beyond the minimum: from the face count (quads of the
+/// coarsest all-quad mesh), the level, and the irregular vertices (Stam's eigenbasis per
+/// valence, (2n+8)^2 doubles a few times over).
+ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep = true);
+
+/// Uniform refinement to `levels`: faces exact (corners x 4^(levels-1) after the first level).
+ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels);
+
+/// A refusal: the estimate exceeds a limit. A SettingsError's sibling; the message names the
+/// estimate, the limit and the overrides (--max-faces / --max-memory, Python max_faces= /
+/// max_memory=).
+class ResourceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// \throw ResourceError naming `what` ("converting at level 2", "refining to level 11")
+void check_resources(const ResourceEstimate& estimate, const ResourceLimits& limits, double default_max_faces,
+                     const std::string& what, const std::string& advice);
+
+/// Human-readable byte count ("1.5 GiB").
+std::string bytes_text(double bytes);
+
+/// Parses a memory size: a number of bytes with an optional K, M, G or T suffix (powers of
+/// 1024, "B" / "iB" allowed after it): "8G", "512MiB", "1e9". Returns false when malformed
+/// or not positive.
+bool parse_memory_size(const std::string& text, double& bytes);
+
+}  // namespace subd2nurbs::pipeline
