@@ -16,6 +16,7 @@
 #include <random>
 
 #include "io/input_error.h"
+#include "io/input_file.h"
 
 namespace subd2nurbs {
 
@@ -32,15 +33,6 @@ std::string directory_of(const std::string& path) {
 std::string file_name_of(const std::string& path) {
   const std::string::size_type slash = path.rfind('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-const char* file_kind(mode_t mode) {
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
-  if (S_ISCHR(mode)) return "a character device";
-  if (S_ISBLK(mode)) return "a block device";
-  if (S_ISSOCK(mode)) return "a socket";
-  return "not a regular file";
 }
 
 // --- temporary files removed on SIGINT / SIGTERM / SIGHUP ------------------------------------

@@ -19,6 +19,9 @@ constexpr std::size_t kMaxInputFileBytes = std::size_t{2} << 30;  // 2 GiB
 /// content in messages ("an OBJ file", "a glTF file", ...).
 std::string read_input_file(const std::string& path, const std::string& what);
 
+/// "a directory", "a FIFO (named pipe)", "a character device", ... for a stat() st_mode.
+const char* file_kind(unsigned mode);
+
 /// `text` made safe to echo in a message: control bytes, NUL and bytes >= 0x7f shown as
 /// \xNN (so a file name or token never moves the terminal or hides text), and anything longer
 /// than `max_bytes` shortened to its start and end around "...".
