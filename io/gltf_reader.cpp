@@ -71,7 +71,8 @@ Matrix local_transform(const tinygltf::Node& node) {
 
 /// Node instances (one per path from the scene to a node) a scene may expand to.
 constexpr long kMaxNodeInstances = 100000;
-/// Triangles all instances together may bring; each is kept as a face before quad recovery.
+/// Triangles (and, separately, vertices) all instances together may bring; each is kept
+/// before quad recovery.
 constexpr long kMaxInstancedTriangles = 20000000;
 
 std::string coordinate_text(double x) {
@@ -217,6 +218,14 @@ class Reader {
              "instance of its mesh)");
       const auto it = prim.attributes.find("POSITION");
       if (it == prim.attributes.end()) fail(prim_name + " has no POSITION attribute");
+      // Every instance transforms and welds all of the primitive's vertices, used or not.
+      if (it->second >= 0 && it->second < static_cast<int>(model_.accessors.size()))
+        vertices_ += static_cast<long>(
+            std::min<size_t>(model_.accessors[static_cast<size_t>(it->second)].count, kMaxInstancedTriangles));
+      if (vertices_ > kMaxInstancedTriangles)
+        fail(where + ": instancing " + prim_name + " here brings the scene to more than " +
+             std::to_string(kMaxInstancedTriangles) + " vertices (each path from the scene to a node is one "
+             "instance of its mesh)");
       const std::vector<std::array<double, 3>> local = positions(it->second, "POSITION of " + prim_name);
       const std::vector<long> idx = indices(prim.indices, local.size(), "indices of " + prim_name);
       if (idx.size() % 3 != 0)
@@ -292,6 +301,7 @@ class Reader {
   std::map<std::array<double, 3>, int> weld_;
   long instances_ = 0;
   long triangles_ = 0;
+  long vertices_ = 0;
 };
 
 std::string lower_extension(const std::string& path) {

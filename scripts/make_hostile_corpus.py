@@ -275,7 +275,13 @@ def main():
            "python": {"exit": 1, "message": r"SettingsError: .*max_faces"},
            "refine": {"exit": 1, "message": r"about 6\.92e\+07 faces .*--max-faces"}},
           args={"refine": ["-l", "4"]})
-    c.add("grid_100.obj", grid(100), {}, kind="signal")  # for the SIGTERM / SIGINT runs only
+    c.add("grid_100.obj", grid(100), {}, kind="signal")
+    # A semi-sharp crease makes the patch builder refine until it has decayed (5 levels here):
+    # 10k quads x 4^5, refused by the estimate although the level asked for is 0.
+    c.add("grid_100_crease5.obj", grid(100) + "t crease 2/1/0 102 103 5\n",
+          {"default": OK, "convert": {"exit": 1, "message": r"at level 0 would make about 1\.02e\+07 faces"},
+           "python": {"exit": 1, "message": r"SettingsError: .*1\.02e\+07 faces"}},
+          args={"refine": ["-l", "1"]})  # for the SIGTERM / SIGINT runs only
     c.add("cube_refine_11.obj", CUBE,
           {"default": OK, "refine": {"exit": 1, "message": r"refining 6 faces to level 11 would make about 2\.52e\+07 faces"}},
           args={"refine": ["-l", "11"]})

@@ -1,5 +1,7 @@
 #include "converter/pipeline/resources.h"
 
+#include "core/patch/patch_builder.h"
+
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -68,7 +70,17 @@ bool parse_memory_size(const std::string& text, double& bytes) {
 ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep) {
   const PolyMesh& m = base.mesh;
   const double coarse_quads = m.all_quads() ? m.num_faces() : m.num_corners();
-  const int k = 2 + std::max(0, extra_levels);
+  const int coarse = m.all_quads() ? 0 : 1;
+  // Levels above the coarse mesh: 2 + extra, or more while semi-sharp creases and corners
+  // have not decayed (one level per unit of sharpness), up to the patch builder's cap.
+  int k = 2 + std::max(0, extra_levels);
+  float semi = 0;
+  for (float s : base.edge_sharpness)
+    if (s > 0 && s < kInfiniteSharpness) semi = std::max(semi, s);
+  for (float s : base.vertex_sharpness)
+    if (s > 0 && s < kInfiniteSharpness) semi = std::max(semi, s);
+  const int cap = std::max(k, std::max(2, PatchOptions{}.max_levels_above_coarse));
+  k = std::max(k, std::min(static_cast<int>(std::ceil(semi)) - coarse, cap));
   ResourceEstimate e;
   e.faces = coarse_quads * std::pow(4.0, k);
   e.patches = coarse_quads;

@@ -43,7 +43,8 @@ struct ResourceEstimate {
 };
 
 /// Conversion with `extra_levels` beyond the minimum: from the face count (quads of the
-/// coarsest all-quad mesh), the level, and the irregular vertices (Stam's eigenbasis per
+/// coarsest all-quad mesh), the level (raised, as the patch builder does, while semi-sharp
+/// creases have not decayed: up to 5 levels above the coarse mesh), and the irregular vertices (Stam's eigenbasis per
 /// valence, (2n+8)^2 doubles a few times over).
 ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep = true);
 

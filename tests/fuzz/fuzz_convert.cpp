@@ -1,12 +1,13 @@
 // libFuzzer target: read -> validate -> patches at level 0 -> continuity (core only, no OCCT):
 // an OBJ cage from the fuzzer's bytes through parse_obj, load_and_validate, build_patches and
-// measure_continuity. Small cages only (the resource guard's estimate, converter/pipeline,
-// decides what a real run refuses; here a face cap keeps each execution short).
+// measure_continuity. Small work only: the resource guard's estimate (converter/pipeline),
+// which decides what a real run refuses, here at 2e4 refined faces.
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 
+#include "converter/pipeline/resources.h"
 #include "core/eval/continuity.h"
 #include "core/patch/patch_builder.h"
 #include "io/input_error.h"
@@ -18,6 +19,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const subd2nurbs::LoadedCage cage = subd2nurbs::parse_obj(text, "fuzz.obj");
     if (cage.input.num_faces() > 64 || cage.input.face_indices.size() > 512) return 0;
     const subd2nurbs::SubdivLevel level = subd2nurbs::load_and_validate(cage);
+    // The pipeline's resource estimate (converter/pipeline/resources.h) at a fuzzing scale.
+    if (subd2nurbs::pipeline::estimate_conversion(level, 0, false).faces > 20000) return 0;
     const std::vector<subd2nurbs::Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
     bool surface = false;
     for (char hole : level.face_hole) surface = surface || !hole;
