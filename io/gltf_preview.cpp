@@ -49,7 +49,7 @@ int add_vec3(tinygltf::Model& model, std::vector<unsigned char>& data, const std
 
 }  // namespace
 
-void write_preview_glb(const std::string& path, const PreviewMesh& mesh, const std::string& title) {
+StagedFile stage_preview_glb(const std::string& path, const PreviewMesh& mesh, const std::string& title) {
   tinygltf::Model model;
   std::vector<unsigned char> data;
   tinygltf::Primitive prim;
@@ -90,11 +90,17 @@ void write_preview_glb(const std::string& path, const PreviewMesh& mesh, const s
   model.defaultScene = 0;
   model.asset.version = "2.0";
   model.asset.generator = "subd2nurbs preview";
-  write_file_atomically(path, [&](std::ostream& out) {
+  StagedFile file(path);
+  file.write([&](std::ostream& out) {
     tinygltf::TinyGLTF writer;
     if (!writer.WriteGltfSceneToStream(&model, out, false, true))
       throw WriteError(path, "tinygltf could not write the preview");
   });
+  return file;
+}
+
+void write_preview_glb(const std::string& path, const PreviewMesh& mesh, const std::string& title) {
+  stage_preview_glb(path, mesh, title).commit();
 }
 
 }  // namespace subd2nurbs

@@ -7,9 +7,13 @@
 #include <string>
 
 #include "core/eval/preview_mesh.h"
+#include "io/atomic_file.h"
 
 namespace subd2nurbs {
 
 void write_preview_glb(const std::string& path, const PreviewMesh& mesh, const std::string& title);
+
+/// The same, into a StagedFile the caller commits (with the other outputs of a run).
+StagedFile stage_preview_glb(const std::string& path, const PreviewMesh& mesh, const std::string& title);
 
 }  // namespace subd2nurbs

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/mesh/errors.h"
+#include "io/input_file.h"
 
 namespace subd2nurbs {
 
@@ -24,6 +25,10 @@ class InputError : public std::runtime_error {
   const std::string& file() const { return file_; }
   /// 1-based line number, or 0 when the error is not about one line.
   int line() const { return line_; }
+  /// "FILE:LINE" (or "FILE"), the name made printable and shortened (io/input_file.h).
+  std::string location() const {
+    return line_ > 0 ? printable(file_) + ":" + std::to_string(line_) : printable(file_);
+  }
   /// The message without the "FILE:LINE: " prefix.
   const std::string& message() const { return message_; }
   /// Why the cage is invalid, when it is a validation problem (malformed tags count as
@@ -32,7 +37,8 @@ class InputError : public std::runtime_error {
 
  private:
   static std::string format(const std::string& file, int line, const std::string& message) {
-    return line > 0 ? file + ":" + std::to_string(line) + ": " + message : file + ": " + message;
+    const std::string name = printable(file);
+    return line > 0 ? name + ":" + std::to_string(line) + ": " + message : name + ": " + message;
   }
 
   std::string file_;
@@ -45,7 +51,7 @@ class InputError : public std::runtime_error {
 class WriteError : public std::runtime_error {
  public:
   WriteError(std::string file, std::string message)
-      : std::runtime_error(file + ": " + message), file_(std::move(file)),
+      : std::runtime_error(printable(file) + ": " + message), file_(std::move(file)),
         message_(std::move(message)) {}
 
   const std::string& file() const { return file_; }

@@ -18,14 +18,13 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <string_view>
 
 #include "core/mesh/validate.h"
+#include "io/input_file.h"
 
 namespace subd2nurbs {
 
@@ -71,22 +70,25 @@ bool parse_int(std::string_view token, int& value) {
   return ec == std::errc() && ptr == end;
 }
 
-std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
+/// A token of the file for a message: quoted, printable and shortened (io/input_file.h).
+std::string quoted(std::string_view s) { return "'" + printable(s, 60) + "'"; }
 
-std::string read_whole_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(path, 0, "is a directory, not an OBJ file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    const std::string reason = std::filesystem::exists(path, ec) ? "cannot open the file (permission denied?)"
-                                                                  : "no such file";
-    throw InputError(path, 0, reason);
-  }
-  std::ostringstream contents;
-  contents << in.rdbuf();
-  if (in.bad()) throw InputError(path, 0, "reading the file failed");
-  return contents.str();
+/// The text without a UTF-8 byte-order mark (which would make the first statement unknown
+/// and shift every face index). UTF-16 and UTF-32 are refused: OBJ is ASCII.
+std::string strip_byte_order_mark(const std::string& text, const std::string& path) {
+  auto starts_with = [&](std::string_view prefix) { return text.compare(0, prefix.size(), prefix) == 0; };
+  using namespace std::string_view_literals;
+  if (starts_with("\xEF\xBB\xBF"sv)) return text.substr(3);
+  if (starts_with("\x00\x00\xFE\xFF"sv) || starts_with("\xFF\xFE\x00\x00"sv))
+    throw InputError(path, 1, "the file is UTF-32 encoded; OBJ files must be ASCII or UTF-8");
+  if (starts_with("\xFE\xFF"sv) || starts_with("\xFF\xFE"sv))
+    throw InputError(path, 1, "the file is UTF-16 encoded (byte-order mark); OBJ files must be ASCII or UTF-8");
+  // UTF-16 without a byte-order mark: every other byte of ASCII text is NUL.
+  if (text.size() >= 4 && ((text[0] == '\0') != (text[1] == '\0')) &&
+      ((text[2] == '\0') != (text[3] == '\0')))
+    throw InputError(path, 1, "the file looks UTF-16 encoded (NUL bytes between the characters); "
+                              "OBJ files must be ASCII or UTF-8");
+  return text;
 }
 
 // --- pass 1: the line scan ---------------------------------------------------------------
@@ -224,7 +226,7 @@ class LineScanner {
     const size_t given = tokens.size() - 3;
     const size_t expected = static_cast<size_t>(counts[0]) + counts[1] + counts[2];
     if (given != expected)
-      tag_error(name, std::string(tokens[2]) + " announces " + std::to_string(expected) +
+      tag_error(name, quoted(tokens[2]) + " announces " + std::to_string(expected) +
                           " arguments but " + std::to_string(given) + " follow");
 
     std::vector<int> ints(counts[0]);
@@ -238,7 +240,7 @@ class LineScanner {
         tag_error(name, "float argument " + quoted(tokens[3 + counts[0] + k]) + " is not a number");
 
     auto expect_counts = [&](bool ok, const char* wanted) {
-      if (!ok) tag_error(name, std::string("expected ") + wanted + ", got " + std::string(tokens[2]));
+      if (!ok) tag_error(name, std::string("expected ") + wanted + ", got " + quoted(tokens[2]));
     };
     SubdivOptions& options = cage_.input.options;
     if (name == "crease") {
@@ -417,6 +419,22 @@ InputError locate(const LoadedCage& cage, const InvalidMeshError& e) {
                 obj_vertex(e.index()) + " has a non-finite " +
                     (e.index2() >= 0 && e.index2() < 3 ? std::string(1, "xyz"[e.index2()]) + " " : "") +
                     "coordinate");
+    case MeshErrorCode::CoordinateOutOfRange: {
+      const int axis = e.index2() >= 0 && e.index2() < 3 ? static_cast<int>(e.index2()) : 0;
+      return at(line_at(cage.vertex_line, e.index()),
+                obj_vertex(e.index()) + " has " + "xyz"[axis] + " = " +
+                    sharpness_text(in.positions.at(static_cast<size_t>(e.index()))[axis]) +
+                    ", beyond the coordinate limit +-" + sharpness_text(kMaxCoordinate) +
+                    " (scale the model down)");
+    }
+    case MeshErrorCode::FaceTooLarge:
+      return at(line_at(cage.face_line, e.index()),
+                "face has " + std::to_string(e.index2()) + " vertices; at most " +
+                    std::to_string(kMaxFaceSize) + " are supported (split it)");
+    case MeshErrorCode::ValenceTooHigh:
+      return at(line_at(cage.vertex_line, e.index()),
+                obj_vertex(e.index()) + " has valence " + std::to_string(e.index2()) + "; at most " +
+                    std::to_string(kMaxValence) + " is supported");
     case MeshErrorCode::FaceTooSmall:  // read_obj reports these itself; kept for hand-made cages
       return at(line_at(cage.face_line, e.index()),
                 "face has " + std::to_string(line_at(in.face_sizes, e.index())) +
@@ -486,14 +504,16 @@ InputError locate(const LoadedCage& cage, const InvalidMeshError& e) {
 
 }  // namespace
 
-LoadedCage read_obj(const std::string& path) {
+LoadedCage parse_obj(const std::string& text, const std::string& name) {
   LoadedCage cage;
-  cage.path = path;
-  const std::string text = read_whole_file(path);
-  LineScanner(cage).scan(text);
-  read_face_indices(text, cage);
+  cage.path = name;
+  const std::string body = strip_byte_order_mark(text, name);
+  LineScanner(cage).scan(body);
+  read_face_indices(body, cage);
   return cage;
 }
+
+LoadedCage read_obj(const std::string& path) { return parse_obj(read_input_file(path, "an OBJ file"), path); }
 
 SubdivLevel load_and_validate(const LoadedCage& cage, Diagnostics* diagnostics) {
   try {

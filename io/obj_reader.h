@@ -58,7 +58,12 @@ struct LoadedCage {
 /// \throw InputError (naming the file and line) if the file cannot be read, a statement is
 /// malformed, a face has fewer than 3 vertices or uses vertex index 0, or a tag is malformed
 /// (code MeshErrorCode::InvalidTag).
+/// Regular files only (io/input_file.h: a FIFO, directory or device is refused unread); a
+/// UTF-8 byte-order mark is skipped, UTF-16 / UTF-32 text refused.
 LoadedCage read_obj(const std::string& path);
+
+/// The same from OBJ text in memory; `name` stands for the file in messages.
+LoadedCage parse_obj(const std::string& text, const std::string& name);
 
 /// Validates the cage and applies the base-level tagging (SubdivLevel::from_input).
 /// Validation warnings (e.g. unused vertices) are appended to `diagnostics` if given; they

@@ -26,20 +26,20 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
   c->add_option("--json", o.json, "Write the quality report as JSON");
   c->add_option("--samples", o.samples, "Samples per patch side (default 9)")->check(CLI::Range(2, 64));
   c->add_flag("-q,--quiet", o.quiet, "No progress and no summary (warnings are still printed)");
+  add_limit_options(*c, o.limits, "the faces of the refined mesh the patches are built from (as convert)");
   return c;
 }
 
 void run_check(const CheckOptions& o, std::ostream& err) {
   using Clock = std::chrono::steady_clock;
-  if (!o.json.empty()) check_output_directory(o.json);
+  const pipeline::ResourceLimits limits = resource_limits(o.limits);
+  check_outputs(o.mesh, {{"--json", o.json}});
   if (!o.quiet) err << "subd2nurbs: reading " << o.mesh << "\n";
   const LoadedInput loaded = load_input(o.mesh);
   const SubdivLevel& base = loaded.level;
   const std::vector<std::string>& warnings = loaded.warnings;
   for (const std::string& w : warnings) err << w << "\n";
   const std::vector<Point3> positions = loaded.positions();
-  if (pipeline::level_faces(base, o.level) > pipeline::kMaxLevelFaces)
-    throw UsageError("--level " + std::to_string(o.level) + " would refine " + o.mesh + " too far");
 
   pipeline::ConversionSettings settings;
   settings.level = o.level_given ? o.level : 0;
@@ -47,6 +47,7 @@ void run_check(const CheckOptions& o, std::ostream& err) {
   settings.tolerance = pipeline::kDefaultTolerance;
   settings.tolerance_is_default = !o.level_given;
   settings.build_brep = false;
+  settings.limits = limits;
   pipeline::ConversionProgress progress;
   if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
   progress.warning = [&](const std::string& w) { err << w << "\n"; };

@@ -7,6 +7,8 @@
 #include <ostream>
 #include <string>
 
+#include "converter/cli/commands.h"
+
 namespace CLI {
 class App;
 }
@@ -20,6 +22,7 @@ struct CheckOptions {
   std::string json;  ///< output path, empty for none
   int samples = 9;   ///< per patch side
   bool quiet = false;
+  LimitOptionValues limits;  ///< --max-faces, --max-memory
 };
 
 CLI::App* add_check_command(CLI::App& app, CheckOptions& options);

@@ -25,6 +25,9 @@
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 #include "io/obj_writer.h"
+#include "io/atomic_file.h"
+#include "io/input_file.h"
+#include "converter/pipeline/conversion.h"
 
 #ifndef SUBD2NURBS_VERSION
 #define SUBD2NURBS_VERSION "0.1.0"
@@ -34,8 +37,6 @@ namespace subd2nurbs::cli {
 
 namespace {
 
-/// Refinements producing more faces than this are refused (memory grows 4x per level).
-constexpr double kMaxOutputFaces = 50e6;
 /// Beyond the face limit for any cage; keeps 4^levels far from overflowing.
 constexpr int kMaxLevels = 20;
 /// Above this many output faces, refine reports what it is doing on stderr.
@@ -67,6 +68,7 @@ const char* triangle_rule_name(TriangleRule r) {
 }
 
 std::string number(double x) {
+  if (!std::isfinite(x)) return "-";  // never "nan" / "inf" in a description
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.6g", x);
   return buffer;
@@ -207,15 +209,42 @@ LoadedInput load_input(const std::string& path) {
   return result;
 }
 
-void check_output_directory(const std::string& path) {
+void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs) {
   namespace fs = std::filesystem;
-  fs::path dir = fs::path(path).parent_path();
-  if (dir.empty()) dir = ".";
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw WriteError(path, "the directory " + dir.string() + " does not exist");
-  if (::access(dir.c_str(), W_OK) != 0)
-    throw WriteError(path, "the directory " + dir.string() + " is not writable");
+  std::vector<std::pair<std::string, std::string>> seen;  // (option, absolute target)
+  for (const auto& [option, path] : outputs) {
+    if (path.empty()) continue;
+    const std::string target = resolve_output_path(path);
+    if (same_file(input, target))
+      throw UsageError(option + " " + printable(path) + " is the input file " + printable(input) +
+                       " (the same file); the input is never overwritten: choose another output name");
+    std::error_code ec;
+    std::string absolute = fs::weakly_canonical(fs::absolute(target, ec), ec).string();
+    if (absolute.empty()) absolute = target;
+    for (const auto& [other_option, other] : seen)
+      if (other == absolute || same_file(other, target))
+        throw UsageError(option + " and " + other_option + " name the same file " + printable(path) +
+                         ": give each output its own name");
+    seen.emplace_back(option, absolute);
+  }
+}
+
+void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning) {
+  command.add_option("--max-faces", values.max_faces, "Refuse when " + faces_meaning + " would exceed N")
+      ->check(CLI::PositiveNumber);
+  command.add_option("--max-memory", values.max_memory,
+                     "Refuse when the estimated memory would exceed SIZE (bytes, or with K/M/G/T; default "
+                     "3/4 of the memory available)");
+}
+
+pipeline::ResourceLimits resource_limits(const LimitOptionValues& values) {
+  pipeline::ResourceLimits limits;
+  if (values.max_faces < 0 || !std::isfinite(values.max_faces)) throw UsageError("--max-faces must be a positive number");
+  limits.max_faces = values.max_faces;
+  if (!values.max_memory.empty() && !pipeline::parse_memory_size(values.max_memory, limits.max_memory))
+    throw UsageError("--max-memory '" + printable(values.max_memory, 40) +
+                     "' is not a size (bytes, or a number with K, M, G or T, e.g. 8G)");
+  return limits;
 }
 
 // --- subcommands ---------------------------------------------------------------------------
@@ -231,19 +260,19 @@ void run_info(const InfoOptions& options, std::ostream& out) {
 
 void run_refine(const RefineOptions& options, std::ostream& err) {
   if (options.levels < 0) throw UsageError("the number of levels must be >= 0");
+  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
+  resource_limits(options.limits);  // a malformed --max-memory is refused before any work
+  check_outputs(options.mesh, {{"-o", options.output}});
   const LoadedInput loaded = load_input(options.mesh);
   for (const std::string& w : loaded.warnings) err << w << "\n";
 
-  // After the first level every face is a quad: corners * 4^(levels-1) faces.
   const PolyMesh& base = loaded.level.mesh;
-  const double faces = options.levels == 0
-                           ? base.num_faces()
-                           : base.num_corners() * std::pow(4.0, options.levels - 1);
-  if (faces > kMaxOutputFaces)
-    throw UsageError("refining " + std::to_string(base.num_faces()) + " faces to level " +
-                     std::to_string(options.levels) + " would produce about " +
-                     number(faces) + " faces (limit " + number(kMaxOutputFaces) +
-                     "); use fewer levels");
+  const pipeline::ResourceEstimate estimate = pipeline::estimate_refinement(loaded.level, options.levels);
+  pipeline::check_resources(estimate, resource_limits(options.limits), pipeline::kDefaultMaxRefineFaces,
+                            "refining " + std::to_string(base.num_faces()) + " faces to level " +
+                                std::to_string(options.levels),
+                            "use fewer levels");
+  const double faces = estimate.faces;
   const bool report = faces > kProgressFaces;
 
   if (report)
@@ -287,6 +316,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   refine_command->add_option("-o,--output", refine.output, "Output OBJ file")->required();
   refine_command->add_option("--polar", refine.polar,
                              "Polar structures: on (BP subdivision there, default) or off (Catmull-Clark)");
+  add_limit_options(*refine_command, refine.limits,
+                    "the output faces (default " + number(pipeline::kDefaultMaxRefineFaces) + ")");
 
   ConvertOptions convert;
   CLI::App* convert_command = app.add_subcommand(
@@ -345,6 +376,9 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       "--fair", convert.fair,
       "With --fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
       "interpolation (noisy points give a smooth surface)");
+  add_limit_options(*convert_command, convert.limits,
+                    "the faces of the refined mesh the patches are built from (default " +
+                        number(pipeline::kDefaultMaxConvertFaces) + ")");
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress and no summary on stderr (warnings are still printed)");
 
@@ -362,6 +396,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
     return app.exit(e, out, err) == 0 ? kOk : kUsage;
   }
 
+  std::string current_input = info.mesh + refine.mesh + convert.mesh + limit.mesh + check.mesh;
   try {
     if (*info_command) run_info(info, out);
     if (*refine_command) run_refine(refine, err);
@@ -379,9 +414,18 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   } catch (const UsageError& e) {
     err << "subd2nurbs: error: " << e.what() << "\n";
     return kUsage;
+  } catch (const pipeline::SettingsError& e) {
+    err << "subd2nurbs: error: " << e.what() << "\n";
+    return kUsage;
+  } catch (const pipeline::ResourceError& e) {
+    err << "subd2nurbs: error: " << e.what() << "\n";
+    return kUsage;
   } catch (const InputError& e) {
-    err << e.file() << (e.line() > 0 ? ":" + std::to_string(e.line()) : std::string())
-        << ": error: " << e.message() << "\n";
+    err << e.location() << ": error: " << e.message() << "\n";
+    return kInvalidInput;
+  } catch (const InvalidMeshError& e) {
+    // Found after validation (e.g. every face a hole): about the cage as a whole.
+    err << printable(current_input) << ": error: " << e.what() << "\n";
     return kInvalidInput;
   } catch (const WriteError& e) {
     err << "subd2nurbs: cannot write " << e.what() << "\n";

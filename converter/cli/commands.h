@@ -5,10 +5,16 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "converter/pipeline/resources.h"
 #include "core/refine/refiner.h"
 #include "io/obj_reader.h"
+
+namespace CLI {
+class App;
+}
 
 namespace subd2nurbs::cli {
 
@@ -35,9 +41,23 @@ struct LoadedInput {
 /// \throw InputError for an unreadable or invalid cage
 LoadedInput load_input(const std::string& path);
 
-/// Fails early, before any work, when no file can be created in `path`'s directory.
-/// \throw WriteError naming `path`
-void check_output_directory(const std::string& path);
+/// Checks the outputs before any work (io/atomic_file.h resolve_output_path): each must be
+/// a regular file or not exist yet (a symbolic link is followed: its target is replaced),
+/// in a writable directory, and must be neither the input file (same inode) nor another of
+/// the outputs. `outputs` holds (option, path) pairs; empty paths are skipped.
+/// \throw WriteError (special file, missing or read-only directory, dangling link),
+///        UsageError (an output is the input, or two outputs are the same file)
+void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs);
+
+/// The --max-faces / --max-memory options of a subcommand.
+struct LimitOptionValues {
+  double max_faces = 0;    ///< 0: the default
+  std::string max_memory;  ///< empty: the default; else bytes with an optional K/M/G/T suffix
+};
+/// Registers --max-faces and --max-memory on `command`.
+void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning);
+/// \throw UsageError for a malformed --max-memory
+pipeline::ResourceLimits resource_limits(const LimitOptionValues& values);
 
 struct InfoOptions {
   std::string mesh;
@@ -46,6 +66,7 @@ struct InfoOptions {
 
 struct RefineOptions {
   std::string mesh;
+  LimitOptionValues limits;
   int levels = 1;
   std::string output;
   std::string polar = "on";  ///< "on": BP subdivision at polar structures; "off": Catmull-Clark only

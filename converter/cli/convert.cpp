@@ -25,8 +25,6 @@ namespace {
 
 using pipeline::ApproximateFan;
 using pipeline::ConversionResult;
-using pipeline::kMaxLevelFaces;
-using pipeline::level_faces;
 using pipeline::short_number;
 
 using Clock = std::chrono::steady_clock;
@@ -206,9 +204,8 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
 
   const OutputKind kind = output_kind(options.output);
   const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
-  check_output_directory(options.output);
-  if (!options.report.empty()) check_output_directory(options.report);
-  if (!options.preview.empty()) check_output_directory(options.preview);
+  const pipeline::ResourceLimits limits = resource_limits(options.limits);
+  check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
 
   Progress progress(err, options.quiet, options.progress_tty);
   std::vector<std::string> load_warnings;
@@ -231,11 +228,6 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
         << " triangles (" << cage.recovery.triangles_kept << " triangles kept, " << cage.recovery.fan_vertices
         << " fan vertices)\n";
 
-  if (options.level_given && level_faces(base, options.level) > kMaxLevelFaces)
-    throw UsageError("--level " + std::to_string(options.level) + " could need about " +
-                     short_number(level_faces(base, options.level)) + " polynomial pieces for " + options.mesh +
-                     " (limit " + short_number(kMaxLevelFaces) + "); use a lower --level");
-
   // Patches, measures and (unless the output is patch JSON) the B-rep.
   pipeline::ConversionSettings settings;
   settings.level = options.level_given ? options.level : 0;
@@ -244,6 +236,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   settings.tolerance_is_default = !options.tolerance_given && !options.level_given;
   settings.absolute = options.absolute;
   settings.build_brep = kind != OutputKind::Json;
+  settings.limits = limits;
   settings.patch.polar = options.polar == "on";
   settings.patch.cap.radial_steps = options.radial_steps;
   settings.patch.cap.lambda = options.lambda;
@@ -275,11 +268,15 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   if (kind == OutputKind::Step) c.output.step_schema = occt::to_string(schema);
   c.ms.load = load_ms;
 
-  // Output.
+  // Outputs: all staged in temporary files first, renamed over their names only when every
+  // one of them is ready.
+  std::vector<StagedFile> staged;
   if (kind == OutputKind::Json) {
     t = Clock::now();
     progress.stage("writing " + options.output);
-    write_patch_json(options.output, c.build.set);
+    const std::string text = patch_set_to_json(c.build.set);
+    staged.emplace_back(options.output);
+    staged.back().write([&](std::ostream& out) { out << text; });
     c.ms.write = ms_since(t);
   } else {
     if (!c.brep.valid) {
@@ -292,15 +289,17 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     const occt::Format format = kind == OutputKind::Step   ? occt::Format::Step
                                 : kind == OutputKind::Iges ? occt::Format::Iges
                                                            : occt::Format::Brep;
-    occt::write_shape(c.brep.shape, options.output, format, schema);
+    staged.push_back(occt::stage_shape(c.brep.shape, options.output, format, schema));
     c.ms.write = ms_since(t);
   }
 
   if (!options.report.empty()) {
     const std::string text = report_with_quality(pipeline::report_json(c), base, c.cage, c, err, options.quiet);
-    write_file_atomically(options.report, [&](std::ostream& out) { out << text; });
+    staged.emplace_back(options.report);
+    staged.back().write([&](std::ostream& out) { out << text; });
   }
-  if (!options.preview.empty()) write_preview(options, base, c.cage, c, err);
+  if (!options.preview.empty()) staged.push_back(stage_preview(options, base, c.cage, c, err));
+  for (StagedFile& file : staged) file.commit();
   if (!options.quiet) print_summary(err, c, kind, schema);
 }
 

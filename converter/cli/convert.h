@@ -6,6 +6,7 @@
 #include <ostream>
 #include <string>
 
+#include "converter/cli/commands.h"
 #include "converter/pipeline/conversion.h"
 
 namespace subd2nurbs::cli {
@@ -32,13 +33,17 @@ struct ConvertOptions {
   std::string fit = "approximate";  ///< approximate (the cage's own limit) or interpolate
   double fair = 0;            ///< > 0: fair fit with this weight (needs fit == "interpolate")
   bool fair_given = false;
+  LimitOptionValues limits;   ///< --max-faces, --max-memory
 };
 
 /// Most extra levels --tolerance adds; a tolerance needing more is reported as capped.
 constexpr int kMaxFanExtraLevels = pipeline::kMaxFanExtraLevels;
 
 /// Converts a cage. Progress, warnings and the summary go to `err`.
-/// \throw UsageError (bad options, unknown output extension, a level too deep),
+/// Every output (-o, --report, --preview) is computed first and written only when all of
+/// them are ready (io/atomic_file.h StagedFile), so a failure leaves every file as it was.
+/// \throw UsageError (bad options, unknown output extension, an output that is the input),
+///        pipeline::ResourceError (the estimate exceeds --max-faces / --max-memory),
 ///        InputError (the cage), WriteError (the output or report file),
 ///        occt::ExportError (OCCT failed, or the B-rep is not valid: nothing is written)
 void run_convert(const ConvertOptions& options, std::ostream& err);

@@ -36,8 +36,7 @@ CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& o) {
 void run_fair(const FairCommandOptions& o, std::ostream& err) {
   if (!(o.weight > 0 && std::isfinite(o.weight))) throw UsageError("--weight must be a positive number");
   if (!(o.membrane >= 0 && std::isfinite(o.membrane))) throw UsageError("--membrane must be a number >= 0");
-  check_output_directory(o.output);
-  if (!o.report.empty()) check_output_directory(o.report);
+  check_outputs(o.mesh, {{"-o", o.output}, {"--report", o.report}});
   const LoadedInput loaded = load_input(o.mesh);
   for (const std::string& w : loaded.warnings) err << w << "\n";
   const SubdivLevel& level = loaded.level;

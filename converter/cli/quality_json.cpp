@@ -121,17 +121,18 @@ std::string report_with_quality(const std::string& report, const SubdivLevel& ba
   return add_member(add_quality_member(report, quality_json(q, size, 2)), "quality_ms", pipeline::json_number(ms));
 }
 
-void write_preview(const ConvertOptions& o, const SubdivLevel& base, const std::vector<Point3>& positions,
+StagedFile stage_preview(const ConvertOptions& o, const SubdivLevel& base, const std::vector<Point3>& positions,
                    const pipeline::ConversionResult& c, std::ostream& err) {
   const PreviewColor color = preview_color_from_string(o.preview_color);
   if (!o.quiet) err << "subd2nurbs: writing the preview " << o.preview << " (" << o.preview_color << ")\n";
   std::unique_ptr<LimitEvaluator> limit;
   if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, positions);
   const PreviewMesh mesh = build_preview(c.build, limit.get(), color, o.preview_samples);
-  write_preview_glb(o.preview, mesh, o.mesh + " (" + o.preview_color + ")");
+  StagedFile file = stage_preview_glb(o.preview, mesh, o.mesh + " (" + o.preview_color + ")");
   if (!o.quiet)
     err << "  preview    " << mesh.indices.size() / 3 << " triangles, " << o.preview_color << " from "
         << g(mesh.value_min) << " to " << g(mesh.value_max) << "\n";
+  return file;
 }
 
 void print_quality_summary(std::ostream& err, const QualityReport& q, double size) {

@@ -2,6 +2,8 @@
 // a short human summary. Used by `subd2nurbs check` and by `convert --report`.
 #pragma once
 
+#include "io/atomic_file.h"
+
 #include <ostream>
 #include <string>
 
@@ -30,9 +32,10 @@ std::string report_with_quality(const std::string& report, const SubdivLevel& ba
                                 const std::vector<Point3>& positions, const pipeline::ConversionResult& c,
                                 std::ostream& err, bool quiet);
 
-/// `convert --preview`: the GLB preview of the patches (core/eval/preview_mesh.h).
+/// `convert --preview`: the GLB preview of the patches (core/eval/preview_mesh.h), staged
+/// (io/atomic_file.h) for the caller to commit with the other outputs.
 struct ConvertOptions;
-void write_preview(const ConvertOptions& options, const SubdivLevel& base, const std::vector<Point3>& positions,
+StagedFile stage_preview(const ConvertOptions& options, const SubdivLevel& base, const std::vector<Point3>& positions,
                    const pipeline::ConversionResult& c, std::ostream& err);
 
 /// Three lines for stderr.

@@ -6,19 +6,15 @@
 #include <STEPControl_Controller.hxx>
 #include <STEPControl_Writer.hxx>
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <BRep_Builder.hxx>
 
+#include <sys/stat.h>
+
 #include <algorithm>
-#include <atomic>
 #include <cctype>
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -62,70 +58,6 @@ Format format_from_path(const std::string& path) {
 }
 
 namespace {
-
-/// A new, empty, uniquely named file next to `path` (".NAME.XXXXXXXX.tmp", the same scheme as
-/// io/atomic_file.cpp), removed again on destruction unless commit() renamed it over `path`.
-/// OCCT's writers only take file names, so they write this file by name.
-class TemporaryFile {
- public:
-  explicit TemporaryFile(const std::string& path) : path_(path) {
-    static std::atomic<unsigned> counter{0};
-    std::random_device entropy;
-    const std::string::size_type slash = path.rfind('/');
-    const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
-    const std::string file = slash == std::string::npos ? path : path.substr(slash + 1);
-    int err = 0;
-    for (int attempt = 0; attempt < 16; ++attempt) {
-      char suffix[32];
-      std::snprintf(suffix, sizeof suffix, "%08x", entropy() ^ (counter++ * 2654435761u));
-      const std::string candidate = dir + "." + file + "." + suffix + ".tmp";
-      const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-      if (fd >= 0) {
-        ::close(fd);
-        name_ = candidate;
-        break;
-      }
-      err = errno;
-      if (err != EEXIST) break;
-    }
-    if (name_.empty())
-      throw WriteError(path, "cannot create a temporary file in directory '" +
-                                 (dir.empty() ? std::string(".") : dir) +
-                                 "': " + std::strerror(err));
-    // Replacing an existing file keeps its permissions.
-    struct stat existing;
-    if (::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
-      ::chmod(name_.c_str(), existing.st_mode & 07777);
-  }
-  ~TemporaryFile() {
-    if (!name_.empty()) std::remove(name_.c_str());
-  }
-  TemporaryFile(const TemporaryFile&) = delete;
-  TemporaryFile& operator=(const TemporaryFile&) = delete;
-
-  const std::string& name() const { return name_; }
-
-  /// Checks that something was written, forces it to disk, and renames it over the target.
-  void commit() {
-    struct stat written;
-    if (::stat(name_.c_str(), &written) != 0 || written.st_size == 0)
-      throw WriteError(path_, "the writer produced an empty file");
-    const int fd = ::open(name_.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0 || ::fsync(fd) != 0) {
-      const int err = errno;
-      if (fd >= 0) ::close(fd);
-      throw WriteError(path_, std::string("cannot flush to disk: ") + std::strerror(err));
-    }
-    ::close(fd);
-    if (std::rename(name_.c_str(), path_.c_str()) != 0)
-      throw WriteError(path_, std::string("cannot replace the file: ") + std::strerror(errno));
-    name_.clear();
-  }
-
- private:
-  std::string path_;
-  std::string name_;
-};
 
 void write_step(const TopoDS_Shape& shape, const std::string& file, const std::string& path,
                 StepSchema schema) {
@@ -172,11 +104,11 @@ void write_brep(const TopoDS_Shape& shape, const std::string& file, const std::s
 
 }  // namespace
 
-void write_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
-                 StepSchema schema) {
+StagedFile stage_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
+                       StepSchema schema) {
   if (path.empty()) throw WriteError("(empty path)", "no output file name given");
   if (shape.IsNull()) throw ExportError("write", -1, "nothing to write: the shape is null");
-  TemporaryFile temporary(path);
+  StagedFile temporary(path);
   {
     std::lock_guard<std::mutex> lock(detail::exchange_mutex());
     detail::QuietMessages quiet;
@@ -186,7 +118,15 @@ void write_shape(const TopoDS_Shape& shape, const std::string& path, Format form
       case Format::Brep: write_brep(shape, temporary.name(), path); break;
     }
   }
-  temporary.commit();
+  struct stat written;
+  if (::stat(temporary.name().c_str(), &written) != 0 || written.st_size == 0)
+    throw WriteError(path, "the writer produced an empty file");
+  return temporary;
+}
+
+void write_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
+                 StepSchema schema) {
+  stage_shape(shape, path, format, schema).commit();
 }
 
 std::string brep_text(const TopoDS_Shape& shape) {

@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "io/atomic_file.h"
+
 namespace subd2nurbs::occt {
 
 enum class Format { Step, Iges, Brep };
@@ -30,6 +32,12 @@ Format format_from_path(const std::string& path);
 /// \throw ExportError when OCCT refuses the shape (transfer failure, OCCT exception).
 void write_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
                  StepSchema schema = StepSchema::AP214);
+
+/// The same, into a StagedFile (io/atomic_file.h) that the caller commits: for several
+/// outputs written together, all only after everything succeeded.
+/// \throw WriteError, ExportError as write_shape
+StagedFile stage_shape(const TopoDS_Shape& shape, const std::string& path, Format format,
+                       StepSchema schema = StepSchema::AP214);
 
 /// The shape in OCCT's native BREP text format (what BRepTools::Write puts in a .brep file and
 /// FreeCAD's Part.Shape().importBrepFromString reads).

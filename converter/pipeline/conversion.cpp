@@ -45,15 +45,6 @@ std::string short_number(double x) {
   return buffer;
 }
 
-double level_faces(const SubdivLevel& base, int extra) {
-  // Upper bound of the pieces: every coarse quad one bicubic, plus, at each of its corners that
-  // has a fan, 3 pieces per level down to the zone and the zone's 4 (semi-sharp creases add
-  // pieces along their edges, which the sharpness bounds: at most 11 levels).
-  const PolyMesh& m = base.mesh;
-  const double coarse_quads = m.all_quads() ? m.num_faces() : m.num_corners();
-  return coarse_quads * (1 + 4 * (3.0 * (2 + extra) + 4));
-}
-
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -153,10 +144,44 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     c.warnings.push_back(w);
   };
   const int level = settings.tolerance_given ? 0 : settings.level;
-  if (level > 0 && level_faces(base, level) > kMaxLevelFaces)
-    throw SettingsError("level " + std::to_string(level) + " could need about " +
-                        short_number(level_faces(base, level)) + " polynomial pieces (limit " +
-                        short_number(kMaxLevelFaces) + "); use a lower level");
+  bool any_surface = false;
+  for (const char hole : base.face_hole) any_surface = any_surface || !hole;
+  if (!any_surface)
+    throw InvalidMeshError(MeshErrorCode::EmptyMesh, ElementKind::None, -1, -1,
+                           "every face of the cage is a hole ('t hole' tags): there is no surface to convert");
+  {
+    // A cage of zero size (all vertices at one point), or one too small for its distance from
+    // the origin to be resolved in double precision, has no surface a B-rep can hold.
+    Point3 lo = positions.empty() ? Point3{0, 0, 0} : positions[0], hi = lo;
+    double far = 0;
+    for (const Point3& p : positions)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], p[k]);
+        hi[k] = std::max(hi[k], p[k]);
+        far = std::max(far, std::fabs(p[k]));
+      }
+    const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!(diagonal > 1e-12 * far) || diagonal == 0)
+      throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::None, -1, -1,
+                             "the cage has size " + short_number(diagonal) + " (bounding-box diagonal) " +
+                                 (diagonal == 0 ? std::string("- all its vertices coincide")
+                                                : "at distance " + short_number(far) +
+                                                      " from the origin, below what double precision resolves") +
+                                 ": there is no surface to convert");
+  }
+  check_resources(estimate_conversion(base, level, settings.build_brep), settings.limits, kDefaultMaxConvertFaces,
+                  "converting " + std::to_string(base.mesh.num_faces()) + " cage faces at level " +
+                      std::to_string(level),
+                  level > 0 ? "use a lower level" : "simplify the cage");
+  auto fits = [&](int extra) {
+    try {
+      check_resources(estimate_conversion(base, extra, settings.build_brep), settings.limits, kDefaultMaxConvertFaces, "", "");
+      return true;
+    } catch (const ResourceError&) {
+      return false;
+    }
+  };
 
   // The fit: the cage whose limit passes through the input's vertices (or a fair fit).
   c.cage = positions;
@@ -240,6 +265,11 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
         const int want = extra[fan.vertex] + std::max(1, fan_extra_levels_for_tolerance(fan, fd.max, tr.absolute));
         tr.needed = std::max(tr.needed, want);
         const int use = std::min(want, kMaxFanExtraLevels);
+        if (use > extra[fan.vertex] && !fits(use)) {  // the limits bound every fan alike
+          tr.capped = true;
+          tr.cap_reason = "the face and memory limits, --max-faces / --max-memory";
+          continue;
+        }
         if (use > extra[fan.vertex]) {
           extra[fan.vertex] = use;
           deeper = true;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "converter/occt/brep_builder.h"
+#include "converter/pipeline/resources.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
 #include "core/fit/fairing.h"
@@ -21,9 +22,6 @@
 
 namespace subd2nurbs::pipeline {
 
-/// Polynomial pieces (level_faces) above which a conversion with a level is refused: each
-/// takes about half a kilobyte while the patches are built.
-constexpr double kMaxLevelFaces = 2e7;
 /// The deviation tolerance used when neither a level nor a tolerance is given (relative to the
 /// bounding-box diagonal).
 constexpr double kDefaultTolerance = 1e-4;
@@ -62,6 +60,9 @@ struct ConversionSettings {
   bool tolerance_is_default = false;  ///< the tolerance is kDefaultTolerance, not the user's
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
   FitSettings fit;
+  /// Refused before any work when estimate_conversion exceeds them (resources.h); with a
+  /// tolerance, the extra levels are capped to stay within them.
+  ResourceLimits limits;
 };
 
 /// A setting that cannot be used (negative level, bad tolerance, a level too deep for the cage).
@@ -154,17 +155,14 @@ struct ConversionResult {
   Timings ms;             ///< load and write are the caller's to fill
 };
 
-/// An upper bound of the polynomial pieces of a build with `extra` levels (every corner of
-/// every coarse quad irregular).
-double level_faces(const SubdivLevel& base, int extra);
-
 /// Checks `settings` on their own (level >= 0, a positive finite tolerance).
 /// \throw SettingsError
 void check_settings(const ConversionSettings& settings);
 
 /// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
 /// result's warning list.
-/// \throw SettingsError (see check_settings; a level refining past kMaxLevelFaces),
+/// \throw SettingsError (see check_settings), ResourceError (the estimate exceeds
+///        settings.limits, resources.h), InvalidMeshError (every face is a hole: no surface),
 ///        FitError (FitMode::Interpolate: no cage interpolates the vertices; names them),
 ///        std::invalid_argument (topology the patch builder does not support),
 ///        occt::ExportError (OCCT failed while building the B-rep)

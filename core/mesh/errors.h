@@ -22,6 +22,9 @@ enum class MeshErrorCode {
   InconsistentOrientation, ///< two neighbouring faces traverse their shared edge the same way
   NonManifoldVertex,       ///< the faces around a vertex do not form one connected fan
   InvalidTag,              ///< a crease/corner/hole tag names something that does not exist
+  CoordinateOutOfRange,    ///< a coordinate beyond +-kMaxCoordinate (core/mesh/validate.h)
+  FaceTooLarge,            ///< a face with more than kMaxFaceSize vertices
+  ValenceTooHigh,          ///< a vertex on more than kMaxValence edges
 };
 
 const char* to_string(MeshErrorCode code);

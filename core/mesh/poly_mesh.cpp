@@ -15,6 +15,9 @@ const char* to_string(MeshErrorCode code) {
     case MeshErrorCode::InconsistentOrientation: return "inconsistent-orientation";
     case MeshErrorCode::NonManifoldVertex: return "non-manifold-vertex";
     case MeshErrorCode::InvalidTag: return "invalid-tag";
+    case MeshErrorCode::CoordinateOutOfRange: return "coordinate-out-of-range";
+    case MeshErrorCode::FaceTooLarge: return "face-too-large";
+    case MeshErrorCode::ValenceTooHigh: return "valence-too-high";
   }
   return "unknown";
 }

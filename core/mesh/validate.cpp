@@ -1,12 +1,18 @@
 #include "core/mesh/validate.h"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace subd2nurbs {
 
 namespace {
 bool valid_sharpness(double s) { return std::isfinite(s) && s >= 0.0; }
+std::string number_text(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", x);
+  return buffer;
+}
 }  // namespace
 
 PolyMesh validate_and_build(const MeshInput& input, Diagnostics* diagnostics) {
@@ -22,7 +28,26 @@ PolyMesh validate_and_build(const MeshInput& input, Diagnostics* diagnostics) {
                                "vertex " + std::to_string(v) + " has a non-finite coordinate (" +
                                    "xyz"[k] + " = " + std::to_string(input.positions[v][k]) + ")");
 
+  for (int v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k)
+      if (std::fabs(input.positions[v][k]) > kMaxCoordinate)
+        throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::Vertex, v, k,
+                               "vertex " + std::to_string(v) + " has " + "xyz"[k] + " = " +
+                                   number_text(input.positions[v][k]) +
+                                   ", beyond the coordinate limit +-" + number_text(kMaxCoordinate));
+  for (int f = 0; f < input.num_faces(); ++f)
+    if (input.face_sizes[f] > kMaxFaceSize)
+      throw InvalidMeshError(MeshErrorCode::FaceTooLarge, ElementKind::Face, f, input.face_sizes[f],
+                             "face " + std::to_string(f) + " has " + std::to_string(input.face_sizes[f]) +
+                                 " vertices; at most " + std::to_string(kMaxFaceSize) + " are supported");
+
   PolyMesh mesh = PolyMesh::build(nv, input.face_sizes, input.face_indices, diagnostics);
+
+  for (int v = 0; v < nv; ++v)
+    if (mesh.valence(v) > kMaxValence)
+      throw InvalidMeshError(MeshErrorCode::ValenceTooHigh, ElementKind::Vertex, v, mesh.valence(v),
+                             "vertex " + std::to_string(v) + " has valence " + std::to_string(mesh.valence(v)) +
+                                 "; at most " + std::to_string(kMaxValence) + " is supported");
 
   for (size_t i = 0; i < input.creases.size(); ++i) {
     const CreaseTag& c = input.creases[i];

@@ -6,9 +6,23 @@
 
 namespace subd2nurbs {
 
+/// Largest |coordinate| accepted. Beyond it the B-rep cannot be built reliably: OCCT treats
+/// values near 1e100 as infinite (Precision::Infinite) and its absolute tolerances
+/// (1e-7) fall below the spacing of doubles (see README, "Limits"); and every later
+/// computation (squared distances, curvatures, which raise coordinates to the 4th power)
+/// stays finite.
+constexpr double kMaxCoordinate = 1e15;
+/// Most vertices of one face. An n-gon becomes a level-1 vertex of valence n, so this is
+/// the valence limit as well.
+constexpr int kMaxFaceSize = 1024;
+/// Most edges around one vertex. Stam's eigenbases (core/limit) exist up to 1024; the patch
+/// builder's work per extraordinary vertex grows with the cube of the valence.
+constexpr int kMaxValence = 1024;
+
 /// Validates a MeshInput completely and returns its connectivity.
 /// Order of checks (the first failure is thrown): empty mesh, non-finite coordinates,
-/// face sizes / indices / repeats, non-manifold edges, orientation, non-manifold vertices,
+/// coordinates beyond +-kMaxCoordinate, faces larger than kMaxFaceSize, face sizes /
+/// indices / repeats, vertices of valence above kMaxValence, non-manifold edges, orientation, non-manifold vertices,
 /// then tags (crease edges that do not exist, corner vertices / hole faces out of range,
 /// negative or non-finite sharpness).
 /// \throw InvalidMeshError

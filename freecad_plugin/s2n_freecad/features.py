@@ -281,6 +281,13 @@ class NurbsFeature(_Stateless):
              "With Fit = Interpolate: if > 0, trade exact interpolation for fairness (least squares with "
              "the thin-plate energy weighted this much); 0: exact")
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
+        lim = "Limits"
+        _add(obj, "App::PropertyFloat", "MaxFaces", lim,
+             "Refuse a conversion whose refined mesh would have more faces (0: the default, 4e6; "
+             "as --max-faces)")
+        _add(obj, "App::PropertyFloat", "MaxMemoryMiB", lim,
+             "Refuse a conversion estimated to need more memory, in MiB (0: the default, 3/4 of "
+             "the memory available; as --max-memory)")
         r = "Result"
         _add(obj, "App::PropertyInteger", "Patches", r, "NURBS patches (= faces)", read_only=True)
         _add(obj, "App::PropertyInteger", "RecoveredQuads", r,
@@ -325,8 +332,13 @@ class NurbsFeature(_Stateless):
                                                       fair_weight):
             result = prepared[1]
         else:
+            limits = {}
+            if getattr(obj, "MaxFaces", 0) > 0:
+                limits["max_faces"] = obj.MaxFaces
+            if getattr(obj, "MaxMemoryMiB", 0) > 0:
+                limits["max_memory"] = obj.MaxMemoryMiB * 1024.0 * 1024.0
             result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress,
-                                  fit=fit, fair_weight=fair_weight)
+                                  fit=fit, fair_weight=fair_weight, **limits)
         shape = Part.Shape()
         shape.importBrepFromString(result.brep_text)
         if obj.OutputType == "Shell" and shape.Solids:

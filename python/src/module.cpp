@@ -91,6 +91,10 @@ void translate(std::exception_ptr p) {
     py::dict a;
     a["vertices"] = e.vertices();
     raise("FitError", e.what(), a);
+  } catch (const pipeline::ResourceError& e) {
+    py::dict a;
+    a["code"] = "resource-limit";
+    raise("SettingsError", e.what(), a);
   } catch (const occt::ExportError& e) {
     py::dict a;
     a["stage"] = e.stage;
@@ -284,9 +288,16 @@ py::dict info(const DoubleArray& positions, const IntArray& face_sizes, const In
 py::tuple refine(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
                  const std::vector<std::tuple<int, int, double>>& creases,
                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
-                 const py::dict& options, int levels) {
+                 const py::dict& options, int levels, double max_faces, double max_memory) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   const SubdivLevel base = SubdivLevel::from_input(in);
+  pipeline::ResourceLimits limits;
+  limits.max_faces = max_faces;
+  limits.max_memory = max_memory;
+  pipeline::check_resources(pipeline::estimate_refinement(base, levels), limits, pipeline::kDefaultMaxRefineFaces,
+                            "refining " + std::to_string(base.mesh.num_faces()) + " faces to level " +
+                                std::to_string(levels),
+                            "use fewer levels");
   const Refinement r = refine_uniform(base, levels);
   const std::vector<Point3> last = r.positions(std::vector<Point3>(in.positions.begin(), in.positions.end())).back();
   const PolyMesh& m = r.levels.back().mesh;
@@ -342,7 +353,8 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
                  bool polar, int radial_steps, double polar_lambda, bool separate_poles,
                  const std::string& fit, double fair_weight,
                  const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
-                 const std::function<void(const std::string&, double)>& progress) {
+                 const std::function<void(const std::string&, double)>& progress, double max_faces,
+                 double max_memory) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
   const SubdivLevel base = SubdivLevel::from_input(in, &diagnostics);
@@ -362,6 +374,8 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
     throw pipeline::SettingsError("fit must be 'approximate' or 'interpolate', not '" + fit + "'");
   settings.fit.mode = fit == "interpolate" ? pipeline::FitMode::Interpolate : pipeline::FitMode::Approximate;
   settings.fit.fair_weight = fair_weight;
+  settings.limits.max_faces = max_faces;
+  settings.limits.max_memory = max_memory;
   pipeline::ConversionProgress callbacks;
   std::string current;
   if (progress) {
@@ -542,4 +556,8 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.def("brep_summary", &brep_summary, py::arg("text"));
   m.def("write_shape", &write_shape_file);
   m.def("file_summary", &file_summary, py::arg("path"));
+  m.def("parse_memory_size", [](const std::string& text) {
+    double bytes = 0;
+    return pipeline::parse_memory_size(text, bytes) ? bytes : 0.0;
+  });
 }

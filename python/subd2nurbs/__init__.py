@@ -271,19 +271,46 @@ def info(cage):
     return _subd2nurbs.info(*_cage(cage)._args())
 
 
-def refine(cage, levels=1):
+def _limits(max_faces, max_memory):
+    """(max_faces, max_memory in bytes) for the C++ side; 0 means the default
+    (docs/hardening.md): max_faces a positive number, max_memory a positive number of bytes
+    or a string such as "8G" / "512MiB"."""
+    if max_faces is None:
+        faces = 0.0
+    elif isinstance(max_faces, bool) or not isinstance(max_faces, numbers.Real) \
+            or not math.isfinite(max_faces) or max_faces <= 0:
+        raise SettingsError("max_faces must be a positive number, not %r" % (max_faces,))
+    else:
+        faces = float(max_faces)
+    if max_memory is None:
+        memory = 0.0
+    elif isinstance(max_memory, str):
+        memory = _subd2nurbs.parse_memory_size(max_memory)
+        if memory <= 0:
+            raise SettingsError("max_memory %r is not a size (bytes, or a number with K, M, G or T, e.g. '8G')"
+                                % (max_memory,))
+    elif isinstance(max_memory, bool) or not isinstance(max_memory, numbers.Real) \
+            or not math.isfinite(max_memory) or max_memory <= 0:
+        raise SettingsError("max_memory must be a positive number of bytes or a size string, not %r"
+                            % (max_memory,))
+    else:
+        memory = float(max_memory)
+    return faces, memory
+
+
+def refine(cage, levels=1, max_faces=None, max_memory=None):
     """Refines a cage uniformly `levels` times (Catmull-Clark, tags honoured); returns the last
     level's vertices and faces as a new Cage. Unlike `subd2nurbs refine`, the refined level's
-    (decayed) crease and corner sharpness is not carried over: the returned Cage has no tags."""
+    (decayed) crease and corner sharpness is not carried over: the returned Cage has no tags.
+
+    max_faces, max_memory: refuse (SettingsError) when the output faces (exact) or the
+    estimated memory exceed them, as refine --max-faces / --max-memory (defaults 2e7 faces,
+    3/4 of the memory available)."""
     cage = _cage(cage)
     if not _is_int(levels) or levels < 0:
         raise SettingsError("levels must be an integer >= 0, not %r" % (levels,))
-    corners = cage.face_sizes.sum() if levels else cage.num_faces
-    faces_out = corners * 4.0 ** max(levels - 1, 0)
-    if faces_out > 50e6:
-        raise SettingsError("refining %d faces to level %d would produce about %.3g faces (limit 5e7)"
-                            % (cage.num_faces, levels, faces_out))
-    vertices, sizes, indices = _subd2nurbs.refine(*cage._args(), levels)
+    faces, memory = _limits(max_faces, max_memory)
+    vertices, sizes, indices = _subd2nurbs.refine(*cage._args(), levels, faces, memory)
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     faces = [indices[offsets[f]:offsets[f + 1]].tolist() for f in range(len(sizes))]
     return Cage(vertices, faces, name="%s (level %d)" % (cage.name, levels))
@@ -352,7 +379,7 @@ class ConversionResult:
 
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
             progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
-            preview=None, preview_samples=16, fit="approximate", fair=None):
+            preview=None, preview_samples=16, fit="approximate", fair=None, max_faces=None, max_memory=None):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
     level: pin the extra refinement levels beyond the minimum at every fan (>= 0), as --level.
@@ -378,6 +405,10 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         colour map's value_min / value_max.
     progress: a callable(stage: str, fraction: float) called as the stages run.
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
+    max_faces, max_memory: refuse (SettingsError, before any work) when the refined mesh the
+        patches are built from would have more faces, or the estimated memory would be larger,
+        as --max-faces / --max-memory (defaults 4e6 faces and 3/4 of the memory available;
+        max_memory in bytes or a string such as "8G").
     """
     cage = _cage(cage)
     if level is not None and tolerance is not None:
@@ -420,9 +451,11 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         raise SettingsError("preview_samples must be an integer >= 2, not %r" % (preview_samples,))
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
+    faces, memory = _limits(max_faces, max_memory)
     d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
                             bool(polar), int(radial_steps), float(polar_lambda), bool(separate_poles),
-                            fit, float(fair or 0.0), preview or "", int(preview_samples), cage.name, cage.warnings, progress)
+                            fit, float(fair or 0.0), preview or "", int(preview_samples), cage.name, cage.warnings, progress,
+                            faces, memory)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")

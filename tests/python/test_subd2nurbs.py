@@ -161,6 +161,48 @@ class BadInput(unittest.TestCase):
         with self.assertRaises(TypeError):
             s2n.convert(v)
 
+    def test_resource_limits(self):
+        """max_faces / max_memory (issue #14): the refine estimate is exact, so the limit at
+        the real output face count passes and one below refuses; convert refuses before any
+        work, naming the estimate and the override."""
+        v, f = cube_cage()
+        cage = s2n.Cage(v, f)
+        for levels in (1, 2, 3):
+            faces = s2n.refine(cage, levels).num_faces
+            s2n.refine(cage, levels, max_faces=faces)
+            with self.assertRaises(s2n.SettingsError) as e:
+                s2n.refine(cage, levels, max_faces=faces - 1)
+            self.assertEqual(e.exception.code, "resource-limit")
+            self.assertIn("about %d faces" % faces, str(e.exception))
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n.convert(cage, level=12)
+        self.assertIn("max_faces", str(e.exception))
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n.convert(cage, max_memory="1K")
+        self.assertIn("memory", str(e.exception))
+        self.assertEqual(s2n.convert(cage, max_memory="1G", max_faces=1e3, brep=False).num_patches, 6)
+        for bad in ({"max_faces": 0}, {"max_faces": "x"}, {"max_memory": "12Q"}, {"max_memory": -1}):
+            with self.assertRaises(s2n.SettingsError, msg=str(bad)):
+                s2n.convert(cage, **bad)
+
+    def test_hostile_cages_name_the_element(self):
+        v, f = cube_cage()
+        v = np.array(v, dtype=float)
+        v[6, 0] = 1e200
+        with self.assertRaises(s2n.CageError) as e:
+            s2n.info(s2n.Cage(v, f))
+        self.assertEqual(e.exception.code, "coordinate-out-of-range")
+        v, f = cube_cage()
+        with self.assertRaises(s2n.CageError) as e:
+            s2n.convert(s2n.Cage(v, f, holes=list(range(6))))
+        self.assertIn("every face", str(e.exception))
+        with tempfile.TemporaryDirectory() as d:
+            fifo = os.path.join(d, "pipe.obj")
+            os.mkfifo(fifo)
+            with self.assertRaises(s2n.CageError) as e:
+                s2n.read_cage(fifo)
+            self.assertIn("FIFO", str(e.exception))
+
 
 class Conversion(unittest.TestCase):
     def test_cube_patches_are_clamped_bicubic_nurbs(self):

@@ -1,0 +1,36 @@
+// libFuzzer target: read -> validate -> patches at level 0 -> continuity (core only, no OCCT):
+// an OBJ cage from the fuzzer's bytes through parse_obj, load_and_validate, build_patches and
+// measure_continuity. Small work only: the resource guard's estimate (converter/pipeline),
+// which decides what a real run refuses, here at 2e4 refined faces.
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "converter/pipeline/resources.h"
+#include "core/eval/continuity.h"
+#include "core/patch/patch_builder.h"
+#include "io/input_error.h"
+#include "io/obj_reader.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const subd2nurbs::LoadedCage cage = subd2nurbs::parse_obj(text, "fuzz.obj");
+    if (cage.input.num_faces() > 64 || cage.input.face_indices.size() > 512) return 0;
+    const subd2nurbs::SubdivLevel level = subd2nurbs::load_and_validate(cage);
+    // The pipeline's resource estimate (converter/pipeline/resources.h) at a fuzzing scale.
+    if (subd2nurbs::pipeline::estimate_conversion(level, 0, false).faces > 20000) return 0;
+    const std::vector<subd2nurbs::Point3> positions(cage.input.positions.begin(), cage.input.positions.end());
+    bool surface = false;
+    for (char hole : level.face_hole) surface = surface || !hole;
+    if (!surface) return 0;  // the pipeline refuses all-hole cages before building patches
+    subd2nurbs::PatchOptions options;
+    const subd2nurbs::PatchBuild build = subd2nurbs::build_patches(level, positions, options);
+    subd2nurbs::measure_continuity(build.set, 4);
+  } catch (const subd2nurbs::InputError&) {
+  } catch (const std::invalid_argument&) {
+    // The patch builder's documented refusal of topology it does not support.
+  }
+  return 0;
+}

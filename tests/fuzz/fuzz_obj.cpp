@@ -1,0 +1,21 @@
+// libFuzzer target: the OBJ reader with OpenSubdiv tags (io/obj_reader.h), then validation.
+// Any InputError is an accepted outcome; a crash, a sanitizer report, a leak or an uncaught
+// exception of another type is a finding.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "io/input_error.h"
+#include "io/obj_reader.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const subd2nurbs::LoadedCage cage = subd2nurbs::parse_obj(text, "fuzz.obj");
+    subd2nurbs::Diagnostics diagnostics;
+    subd2nurbs::load_and_validate(cage, &diagnostics);
+    for (const subd2nurbs::Diagnostic& d : diagnostics) subd2nurbs::format_diagnostic(cage, d);
+  } catch (const subd2nurbs::InputError&) {
+  }
+  return 0;
+}
