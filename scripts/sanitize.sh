@@ -4,7 +4,8 @@
 #   scripts/sanitize.sh -L hostile        scripts/sanitize.sh -R io
 # Skipped: labels python and freecad (the interpreters are not instrumented: an ASan module
 # would need libasan preloaded into python3 / FreeCAD) and slow (the long corpus conversions).
-# LeakSanitizer suppressions: scripts/lsan.supp (OCCT's static allocations only).
+# LeakSanitizer suppressions: scripts/lsan.supp (OCCT's static allocations only; full malloc stacks
+# (fast_unwind_on_malloc=0) so that they match through OCCT's frames).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build-asan}
@@ -12,7 +13,7 @@ JOBS=${JOBS:-2}
 nice -n 10 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DSUBD2NURBS_SANITIZE=address,undefined -DSUBD2NURBS_BUILD_BENCH=OFF -DSUBD2NURBS_BUILD_PYTHON=OFF
 nice -n 10 cmake --build "$BUILD" -j"$JOBS"
-export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
+export ASAN_OPTIONS="detect_leaks=1:fast_unwind_on_malloc=0:abort_on_error=0:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export SUBD2NURBS_SANITIZED=1   # the hostile runner then sets no address-space limit
