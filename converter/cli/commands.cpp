@@ -377,7 +377,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       "With --fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
       "interpolation (noisy points give a smooth surface)");
   add_limit_options(*convert_command, convert.limits,
-                    "the faces of the refined mesh the patches are built from (default " +
+                    "the polynomial pieces the patches are built from, estimated (default " +
                         number(pipeline::kDefaultMaxConvertFaces) + ")");
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress and no summary on stderr (warnings are still printed)");

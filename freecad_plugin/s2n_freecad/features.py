@@ -283,7 +283,7 @@ class NurbsFeature(_Stateless):
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
         lim = "Limits"
         _add(obj, "App::PropertyFloat", "MaxFaces", lim,
-             "Refuse a conversion whose refined mesh would have more faces (0: the default, 4e6; "
+             "Refuse a conversion estimated to make more polynomial pieces (0: the default, 4e6; "
              "as --max-faces)")
         _add(obj, "App::PropertyFloat", "MaxMemoryMiB", lim,
              "Refuse a conversion estimated to need more memory, in MiB (0: the default, 3/4 of "

@@ -405,8 +405,8 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         colour map's value_min / value_max.
     progress: a callable(stage: str, fraction: float) called as the stages run.
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
-    max_faces, max_memory: refuse (SettingsError, before any work) when the refined mesh the
-        patches are built from would have more faces, or the estimated memory would be larger,
+    max_faces, max_memory: refuse (SettingsError, before any work) when the estimated polynomial
+        pieces the patches are built from would be more, or the estimated memory larger,
         as --max-faces / --max-memory (defaults 4e6 faces and 3/4 of the memory available;
         max_memory in bytes or a string such as "8G").
     """
