@@ -36,6 +36,7 @@ common=(--benchmark_repetitions="$reps" --benchmark_enable_random_interleaving=t
 "$build"/bench/bench_convert "${common[@]}" --benchmark_out="$convert_json" >&2
 "$build"/bench/bench_limit "${common[@]}" --benchmark_out="$limit_json" >&2
 python3 scripts/bench_table.py "$refine_json" "$reps" "$convert_json" "$limit_json" > docs/benchmarks.md.tmp
+{ echo; python3 scripts/bench_fit.py "$build" "${FIT_REPS:-3}"; } >> docs/benchmarks.md.tmp
 {
   echo
   echo "## 7. Real models through the command line (\`scripts/bench_models.py\`)"
@@ -60,6 +61,5 @@ brackets on a busy one):
 | 100 000-quad regular torus | (117 s) | 8.0 GB | 870 MB | 100 000 | 49 |
 BEFORE
 } >> docs/benchmarks.md.tmp
-{ echo; python3 scripts/bench_fit.py "$build" "${FIT_REPS:-3}"; } >> docs/benchmarks.md.tmp
 mv docs/benchmarks.md.tmp docs/benchmarks.md
 cat docs/benchmarks.md
