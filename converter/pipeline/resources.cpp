@@ -1,6 +1,5 @@
 #include "converter/pipeline/resources.h"
 
-#include "core/patch/patch_builder.h"
 
 #include <sys/resource.h>
 #include <unistd.h>

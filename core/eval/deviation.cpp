@@ -230,11 +230,4 @@ int fan_extra_levels_for_tolerance(const IrregularFan& fan, double max, double t
   return static_cast<int>(std::ceil(std::log(max / tolerance) / std::log(rate) - 1e-9));
 }
 
-int extra_levels_for_tolerance(const PatchBuild& build, const DeviationReport& measured, double tolerance) {
-  int extra = 0;
-  for (const FanDeviation& fd : measured.fans)
-    extra = std::max(extra, fan_extra_levels_for_tolerance(build.info.fans[fd.fan], fd.max, tolerance));
-  return extra;
-}
-
 }  // namespace subd2nurbs

@@ -44,13 +44,8 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels = 2
 double deviation_rate(int valence);
 
 /// Extra levels after which one fan's deviation `max` falls to `tolerance`, extrapolated with
-/// its rate (deviation_rate of its valence; open and approximate fans as documented below).
+/// its rate: deviation_rate of its valence; crease and corner fans that of valence 2k and 4k
+/// (k sectors), approximate fans 2 (a conservative guess: no rate is derived for them).
 int fan_extra_levels_for_tolerance(const IrregularFan& fan, double max, double tolerance);
-
-/// Extra levels (beyond the build's) after which every fan's deviation, extrapolated with
-/// its valence's rate, is at most `tolerance` (model units). Fans of the open and
-/// approximate kinds use the rate of the smallest valence > 4 that bounds them (2, a
-/// conservative guess) since MATH.md derives no rate for them.
-int extra_levels_for_tolerance(const PatchBuild& build, const DeviationReport& measured, double tolerance);
 
 }  // namespace subd2nurbs
