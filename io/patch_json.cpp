@@ -102,6 +102,23 @@ void write_patch(JsonWriter& w, const NurbsPatch& p) {
   }
   w.key("base_faces");
   w.array(p.base_faces, [&](int f) { w.integer(f); });
+  if (!p.cells.empty()) {  // a packed face: its coarse quads, one cell [u, u+1] x [v, v+1] each
+    w.key("cells");
+    w.array(p.cells, [&](const PatchCell& c) {
+      s += '{';
+      w.key("base_face", true);
+      w.integer(c.base_face);
+      w.key("coarse_face");
+      w.integer(c.coarse_face);
+      w.key("u");
+      w.integer(c.u);
+      w.key("v");
+      w.integer(c.v);
+      w.key("rotation");
+      w.integer(c.rotation);
+      s += '}';
+    });
+  }
   w.key("corners");
   w.array(p.corners, [&](int c) { w.integer(c); });
   w.key("curves");
@@ -110,7 +127,7 @@ void write_patch(JsonWriter& w, const NurbsPatch& p) {
   w.array(p.curve_reversed, [&](bool b) { w.boolean(b); });
   bool split = false;
   for (const auto& pieces : p.split_sides) split = split || !pieces.empty();
-  if (split) {  // sides made of several curves (polar cap boundary), counter-clockwise
+  if (split) {  // sides made of several curves (a packed face, a polar cap), counter-clockwise
     w.key("split_sides");
     w.array(p.split_sides, [&](const std::vector<SidePiece>& pieces) {
       w.array(pieces, [&](const SidePiece& q) {

@@ -356,6 +356,10 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                             "Catmull-Clark step first (MATH.md 3.4), then polar caps");
   convert_command->add_option("--lambda", convert.lambda,
                               "Scale of a polar cap's projected 1-link, > 0 (default 0.75)");
+  convert_command->add_option("--faces", convert.faces,
+                              "packed (default: each regular region of quads is one B-spline face) or "
+                              "per-quad (one face per coarse quad)")
+      ->check(CLI::IsMember({"packed", "per-quad"}));
   convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242")
       ->check(CLI::IsMember({"ap214", "ap242"}));
   convert_command->add_option("--report", convert.report,

@@ -114,6 +114,9 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
       << info.pccm_patches << " pccm, " << info.caps.size() << " polar caps), " << info.total_poles
       << " poles, deepest level " << info.level
       << " (coarse level " << info.coarse_level << ", " << c.extra_levels << " extra)\n";
+  const PackedSet& out = c.exported;
+  err << "  faces      " << out.set.patches.size() << " (" << pipeline::to_string(c.faces) << ": " << out.packs
+      << " packs of " << out.packed_quads << " quads), " << out.total_poles << " poles\n";
   if (!c.caps.empty()) {
     double dist = 0, angle = 0, k_near = 0, k_far = 0;
     for (const pipeline::CapMeasure& m : c.caps) {
@@ -236,6 +239,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   settings.tolerance_is_default = !options.tolerance_given && !options.level_given;
   settings.absolute = options.absolute;
   settings.build_brep = kind != OutputKind::Json;
+  settings.faces = options.faces == "per-quad" ? pipeline::FaceMode::PerQuad : pipeline::FaceMode::Packed;
   settings.limits = limits;
   settings.patch.polar = options.polar == "on";
   settings.patch.cap.radial_steps = options.radial_steps;
@@ -274,7 +278,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   if (kind == OutputKind::Json) {
     t = Clock::now();
     progress.stage("writing " + options.output);
-    const std::string text = patch_set_to_json(c.build.set);
+    const std::string text = patch_set_to_json(c.exported.set);
     staged.emplace_back(options.output);
     staged.back().write([&](std::ostream& out) { out << text; });
     c.ms.write = ms_since(t);

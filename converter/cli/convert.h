@@ -20,6 +20,7 @@ struct ConvertOptions {
   bool tolerance_given = false;
   bool absolute = false;      ///< tolerance in model units, else relative to the bbox diagonal
   std::string schema = "ap214";  ///< STEP schema: ap214 or ap242
+  std::string faces = "packed";  ///< packed (regular regions as one face) or per-quad
   std::string report;         ///< JSON report path, empty for none
   std::string polar = "on";   ///< polar structures: "on" (singular caps) or "off" (Catmull-Clark)
   int radial_steps = 1;       ///< radial BP pre-steps of a polar cap (1 or 2)

@@ -105,7 +105,7 @@ std::string add_quality_member(const std::string& text, const std::string& quali
 QualityReport measure_conversion_quality(const SubdivLevel& base, const std::vector<Point3>& positions,
                                          const pipeline::ConversionResult& c, int samples) {
   const LimitEvaluator limit(base, positions);
-  return measure_quality(c.build, limit, c.continuity, samples);
+  return measure_quality(c.build, limit, c.continuity, samples, &c.exported);
 }
 
 std::string report_with_quality(const std::string& report, const SubdivLevel& base,

@@ -62,7 +62,7 @@ std::string json_point(const Point3& p) {
 
 void collect_fans(ConversionResult& c) {
   const PatchBuildInfo& info = c.build.info;
-  std::vector<int> measure_of_curve(c.build.set.curves.size(), -1);
+  std::vector<int> measure_of_curve(c.exported.set.curves.size(), -1);
   for (size_t i = 0; i < c.continuity.curves.size(); ++i)
     measure_of_curve[c.continuity.curves[i].curve] = static_cast<int>(i);
   std::vector<int> approximate_of_fan(info.fans.size(), -1);
@@ -77,10 +77,11 @@ void collect_fans(ConversionResult& c) {
     if (ray.fan < 0 || approximate_of_fan[ray.fan] < 0 || ray.continuity != Continuity::C0) continue;
     ApproximateFan& a = c.approximate[approximate_of_fan[ray.fan]];
     ++a.rays;
-    const int m = measure_of_curve[ray.curve];
+    const int out = c.exported.curve[ray.curve];  // rays are never inside a pack
+    const int m = out < 0 ? -1 : measure_of_curve[out];
     if (m >= 0) a.normal_angle_deg = std::max(a.normal_angle_deg, c.continuity.curves[m].normal_angle_deg);
   }
-  for (const BoundaryCurve& bc : c.build.set.curves) ++c.curves_by_continuity[static_cast<int>(bc.continuity)];
+  for (const BoundaryCurve& bc : c.exported.set.curves) ++c.curves_by_continuity[static_cast<int>(bc.continuity)];
 }
 
 }  // namespace
@@ -106,6 +107,8 @@ std::string index_list(const std::vector<int>& v) {
   return s;
 }
 }  // namespace
+
+const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed" : "per-quad"; }
 
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
@@ -305,10 +308,24 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   }
   const PatchBuildInfo& info = c.build.info;
 
-  // Measures.
+  // Faces: regular regions packed into one surface each, or one face per quad.
   auto t = Clock::now();
+  c.faces = settings.faces;
+  if (settings.faces == FaceMode::Packed) {
+    stage("packing regular regions into faces");
+    c.exported = pack_patches(c.build);
+    if (c.exported.rejected_packs > 0)
+      warn("subd2nurbs: warning: " + std::to_string(c.exported.rejected_packs) +
+           " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
+  } else {
+    c.exported = unpacked(c.build.set);
+  }
+  c.ms.packing = ms_since(t);
+
+  // Measures.
+  t = Clock::now();
   stage("measuring continuity");
-  c.continuity = measure_continuity(c.build.set, kContinuitySamples);
+  c.continuity = measure_continuity(c.exported.set, kContinuitySamples);
   c.ms.continuity = ms_since(t);
   if (!settings.tolerance_given) measure_deviation_now();
   collect_fans(c);
@@ -329,7 +346,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   if (settings.build_brep) {
     t = Clock::now();
     stage("building the B-rep");
-    c.brep = occt::build_brep(c.build.set, progress.brep_fraction);
+    c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
     c.has_brep = true;
     c.ms.brep = ms_since(t);
   }
@@ -365,7 +382,12 @@ std::string report_json(const ConversionResult& c) {
        ", \"polar_caps\": " + std::to_string(info.caps.size()) + ", \"poles\": " + std::to_string(info.total_poles) +
        ", \"pieces\": " + std::to_string(info.leaves) + ", \"removed_knots\": " + std::to_string(info.removed_knots) + "},");
   const auto& cc = c.curves_by_continuity;
-  line("  \"curves\": {\"total\": " + std::to_string(ps.curves.size()) + ", \"boundary\": " +
+  const PackedSet& out = c.exported;
+  line("  \"faces\": {\"mode\": " + json_string(to_string(c.faces)) + ", \"total\": " +
+       std::to_string(out.set.patches.size()) + ", \"packed\": " + std::to_string(out.packs) +
+       ", \"packed_quads\": " + std::to_string(out.packed_quads) + ", \"poles\": " + std::to_string(out.total_poles) +
+       ", \"removed_knot_lines\": " + std::to_string(out.removed_knots) + "},");
+  line("  \"curves\": {\"total\": " + std::to_string(out.set.curves.size()) + ", \"boundary\": " +
        std::to_string(cc[0]) + ", \"c0\": " + std::to_string(cc[1]) + ", \"g1\": " +
        std::to_string(cc[2]) + ", \"c1\": " + std::to_string(cc[3]) + ", \"c2\": " + std::to_string(cc[4]) + "},");
   const auto& fm = c.fans_by_mode;
@@ -484,7 +506,7 @@ std::string report_json(const ConversionResult& c) {
   const Timings& ms = c.ms;
   line("  \"timings_ms\": {\"load\": " + json_number(ms.load) + ", \"fit\": " + json_number(ms.fit) + ", \"patches\": " + json_number(ms.patches) +
        ", \"continuity\": " + json_number(ms.continuity) + ", \"deviation\": " + json_number(ms.deviation) +
-       ", \"brep\": " + json_number(ms.brep) + ", \"write\": " + json_number(ms.write) + "}");
+       ", \"packing\": " + json_number(ms.packing) + ", \"brep\": " + json_number(ms.brep) + ", \"write\": " + json_number(ms.write) + "}");
   line("}");
   return j;
 }

@@ -17,6 +17,7 @@
 #include "core/eval/deviation.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
+#include "core/patch/packing.h"
 #include "core/patch/patch_builder.h"
 #include "core/refine/refiner.h"
 
@@ -49,6 +50,11 @@ struct FitSettings {
   EnergyOptions energy;    ///< the fairing energy of a fair fit
 };
 
+/// How the patches become B-rep faces: regular regions packed into one B-spline face each
+/// (core/patch/packing.h), or one face per coarse quad.
+enum class FaceMode { Packed, PerQuad };
+const char* to_string(FaceMode mode);
+
 /// What to convert with. `patch` is handed to build_patches untouched, except that its
 /// extra_levels is set from `level` or chosen by `tolerance`.
 struct ConversionSettings {
@@ -59,6 +65,7 @@ struct ConversionSettings {
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
   bool tolerance_is_default = false;  ///< the tolerance is kDefaultTolerance, not the user's
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
+  FaceMode faces = FaceMode::Packed;
   FitSettings fit;
   /// Refused before any work when estimate_conversion exceeds them (resources.h); with a
   /// tolerance, the extra levels are capped to stay within them.
@@ -82,7 +89,7 @@ struct ConversionProgress {
 };
 
 struct Timings {
-  double load = 0, fit = 0, patches = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
+  double load = 0, fit = 0, patches = 0, packing = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
 };
 
 /// What the fit did (FitMode::Interpolate), in model units.
@@ -136,9 +143,13 @@ struct ConversionResult {
   std::string input;  ///< the cage's name for the report (set by the caller)
   OutputInfo output;  ///< set by the caller
   std::vector<std::string> warnings;  ///< the caller's load warnings first, then the pipeline's
-  PatchBuild build;
+  PatchBuild build;     ///< the patches per coarse quad, with how they were built
+  FaceMode faces = FaceMode::Packed;
+  /// What is exported and measured for continuity: build.set packed (FaceMode::Packed) or as
+  /// it is. exported.set is the PatchSet of the B-rep, the patch JSON and the Python result.
+  PackedSet exported;
   int extra_levels = 0;
-  ContinuityReport continuity;
+  ContinuityReport continuity;  ///< over output.set's curves
   DeviationReport deviation;
   bool tolerance_given = false, tolerance_absolute = false;
   ToleranceResult tolerance;

@@ -143,6 +143,11 @@ void side_parameters(int side, double t, double& u, double& v) {
 SideDerivs side_derivatives(const NurbsPatch& patch, int side, double t) {
   double u, v;
   side_parameters(side, t, u, v);
+  // The unit square's point in the patch's domain ([0, mu] x [0, mv] for a packed face).
+  const double u0 = patch.knots_u.knots.front(), u1 = patch.knots_u.knots.back();
+  const double v0 = patch.knots_v.knots.front(), v1 = patch.knots_v.knots.back();
+  u = u == 0 ? u0 : u == 1 ? u1 : u0 + u * (u1 - u0);
+  v = v == 0 ? v0 : v == 1 ? v1 : v0 + v * (v1 - v0);
   const SurfaceDerivs d = evaluate(patch, u, v);
   auto neg = [](const Point3& a) { return Point3{-a[0], -a[1], -a[2]}; };
   SideDerivs f;

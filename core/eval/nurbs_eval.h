@@ -11,7 +11,8 @@ struct SurfaceDerivs {
   Point3 p{}, du{}, dv{}, duu{}, duv{}, dvv{};
 };
 
-/// Position and derivatives up to second order at (u, v) in [0,1]^2.
+/// Position and derivatives up to second order at (u, v) in the patch's domain ([0,1]^2, or
+/// [0, mu] x [0, mv] for a packed face).
 SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v);
 
 /// Unit normal Xu x Xv; the zero vector where the parametrization is singular
@@ -25,9 +26,10 @@ Point3 evaluate(const BoundaryCurve& curve, double s);
 /// see patch_set.h): side 0 (t,0), side 1 (1,t), side 2 (1-t,1), side 3 (0,1-t).
 void side_parameters(int side, double t, double& u, double& v);
 
-/// A patch at a side point, with derivatives taken along the side (counter-clockwise
-/// traversal, d/dt) and into the patch (d/dn): the frame in which two patches sharing a
-/// curve are compared (MATH.md 9).
+/// A patch at a side point (t in [0,1] along the whole side, whatever the patch's domain),
+/// with derivatives taken along the side (counter-clockwise traversal, in the patch's own
+/// parameter) and into the patch (d/dn): the frame in which two patches sharing a curve are
+/// compared (MATH.md 9).
 struct SideDerivs {
   Point3 p{}, along{}, inward{}, inward2{};  ///< X, dX/dt, dX/dn, d2X/dn2
   Point3 normal{};                            ///< unit normal Xu x Xv

@@ -55,6 +55,16 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x) 
   return best;
 }
 
+/// The surface measured at quad patch `pi`'s parameters (s, t): the patch itself, or the
+/// exported face holding it.
+SurfaceDerivs measured_surface(const PatchBuild& b, const PackedSet* exported, int pi, double s, double t) {
+  if (!exported) return evaluate(b.set.patches[static_cast<size_t>(pi)], s, t);
+  const PatchPlace& place = exported->place[static_cast<size_t>(pi)];
+  double u, v;
+  place_parameters(place, s, t, u, v);
+  return evaluate(exported->set.patches[static_cast<size_t>(place.patch)], u, v);
+}
+
 }  // namespace
 
 LimitParam patch_to_limit(const PatchBuild& b, int patch, double s, double t) {
@@ -112,7 +122,7 @@ std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b
 }
 
 QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
-                              const ContinuityReport& continuity, int n) {
+                              const ContinuityReport& continuity, int n, const PackedSet* exported) {
   if (n < 2) throw std::invalid_argument("measure_quality: at least 2 samples per side");
   QualityReport q;
   q.samples_per_side = n;
@@ -146,7 +156,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
         d.s = st[0];
         d.t = st[1];
         d.limit = patch_to_limit(b, d.patch, d.s, d.t);
-        d.point = evaluate(patch, d.s, d.t).p;
+        d.point = measured_surface(b, exported, pi, d.s, d.t).p;
         e.L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
         d.parametric = norm(sub(d.point, e.L.p));
         // The closest-point distance is at most the same-parameter one; searching for it only
@@ -214,7 +224,8 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   std::vector<char> measured_ok(num_curves, 0);
   parallel_for(num_curves, [&](int ci) {
     const CurveMeasure& cm = continuity.curves[ci];
-    const BoundaryCurve& c = ps.curves[cm.curve];
+    // The quads' own curve: its uses give the coarse edge and the limit's parameters.
+    const BoundaryCurve& c = ps.curves[exported ? exported->source_curve[cm.curve] : cm.curve];
     if (c.uses.size() != 2) return;
     if (ps.patches[c.uses[0].patch].kind == PatchKind::PolarCap ||
         ps.patches[c.uses[1].patch].kind == PatchKind::PolarCap)
@@ -237,7 +248,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
         const CurveUse& use = c.uses[w];
         double pu, pv;
         side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
-        pn[w] = unit_normal(evaluate(ps.patches[use.patch], pu, pv));
+        pn[w] = unit_normal(measured_surface(b, exported, use.patch, pu, pv));
         const LimitParam lp = patch_to_limit(b, use.patch, pu, pv);
         ln[w] = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).normal;
       }

@@ -9,6 +9,7 @@
 #include "core/eval/continuity.h"
 #include "core/eval/quadric_fit.h"
 #include "core/limit/limit_evaluator.h"
+#include "core/patch/packing.h"
 #include "core/patch/patch_builder.h"
 
 namespace subd2nurbs {
@@ -89,8 +90,11 @@ double limit_distance(const PatchBuild& build, const LimitEvaluator& limit, int 
 std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& build, int patch, int n);
 
 /// Samples every patch (quality_sample_parameters) (n = samples_per_side, endpoints included) against the
-/// exact limit, and every shared curve (from `continuity`) on both sides.
+/// exact limit, and every shared curve (from `continuity`) on both sides. With `exported`, the
+/// surface measured is exported->set (packed faces): each sample of a coarse quad is taken on
+/// the face holding it (PatchPlace), and `continuity` is over exported->set's curves.
 QualityReport measure_quality(const PatchBuild& build, const LimitEvaluator& limit,
-                              const ContinuityReport& continuity, int samples_per_side = 9);
+                              const ContinuityReport& continuity, int samples_per_side = 9,
+                              const PackedSet* exported = nullptr);
 
 }  // namespace subd2nurbs

@@ -5,9 +5,10 @@
 // accessors.
 //
 // Conventions (used by every consumer, keep them in sync with docs/formats.md):
-// - A patch is a tensor-product NURBS surface of degree (3, 3) over [0,1] x [0,1] with clamped
-//   knot vectors (end multiplicity degree + 1). Knots are stored as distinct values plus
-//   multiplicities, like OCCT and STEP do.
+// - A patch is a tensor-product NURBS surface of degree (3, 3) with clamped knot vectors (end
+//   multiplicity degree + 1). Knots are stored as distinct values plus multiplicities, like
+//   OCCT and STEP do. Its domain is [0,1] x [0,1], except for a packed patch (several coarse
+//   quads, `cells` not empty): [0, mu] x [0, mv], one unit per quad (packing.h).
 // - poles[i * num_poles_v + j] is pole (i, j): i runs along u, j along v.
 // - weights is empty for a polynomial (non-rational) patch, else one weight per pole.
 // - A patch's four sides are numbered counter-clockwise in the (u, v) domain, which is the
@@ -61,6 +62,17 @@ struct SidePiece {
   double t0 = 0, t1 = 1;
 };
 
+/// A coarse quad inside a packed patch: the cell [u, u+1] x [v, v+1] of the patch's domain.
+/// The quad's own parameters (s, t) (corner 0 of its face at (0, 0), side 0 along t = 0) are
+/// turned by `rotation` quarter turns: its corner `rotation` sits at (u, v) and its side
+/// `rotation` runs along the cell's side v = const from there.
+struct PatchCell {
+  int base_face = -1;    ///< cage face
+  int coarse_face = -1;  ///< face of the coarse all-quad level (the cage face when the cage is all quads)
+  int u = 0, v = 0;
+  int rotation = 0;
+};
+
 struct NurbsPatch {
   PatchKind kind = PatchKind::RegularBSpline;
   int degree_u = 3, degree_v = 3;
@@ -68,7 +80,8 @@ struct NurbsPatch {
   int num_poles_u = 0, num_poles_v = 0;
   std::vector<Point3> poles;    ///< num_poles_u * num_poles_v, index i * num_poles_v + j
   std::vector<double> weights;  ///< empty: all 1
-  std::vector<int> base_faces;  ///< cage faces this patch comes from (one, or the n-gon)
+  std::vector<int> base_faces;  ///< cage faces this patch comes from
+  std::vector<PatchCell> cells; ///< a packed patch's quads; empty for a patch of one quad or a cap
 
   std::array<int, 4> corners{{-1, -1, -1, -1}};  ///< PatchSet::corners index per patch corner
   std::array<int, 4> curves{{-1, -1, -1, -1}};   ///< PatchSet::curves index per side

@@ -87,7 +87,7 @@ def make_cage(source, doc=None, name="Cage"):
 
 
 def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, doc=None, name="NURBS",
-               progress=True, fit="Approximate", fair_weight=0.0):
+               progress=True, fit="Approximate", fair_weight=0.0, faces="Packed"):
     """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
     Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around
     high-valence vertices are kept; the object's RecoveredQuads says how many).
@@ -97,7 +97,8 @@ def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, 
     caps, the default as in the CLI) or "Catmull-Clark"; shell: a shell instead of a solid; fit:
     "Approximate" (the cage's own limit surface) or "Interpolate" (the surface passes through the
     cage's vertices), fair_weight > 0 with "Interpolate": a fair fit (least squares with the
-    thin-plate energy). It recomputes when the source or one of these properties changes. Raises (document unchanged) when the conversion fails."""
+    thin-plate energy); faces: "Packed" (each regular region of quads is one face, the default) or
+    "PerQuad". It recomputes when the source or one of these properties changes. Raises (document unchanged) when the conversion fails."""
     check_occt()
     if source is None or not hasattr(source, "Document"):
         raise TypeError("make_nurbs: expected a Cage object or a Mesh::Feature")
@@ -105,17 +106,19 @@ def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, 
     # Convert before touching the document (errors leave it as it was); the first recompute
     # reuses the result.
     cage = features.cage_of(source)
-    result = features.convert_cage(cage, level, tolerance, polar, progress=progress, fit=fit, fair_weight=fair_weight)
+    result = features.convert_cage(cage, level, tolerance, polar, progress=progress, fit=fit, fair_weight=fair_weight,
+                                   faces=faces)
     with _Transaction(doc, "Convert to NURBS"):
         obj = doc.addObject("Part::FeaturePython", name)
         proxy = features.NurbsFeature(obj)
-        proxy.prepare(features.NurbsFeature.signature(cage, level, tolerance, polar, fit, fair_weight), result)
+        proxy.prepare(features.NurbsFeature.signature(cage, level, tolerance, polar, fit, fair_weight, faces), result)
         obj.Source = source
         obj.Level = level
         obj.Tolerance = tolerance
         obj.PolarHandling = polar
         obj.Fit = fit
         obj.FairWeight = float(fair_weight)
+        obj.Faces = faces
         obj.OutputType = "Shell" if shell else "Solid"
         obj.ShowProgress = bool(progress)
         _show_and_recompute(obj, features.ViewProviderNurbs, "NURBS object", hide=source)

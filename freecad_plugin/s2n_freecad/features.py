@@ -19,6 +19,9 @@ POLAR = ["Polar caps", "Catmull-Clark"]
 #: Which surface the cage stands for: its own limit (which misses its vertices) or the limit of
 #: the cage solved to pass through them (subd2nurbs.convert(fit="interpolate")).
 FIT = ["Approximate", "Interpolate"]
+#: Faces of the NURBS object: each regular region of quads as one B-spline face (the default,
+#: as `subd2nurbs convert --faces packed`), or one face per coarse quad.
+FACES = ["Packed", "PerQuad"]
 OUTPUT = ["Solid", "Shell"]
 
 
@@ -209,9 +212,13 @@ class _Progress:
         self.indicator.stop()
 
 
-def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate", fair_weight=0.0, **options):
+def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate", fair_weight=0.0, faces="Packed",
+                 **options):
     """subd2nurbs.convert with the NURBS object's settings (and further convert options).
-    fit: "Approximate" or "Interpolate"; fair_weight > 0 (with "Interpolate"): a fair fit."""
+    fit: "Approximate" or "Interpolate"; fair_weight > 0 (with "Interpolate"): a fair fit;
+    faces: "Packed" or "PerQuad"."""
+    if faces not in FACES:
+        raise subd2nurbs.SettingsError("Faces must be one of %s" % ", ".join(FACES))
     if fit not in FIT:
         raise subd2nurbs.SettingsError("Fit must be one of %s" % ", ".join(FIT))
     if fair_weight < 0:
@@ -233,6 +240,7 @@ def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate"
         kwargs = {}
     kwargs["polar"] = polar == "Polar caps"
     kwargs["fit"] = fit.lower()
+    kwargs["faces"] = "packed" if faces == "Packed" else "per-quad"
     if fair_weight > 0:
         kwargs["fair"] = float(fair_weight)
     kwargs.update(options)
@@ -280,6 +288,11 @@ class NurbsFeature(_Stateless):
         _add(obj, "App::PropertyFloat", "FairWeight", g,
              "With Fit = Interpolate: if > 0, trade exact interpolation for fairness (least squares with "
              "the thin-plate energy weighted this much); 0: exact")
+        if "Faces" not in obj.PropertiesList:
+            _add(obj, "App::PropertyEnumeration", "Faces", g,
+                 "Packed: each regular region of quads is one B-spline face (fewer, larger faces); "
+                 "PerQuad: one face per coarse quad")
+            obj.Faces = FACES
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
         lim = "Limits"
         _add(obj, "App::PropertyFloat", "MaxFaces", lim,
@@ -306,16 +319,21 @@ class NurbsFeature(_Stateless):
         _add(obj, "App::PropertyStringList", "Warnings", r, "Conversion warnings", read_only=True)
 
     @staticmethod
-    def signature(cage, level, tolerance, polar, fit="Approximate", fair_weight=0.0):
+    def signature(cage, level, tolerance, polar, fit="Approximate", fair_weight=0.0, faces="Packed"):
         """What a conversion depends on: a result can be reused while this is unchanged."""
         return (cage.vertices.tobytes(), cage.face_sizes.tobytes(), cage.face_indices.tobytes(),
                 tuple(cage.creases), tuple(cage.corners), tuple(cage.holes), tuple(sorted(cage.options.items())),
-                int(level), float(tolerance), polar, fit, float(fair_weight))
+                int(level), float(tolerance), polar, fit, float(fair_weight), faces)
 
     @staticmethod
     def fit_settings(obj):
         """(Fit, FairWeight) of a NURBS object (documents saved before they existed: Approximate)."""
         return getattr(obj, "Fit", "Approximate"), float(getattr(obj, "FairWeight", 0.0))
+
+    @staticmethod
+    def faces_setting(obj):
+        """Faces of a NURBS object (documents saved before the property existed: Packed)."""
+        return getattr(obj, "Faces", "Packed")
 
     def prepare(self, signature, result):
         """A result computed before the object existed (make_nurbs), used by the first recompute."""
@@ -328,8 +346,9 @@ class NurbsFeature(_Stateless):
         cage = cage_of(obj.Source)
         prepared, self._prepared = getattr(self, "_prepared", None), None
         fit, fair_weight = self.fit_settings(obj)
+        faces = self.faces_setting(obj)
         if prepared and prepared[0] == self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling, fit,
-                                                      fair_weight):
+                                                      fair_weight, faces):
             result = prepared[1]
         else:
             limits = {}
@@ -338,7 +357,7 @@ class NurbsFeature(_Stateless):
             if getattr(obj, "MaxMemoryMiB", 0) > 0:
                 limits["max_memory"] = obj.MaxMemoryMiB * 1024.0 * 1024.0
             result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress,
-                                  fit=fit, fair_weight=fair_weight, **limits)
+                                  fit=fit, fair_weight=fair_weight, faces=faces, **limits)
         shape = Part.Shape()
         shape.importBrepFromString(result.brep_text)
         if obj.OutputType == "Shell" and shape.Solids:
@@ -372,7 +391,8 @@ class NurbsFeature(_Stateless):
         if getattr(self, "_result", None) is None:
             fit, fair_weight = self.fit_settings(obj)
             self._result = convert_cage(cage_of(obj.Source), obj.Level, obj.Tolerance, obj.PolarHandling,
-                                        progress=obj.ShowProgress, fit=fit, fair_weight=fair_weight)
+                                        progress=obj.ShowProgress, fit=fit, fair_weight=fair_weight,
+                                        faces=self.faces_setting(obj))
         return self._result
 
     def onDocumentRestored(self, obj):

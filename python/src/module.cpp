@@ -343,6 +343,18 @@ py::dict patch_dict(const NurbsPatch& p) {
     d["weights"] = w;
   }
   d["base_faces"] = p.base_faces;
+  if (p.cells.empty()) {
+    d["cells"] = py::none();
+  } else {  // a packed face: one row (base_face, coarse_face, u, v, rotation) per coarse quad
+    py::array_t<int> cells({static_cast<py::ssize_t>(p.cells.size()), py::ssize_t{5}});
+    auto c = cells.mutable_unchecked<2>();
+    for (size_t i = 0; i < p.cells.size(); ++i) {
+      const PatchCell& q = p.cells[i];
+      const int row[5] = {q.base_face, q.coarse_face, q.u, q.v, q.rotation};
+      for (int k = 0; k < 5; ++k) c(static_cast<py::ssize_t>(i), k) = row[k];
+    }
+    d["cells"] = cells;
+  }
   return d;
 }
 
@@ -354,7 +366,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
                  const std::string& fit, double fair_weight,
                  const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
                  const std::function<void(const std::string&, double)>& progress, double max_faces,
-                 double max_memory) {
+                 double max_memory, const std::string& faces) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
   const SubdivLevel base = SubdivLevel::from_input(in, &diagnostics);
@@ -376,6 +388,9 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   settings.fit.fair_weight = fair_weight;
   settings.limits.max_faces = max_faces;
   settings.limits.max_memory = max_memory;
+  if (faces != "packed" && faces != "per-quad")
+    throw pipeline::SettingsError("faces must be 'packed' or 'per-quad', not '" + faces + "'");
+  settings.faces = faces == "packed" ? pipeline::FaceMode::Packed : pipeline::FaceMode::PerQuad;
   pipeline::ConversionProgress callbacks;
   std::string current;
   if (progress) {
@@ -412,7 +427,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
     d["preview"] = pv;
   }
   py::list patches;
-  for (const NurbsPatch& p : c.build.set.patches) patches.append(patch_dict(p));
+  for (const NurbsPatch& p : c.exported.set.patches) patches.append(patch_dict(p));
   d["patches"] = patches;
   d["warnings"] = c.warnings;
   d["cage_vertices"] = points_array(c.cage);

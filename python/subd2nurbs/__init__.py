@@ -319,9 +319,11 @@ def refine(cage, levels=1, max_faces=None, max_memory=None):
 class ConversionResult:
     """What convert() returns.
 
-    patches: one dict per NURBS patch: degree_u, degree_v, knots_u, mults_u, knots_v, mults_v
-        (distinct knots and their multiplicities, numpy), poles (numpy (nu, nv, 3)),
-        weights (numpy (nu, nv), or None when all are 1), base_faces (cage faces it comes from).
+    patches: one dict per NURBS patch (one B-rep face): degree_u, degree_v, knots_u, mults_u,
+        knots_v, mults_v (distinct knots and their multiplicities, numpy), poles (numpy
+        (nu, nv, 3)), weights (numpy (nu, nv), or None when all are 1), base_faces (cage faces it
+        comes from), cells (a packed face: numpy (quads, 5) rows base_face, coarse_face, u, v,
+        rotation, its domain one unit per quad; None for a patch of one quad or a polar cap).
     brep_text: OCCT BREP text of the B-rep (None with brep=False); FreeCAD reads it with
         Part.Shape().importBrepFromString(text).
     brep: the B-rep's counts and validity (faces, edges, vertices, solids, shells, is_solid,
@@ -379,7 +381,8 @@ class ConversionResult:
 
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
             progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
-            preview=None, preview_samples=16, fit="approximate", fair=None, max_faces=None, max_memory=None):
+            preview=None, preview_samples=16, fit="approximate", fair=None, max_faces=None, max_memory=None,
+            faces="packed"):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
     level: pin the extra refinement levels beyond the minimum at every fan (>= 0), as --level.
@@ -409,6 +412,9 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         pieces the patches are built from would be more, or the estimated memory larger,
         as --max-faces / --max-memory (defaults 4e6 faces and 3/4 of the memory available;
         max_memory in bytes or a string such as "8G").
+    faces: "packed" (default: each regular region of quads is one B-spline face, as --faces
+        packed) or "per-quad" (one face per coarse quad). The result's patches are the faces;
+        a packed one lists its quads in its "cells" (base_face, coarse_face, u, v, rotation).
     """
     cage = _cage(cage)
     if level is not None and tolerance is not None:
@@ -451,11 +457,13 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         raise SettingsError("preview_samples must be an integer >= 2, not %r" % (preview_samples,))
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
-    faces, memory = _limits(max_faces, max_memory)
+    if faces not in ("packed", "per-quad"):
+        raise SettingsError("faces must be 'packed' or 'per-quad', not %r" % (faces,))
+    face_limit, memory = _limits(max_faces, max_memory)
     d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
                             bool(polar), int(radial_steps), float(polar_lambda), bool(separate_poles),
                             fit, float(fair or 0.0), preview or "", int(preview_samples), cage.name, cage.warnings, progress,
-                            faces, memory)
+                            face_limit, memory, faces)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")

@@ -116,7 +116,8 @@ TEST(CliPolar, RefineUsesBpAtPolesUnlessOff) {
 TEST(CliPolar, ConvertMakesCapsUnlessOffAndChecksItsOptions) {
   TempDir dir;
   const std::string in = quote(polar_sample());
-  const Result on = run("convert " + in + " -o " + quote(dir.file("on.step")) + " --report " + quote(dir.file("on.json")));
+  const Result on = run("convert " + in + " -o " + quote(dir.file("on.step")) + " --faces per-quad --report " +
+                        quote(dir.file("on.json")));
   ASSERT_EQ(on.exit_code, 0) << on.err;
   EXPECT_EQ(python_json_check(dir.file("on.json"),
                               "r['patches']['polar_caps'] == 2 and r['brep']['faces'] == 16 * 5 + 2 and "
@@ -132,6 +133,12 @@ TEST(CliPolar, ConvertMakesCapsUnlessOffAndChecksItsOptions) {
                          " --report " + quote(dir.file("two.json")));
   ASSERT_EQ(two.exit_code, 0) << two.err;
   EXPECT_EQ(python_json_check(dir.file("two.json"), "r['polar']['radial_steps'] == 2 and r['polar']['lambda'] == 0.9"), 0);
+  // Packed (the default): the cylinder's regular quads become fewer faces, still one valid solid.
+  EXPECT_EQ(python_json_check(dir.file("two.json"),
+                              "r['faces']['mode'] == 'packed' and r['faces']['packed'] > 0 and "
+                              "r['brep']['faces'] == r['faces']['total'] < 16 * 5 + 2 and "
+                              "r['brep']['type'] == 'solid' and r['brep']['valid']"),
+            0);
   for (const char* bad : {"--radial-steps 3", "--radial-steps 0", "--lambda 0", "--lambda -1", "--polar yes",
                           "--polar off --separate-poles"}) {
     const Result r = run("convert " + in + " " + bad + " -o " + quote(dir.file("bad.step")));
@@ -327,12 +334,37 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",
       "r['deviation']['worst_fan']['valence'] == 3 and r['deviation']['samples'] > 0",
       "r['deviation']['sample_levels'] == 2 and len(r['deviation']['fans']) == 8",
-      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'continuity', 'deviation', 'brep', 'write'])",
+      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'packing', 'continuity', 'deviation', 'brep', 'write'])",
+      "r['faces'] == {'mode': 'packed', 'total': 24, 'packed': 0, 'packed_quads': 0, 'poles': r['patches']['poles'], 'removed_knot_lines': 0}",
       "r['sharpened_edges'] == 0 and r['sharpened_vertices'] == 0 and r['warnings'] == []",
   };
   for (const char* condition : conditions)
     EXPECT_EQ(python_json_check(report, condition), 0) << condition << "\n" << read_text(report);
   EXPECT_NE(python_json_check(report, "r['patches']['total'] == 25"), 0);  // the check can fail
+}
+
+TEST(CliConvert, FacesPackedOrPerQuad) {
+  TempDir dir;
+  const std::string torus = quote(std::string(SUBD2NURBS_CORPUS_DIR) + "/catmark_torus.obj");  // 8 x 4 regular quads
+  ASSERT_EQ(run("convert " + torus + " -o " + quote(dir.file("p.step")) + " --report " + quote(dir.file("p.json"))).exit_code, 0);
+  ASSERT_EQ(run("convert " + torus + " --faces per-quad -o " + quote(dir.file("q.step")) + " --report " +
+                quote(dir.file("q.json"))).exit_code, 0);
+  EXPECT_EQ(python_json_check(dir.file("p.json"),
+                              "r['faces'] == {'mode': 'packed', 'total': 1, 'packed': 1, 'packed_quads': 32, "
+                              "'poles': 11 * 7, 'removed_knot_lines': 0} and r['brep']['faces'] == 1 and "
+                              "r['brep']['type'] == 'solid' and r['brep']['valid'] and r['curves']['total'] == 12"),
+            0);
+  EXPECT_EQ(python_json_check(dir.file("q.json"),
+                              "r['faces']['mode'] == 'per-quad' and r['faces']['total'] == r['brep']['faces'] == 32 and "
+                              "r['faces']['poles'] == 32 * 16 and r['curves']['total'] == 64"),
+            0);
+  // The patch JSON lists a packed face's quads.
+  ASSERT_EQ(run("convert " + torus + " -o " + quote(dir.file("p.json2.json"))).exit_code, 0);
+  EXPECT_EQ(python_json_check(dir.file("p.json2.json"),
+                              "len(r['patches']) == 1 and len(r['patches'][0]['cells']) == 32 and "
+                              "sorted(c['base_face'] for c in r['patches'][0]['cells']) == list(range(32))"),
+            0);
+  EXPECT_EQ(run("convert " + torus + " --faces some -o " + quote(dir.file("x.step"))).exit_code, 1);
 }
 
 TEST(CliConvert, ReportIsDeterministicApartFromTimings) {

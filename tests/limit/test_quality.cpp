@@ -50,7 +50,9 @@ TEST_P(QualityVsOcct, DeviationAndNormalJumpsAgreeWithTheReadBackStep) {
   ASSERT_TRUE(c.result.brep.valid);
   const LimitEvaluator limit(c.base, c.pos);
   const int n = 7;  // steps of 1/6: not at the level-k vertices, where Construction Q interpolates
-  const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, n);
+  // The exported faces (packed, the default) are what is measured and what OCCT reads back.
+  const PackedSet& out = c.result.exported;
+  const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, n, &out);
   const double size = c.result.build.set.model_size;
 
   TempDir dir;
@@ -58,33 +60,35 @@ TEST_P(QualityVsOcct, DeviationAndNormalJumpsAgreeWithTheReadBackStep) {
   occt::write_shape(c.result.brep.shape, step, occt::Format::Step);
   const TopoDS_Shape back = occt::read_shape(step);
 
-  // Faces of the read-back shape, matched to patches by their centre point.
-  const PatchSet& ps = c.result.build.set;
+  // Faces of the read-back shape, matched to the exported patches by their centre point.
+  const PatchSet& ps = out.set;
   std::vector<Handle(Geom_Surface)> surfaces;
   for (TopExp_Explorer ex(back, TopAbs_FACE); ex.More(); ex.Next())
     surfaces.push_back(BRep_Tool::Surface(TopoDS::Face(ex.Current())));
   ASSERT_EQ(surfaces.size(), ps.patches.size());
-  double occt_parametric_max = 0;
+  std::vector<size_t> face_of(ps.patches.size());
   for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
-    const Point3 centre = evaluate(ps.patches[pi], 0.5, 0.5).p;
-    size_t best = 0;
+    const double um = ps.patches[pi].knots_u.knots.back() / 2, vm = ps.patches[pi].knots_v.knots.back() / 2;
+    const Point3 centre = evaluate(ps.patches[pi], um, vm).p;
     double best_d = HUGE_VAL;
     for (size_t k = 0; k < surfaces.size(); ++k) {
-      const gp_Pnt x = surfaces[k]->Value(0.5, 0.5);
+      const gp_Pnt x = surfaces[k]->Value(um, vm);
       const double d = dist({x.X(), x.Y(), x.Z()}, centre);
-      if (d < best_d) best_d = d, best = k;
+      if (d < best_d) best_d = d, face_of[pi] = k;
     }
     ASSERT_LT(best_d, 1e-9 * size) << "no read-back face has patch " << pi << "'s parametrisation";
-    for (const auto& st : quality_sample_parameters(c.result.build, static_cast<int>(pi), n)) {
-      {
-        const double s = st[0], t = st[1];
-        const gp_Pnt x = surfaces[best]->Value(s, t);
-        const LimitParam lp = patch_to_limit(c.result.build, static_cast<int>(pi), s, t);
-        const LimitSample L = limit.evaluate(lp.face, lp.sub, lp.u, lp.v);
-        occt_parametric_max = std::max(occt_parametric_max, dist({x.X(), x.Y(), x.Z()}, L.p));
-      }
-    }
   }
+  // Every quad's samples, on the read-back face that holds it.
+  double occt_parametric_max = 0;
+  for (size_t qi = 0; qi < c.result.build.set.patches.size(); ++qi)
+    for (const auto& st : quality_sample_parameters(c.result.build, static_cast<int>(qi), n)) {
+      double u, v;
+      place_parameters(out.place[qi], st[0], st[1], u, v);
+      const gp_Pnt x = surfaces[face_of[out.place[qi].patch]]->Value(u, v);
+      const LimitParam lp = patch_to_limit(c.result.build, static_cast<int>(qi), st[0], st[1]);
+      const LimitSample L = limit.evaluate(lp.face, lp.sub, lp.u, lp.v);
+      occt_parametric_max = std::max(occt_parametric_max, dist({x.X(), x.Y(), x.Z()}, L.p));
+    }
   EXPECT_NEAR(q.parametric_max, occt_parametric_max, 1e-9 * size);
   if (c.result.build.info.pccm_patches > 0) {
     EXPECT_GT(q.parametric_max, 1e-6 * size);  // patches at irregular vertices approximate
@@ -118,7 +122,7 @@ TEST(Quality, RegularPatchesAreTheLimitAndCreasesAreExpected) {
   {
     const Converted c = convert_shape("catmark_torus");
     const LimitEvaluator limit(c.base, c.pos);
-    const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, 5);
+    const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, 5, &c.result.exported);
     EXPECT_LT(q.parametric_max, 1e-12 * c.result.build.set.model_size);
     EXPECT_EQ(q.crease_edges, 0);
     EXPECT_EQ(q.class_mismatches, 0);
@@ -129,7 +133,7 @@ TEST(Quality, RegularPatchesAreTheLimitAndCreasesAreExpected) {
   {
     const Converted c = convert_shape("catmark_cubes_infsharp");
     const LimitEvaluator limit(c.base, c.pos);
-    const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, 3);
+    const QualityReport q = measure_quality(c.result.build, limit, c.result.continuity, 3, &c.result.exported);
     EXPECT_GT(q.crease_edges, 0);
     double crease_jump = 0;
     for (const EdgeQuality& e : q.edges)

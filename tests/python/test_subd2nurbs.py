@@ -325,8 +325,32 @@ class Triangles(unittest.TestCase):
             s2n.convert(cage, radial_steps=3)
         with self.assertRaises(s2n.SettingsError):
             s2n.convert(cage, polar_lambda=0)
-        off = s2n.convert(cage, polar=False, brep=False)
+        off = s2n.convert(cage, polar=False, brep=False, faces="per-quad")
         self.assertEqual(off.num_patches, int(cage.face_sizes.sum()))  # one patch per face corner
+
+    def test_packed_faces_list_their_quads(self):
+        # catmark_torus: 8 x 4 regular quads, one packed face over [0, 8] x [0, 4].
+        cage = s2n.read_cage(corpus("catmark_torus"))
+        packed = s2n.convert(cage)
+        quads = s2n.convert(cage, faces="per-quad")
+        self.assertEqual(packed.num_patches, 1)
+        self.assertEqual(quads.num_patches, 32)
+        p = packed.patches[0]
+        self.assertEqual(p["cells"].shape, (32, 5))
+        self.assertEqual(sorted(p["cells"][:, 0]), list(range(32)))
+        self.assertEqual(sorted((p["knots_u"][-1], p["knots_v"][-1])), [4.0, 8.0])  # one unit per quad
+        self.assertEqual(sorted(p["poles"].shape[:2]), [7, 11])
+        self.assertIsNone(quads.patches[0]["cells"])
+        self.assertEqual(packed.report["faces"]["total"], 1)
+        self.assertEqual(packed.brep["faces"], 1)
+        self.assertTrue(packed.brep["valid"] and packed.brep["is_solid"])
+        a, b = s2n.brep_summary(packed.brep_text), s2n.brep_summary(quads.brep_text)
+        self.assertEqual((a["solids"], a["faces"], b["faces"]), (1, 1, 32))
+        # OCCT's GProp integrates to about 1e-6 relative: the same solid within that.
+        self.assertLess(abs(a["volume"] - b["volume"]), 1e-6 * b["volume"])
+        self.assertLess(abs(a["area"] - b["area"]), 1e-6 * b["area"])
+        with self.assertRaises(s2n.SettingsError):
+            s2n.convert(cage, faces="quads")
 
     def test_separate_poles_makes_caps_of_low_valence_poles(self):
         n = 5  # a capped prism whose valence-5 poles BP cannot take directly
@@ -429,8 +453,8 @@ class Fitting(unittest.TestCase):
             d = np.linalg.norm(cage.vertices[None, :, :] - corners[:, None, :], axis=2).min(axis=0)
             return d.max() / size
 
-        plain = s2n.convert(cage, brep=False)
-        fitted = s2n.convert(cage, fit="interpolate", brep=False)
+        plain = s2n.convert(cage, brep=False, faces="per-quad")
+        fitted = s2n.convert(cage, fit="interpolate", brep=False, faces="per-quad")
         self.assertGreater(miss(plain), 1e-2)
         self.assertLess(miss(fitted), 1e-12)
         f = fitted.report["fit"]

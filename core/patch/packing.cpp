@@ -1,0 +1,674 @@
+#include "core/patch/packing.h"
+
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cmath>
+#include <queue>
+#include <utility>
+
+#include "core/patch/patch_builder.h"
+#include "core/util/tolerances.h"
+
+namespace subd2nurbs {
+
+void place_parameters(const PatchPlace& place, double s, double t, double& u, double& v) {
+  double x, y;  // in the cell, from its (u, v) corner
+  switch (place.rotation & 3) {
+    case 0: x = s; y = t; break;
+    case 1: x = t; y = 1 - s; break;
+    case 2: x = 1 - s; y = 1 - t; break;
+    default: x = 1 - t; y = s; break;
+  }
+  u = place.u + x;
+  v = place.v + y;
+}
+
+namespace {
+
+// A grid state is a packable patch seen with a rotation: 4 * patch + rotation. With rotation r
+// the cell's side l is the quad's side (l + r) mod 4, so the cell's +u neighbour is across the
+// quad's side r + 1 and its +v neighbour across side r + 2.
+struct Grid {
+  std::vector<std::array<std::pair<int, int>, 4>> neighbour;  ///< per patch and side: (patch, side) or (-1, -1)
+
+  /// The state one cell further along u (dir 0) or v (dir 1), -1 if the way is not packable.
+  int next(int state, int dir) const {
+    const int p = state >> 2, r = state & 3;
+    const auto [q, s] = neighbour[p][(r + 1 + dir) & 3];
+    if (q < 0) return -1;
+    // Entering q across its side s: that is the new cell's side 3 (moving along u) or 0 (along v).
+    return 4 * q + (dir == 0 ? (s + 1) & 3 : s);
+  }
+};
+
+/// How many cells a straight walk from each state takes along `dir` before the way ends or
+/// comes back to where it started (a ring). An upper bound of a rectangle's width or height.
+std::vector<int> run_lengths(const Grid& g, int dir) {
+  const int states = static_cast<int>(g.neighbour.size()) * 4;
+  std::vector<int> run(states, 0);
+  std::vector<char> mark(states, 0);  // 0 new, 1 on the current walk, 2 done
+  std::vector<int> path;
+  for (int s0 = 0; s0 < states; ++s0) {
+    if (mark[s0]) continue;
+    path.clear();
+    int s = s0;
+    while (s >= 0 && mark[s] == 0) {
+      mark[s] = 1;
+      path.push_back(s);
+      s = g.next(s, dir);
+    }
+    size_t first_before = path.size();  // states before this index get 1 + the next one's run
+    int tail = 0;
+    if (s >= 0 && mark[s] == 1) {  // the walk closed a ring at s
+      const size_t start = static_cast<size_t>(std::find(path.begin(), path.end(), s) - path.begin());
+      const int len = static_cast<int>(path.size() - start);
+      for (size_t i = start; i < path.size(); ++i) run[path[i]] = len;
+      first_before = start;
+      tail = len;
+    } else if (s >= 0) {
+      tail = run[s];
+    }
+    for (size_t i = first_before; i-- > 0;) run[path[i]] = ++tail;
+    for (int q : path) mark[q] = 2;
+  }
+  return run;
+}
+
+struct Rect {
+  int w = 0, h = 0;
+  std::vector<int> cells;  ///< states, cell (i, j) at j * w + i
+};
+
+/// The largest rectangle with its cell (0, 0) at `anchor`, over free patches only.
+class RectFinder {
+ public:
+  RectFinder(const Grid& g, const std::vector<char>& taken) : g_(g), taken_(taken), seen_(taken.size(), 0) {}
+
+  Rect largest(int anchor) {
+    ++stamp_;
+    Rect best;
+    long long best_area = 0;
+    std::vector<std::vector<int>> rows;
+    int width = INT_MAX;
+    for (int j = 0;; ++j) {
+      std::vector<int> row;
+      if (j == 0) {
+        for (int s = anchor; usable(s) && static_cast<int>(row.size()) < width; s = g_.next(s, 0)) take(s, row);
+      } else {
+        const std::vector<int>& below = rows.back();
+        for (int i = 0; i < width; ++i) {
+          const int s = g_.next(below[i], 1);
+          // The cell above (i, j-1) must also be the +u neighbour of (i-1, j): a grid, not a fold.
+          if (!usable(s) || (i > 0 && g_.next(row.back(), 0) != s)) break;
+          take(s, row);
+        }
+      }
+      if (row.empty()) break;
+      width = std::min(width, static_cast<int>(row.size()));
+      rows.push_back(std::move(row));
+      const long long area = static_cast<long long>(width) * (j + 1);
+      if (area > best_area) {
+        best_area = area;
+        best.w = width;
+        best.h = j + 1;
+      }
+    }
+    for (int j = 0; j < best.h; ++j)
+      best.cells.insert(best.cells.end(), rows[j].begin(), rows[j].begin() + best.w);
+    return best;
+  }
+
+ private:
+  bool usable(int s) const { return s >= 0 && !taken_[s >> 2] && seen_[s >> 2] != stamp_; }
+  void take(int s, std::vector<int>& row) {
+    seen_[s >> 2] = stamp_;
+    row.push_back(s);
+  }
+
+  const Grid& g_;
+  const std::vector<char>& taken_;
+  std::vector<int> seen_;
+  int stamp_ = 0;
+};
+
+/// Blossom of a cubic B-spline span: poles d[0..3] of the span [U[k], U[k+1]] of the flat knot
+/// vector U, at (x1, x2, x3) (de Boor's algorithm with a different parameter per level).
+Point3 blossom(const double* U, int k, const Point3* d, double x1, double x2, double x3) {
+  Point3 p[4] = {d[0], d[1], d[2], d[3]};
+  const double xs[3] = {x1, x2, x3};
+  for (int r = 1; r <= 3; ++r)
+    for (int i = 3; i >= r; --i) {
+      const int g = k - 3 + i;
+      const double a = (xs[r - 1] - U[g]) / (U[g + 4 - r] - U[g]);
+      for (int c = 0; c < 3; ++c) p[i][c] = (1 - a) * p[i - 1][c] + a * p[i][c];
+    }
+  return p[3];
+}
+
+double distance(const Point3& a, const Point3& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/// The span of the flat knot vector U (poles = U.size() - 4) holding parameter x: the largest
+/// k <= poles - 1 with U[k] <= x (so a span's right end belongs to it only at the last span).
+int span_at(const std::vector<double>& U, double x) {
+  const int poles = static_cast<int>(U.size()) - 4;
+  const int k = static_cast<int>(std::upper_bound(U.begin(), U.end(), x) - U.begin()) - 1;
+  return std::clamp(k, 3, poles - 1);
+}
+
+/// A tensor B-spline (flat knot vectors, poles a * nv + b), here a quad's patch in a pack's
+/// cell frame (knots over [0,1]) or the pack itself (knots over [0, w] x [0, h]).
+struct Spline {
+  std::vector<double> U, V;
+  int nu = 0, nv = 0;
+  std::vector<Point3> poles;
+
+  const Point3& pole(int a, int b) const { return poles[static_cast<size_t>(a) * nv + b]; }
+
+  /// The tensor blossom on span (ku, kv) at u-arguments xu and v-arguments xv.
+  Point3 blossom2(int ku, int kv, const double xu[3], const double xv[3]) const {
+    Point3 row[4];
+    for (int al = 0; al < 4; ++al) {
+      const Point3 d[4] = {pole(ku - 3 + al, kv - 3), pole(ku - 3 + al, kv - 2), pole(ku - 3 + al, kv - 1), pole(ku - 3 + al, kv)};
+      row[al] = blossom(V.data(), kv, d, xv[0], xv[1], xv[2]);
+    }
+    return blossom(U.data(), ku, row, xu[0], xu[1], xu[2]);
+  }
+
+  /// The Bezier net (index x * 4 + y) over [u0, u1] x [v0, v1], which must lie in one span.
+  void bezier(double u0, double u1, double v0, double v1, Point3 out[16]) const {
+    const int ku = span_at(U, (u0 + u1) / 2), kv = span_at(V, (v0 + v1) / 2);
+    Point3 R[4][4];  // R[alpha][y]: u-pole ku-3+alpha, v Bezier point y
+    for (int al = 0; al < 4; ++al) {
+      const Point3 d[4] = {pole(ku - 3 + al, kv - 3), pole(ku - 3 + al, kv - 2), pole(ku - 3 + al, kv - 1), pole(ku - 3 + al, kv)};
+      for (int y = 0; y < 4; ++y)
+        R[al][y] = blossom(V.data(), kv, d, y > 2 ? v1 : v0, y > 1 ? v1 : v0, y > 0 ? v1 : v0);
+    }
+    for (int y = 0; y < 4; ++y) {
+      const Point3 d[4] = {R[0][y], R[1][y], R[2][y], R[3][y]};
+      for (int x = 0; x < 4; ++x) out[x * 4 + y] = blossom(U.data(), ku, d, x > 2 ? u1 : u0, x > 1 ? u1 : u0, x > 0 ? u1 : u0);
+    }
+  }
+};
+
+/// The interior knot values of a flat clamped knot vector.
+std::vector<double> interior(const std::vector<double>& U) { return {U.begin() + 4, U.end() - 4}; }
+
+/// A quad's patch seen from its corner r (packing.h: the cell frame), poles relative to origin.
+Spline cell_spline(const NurbsPatch& p, int r, const Point3& origin) {
+  const std::vector<double> Uq = p.knots_u.flat(), Vq = p.knots_v.flat();
+  auto reversed = [](const std::vector<double>& K) {
+    std::vector<double> out(K.size());
+    for (size_t i = 0; i < K.size(); ++i) out[i] = 1 - K[K.size() - 1 - i];
+    return out;
+  };
+  Spline c;
+  switch (r & 3) {
+    case 0: c.U = Uq; c.V = Vq; break;
+    case 1: c.U = Vq; c.V = reversed(Uq); break;
+    case 2: c.U = reversed(Uq); c.V = reversed(Vq); break;
+    default: c.U = reversed(Vq); c.V = Uq; break;
+  }
+  const int nq = p.num_poles_u, mq = p.num_poles_v;
+  c.nu = static_cast<int>(c.U.size()) - 4;
+  c.nv = static_cast<int>(c.V.size()) - 4;
+  c.poles.resize(p.poles.size());
+  for (int a = 0; a < c.nu; ++a)
+    for (int b = 0; b < c.nv; ++b) {
+      int I, J;  // the quad's pole at cell pole (a, b): (s, t) = R(r)(x, y)
+      switch (r & 3) {
+        case 0: I = a; J = b; break;
+        case 1: I = nq - 1 - b; J = a; break;
+        case 2: I = nq - 1 - a; J = mq - 1 - b; break;
+        default: I = b; J = mq - 1 - a; break;
+      }
+      const Point3& q = p.pole(I, J);
+      c.poles[static_cast<size_t>(a) * c.nv + b] = {q[0] - origin[0], q[1] - origin[1], q[2] - origin[2]};
+    }
+  return c;
+}
+
+/// The surface of one rectangle: its quads' patches in the pack's frame (relative to
+/// `origin`), then the B-spline with the union of their knot lines, minus the cell lines the
+/// surface does not need, checked against every quad.
+struct PackSurface {
+  int w = 0, h = 0;
+  std::vector<Spline> cells;  ///< cell (i, j) at j * w + i
+  std::vector<std::vector<double>> col_knots, row_knots;  ///< per column / row: the quads' interior knots (local)
+  Spline pack;
+
+  const Spline& cell(int i, int j) const { return cells[static_cast<size_t>(j) * w + i]; }
+
+  /// Largest third-derivative jump across each interior cell line (index 1 .. n-1), as a
+  /// position at the pieces' scale: |d3 left - d3 right| h^3 / 6, h the smaller adjacent span.
+  std::vector<double> jumps(bool across_u) const {
+    const int n = across_u ? w : h, m = across_u ? h : w;
+    std::vector<double> jump(n, 0.0);
+    for (int line = 1; line < n; ++line)
+      for (int o = 0; o < m; ++o) {
+        const Spline& A = across_u ? cell(line - 1, o) : cell(o, line - 1);
+        const Spline& B = across_u ? cell(line, o) : cell(o, line);
+        const std::vector<double>& KA = across_u ? A.U : A.V;
+        const std::vector<double>& KB = across_u ? B.U : B.V;
+        const double ha = 1 - KA[KA.size() - 5], hb = KB[4];  // the spans next to the line
+        // Both sides on the union of their knots along the line.
+        std::vector<double> along;
+        for (const Spline* c : {&A, &B}) {
+          const std::vector<double> k = interior(across_u ? c->V : c->U);
+          along.insert(along.end(), k.begin(), k.end());
+        }
+        along.push_back(0);
+        along.push_back(1);
+        std::sort(along.begin(), along.end());
+        along.erase(std::unique(along.begin(), along.end()), along.end());
+        for (size_t q = 0; q + 1 < along.size(); ++q) {
+          Point3 na[16], nb[16];
+          if (across_u) {
+            A.bezier(1 - ha, 1, along[q], along[q + 1], na);
+            B.bezier(0, hb, along[q], along[q + 1], nb);
+          } else {
+            A.bezier(along[q], along[q + 1], 1 - ha, 1, na);
+            B.bezier(along[q], along[q + 1], 0, hb, nb);
+          }
+          const double hm = std::min(ha, hb), sa = hm * hm * hm / (ha * ha * ha), sb = hm * hm * hm / (hb * hb * hb);
+          for (int r = 0; r < 4; ++r) {
+            Point3 d{};
+            for (int c = 0; c < 3; ++c) {
+              auto at = [&](const Point3* N, int k) { return across_u ? N[k * 4 + r][c] : N[r * 4 + k][c]; };
+              const double da = at(na, 3) - 3 * at(na, 2) + 3 * at(na, 1) - at(na, 0);
+              const double db = at(nb, 3) - 3 * at(nb, 2) + 3 * at(nb, 1) - at(nb, 0);
+              d[c] = da * sa - db * sb;
+            }
+            jump[line] = std::max(jump[line], std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+          }
+        }
+      }
+    return jump;
+  }
+
+  /// Flat knots over [0, n]: per cell line kept or not, and every quad's own knots.
+  static std::vector<double> knots(int n, const std::vector<char>& keep, const std::vector<std::vector<double>>& own) {
+    std::vector<double> U(4, 0.0);
+    for (int i = 0; i < n; ++i) {
+      if (i > 0 && keep[i]) U.push_back(i);
+      for (double k : own[i]) U.push_back(i + k);
+    }
+    U.insert(U.end(), 4, static_cast<double>(n));
+    return U;
+  }
+
+  /// A span of the pack in pole a's support, near the middle of its blossom arguments.
+  static double inside(const std::vector<double>& U, int a) {
+    for (int k : {a + 2, a + 1, a + 3, a})
+      if (U[k] < U[k + 1]) return (U[k] + U[k + 1]) / 2;
+    return U[a + 2];
+  }
+
+  void make_poles() {
+    pack.nu = static_cast<int>(pack.U.size()) - 4;
+    pack.nv = static_cast<int>(pack.V.size()) - 4;
+    pack.poles.assign(static_cast<size_t>(pack.nu) * pack.nv, Point3{});
+    std::vector<int> ci(pack.nu), cj(pack.nv), ku(pack.nu), kv(pack.nv);
+    for (int a = 0; a < pack.nu; ++a) {
+      const double x = inside(pack.U, a);
+      ci[a] = std::min(static_cast<int>(x), w - 1);
+    }
+    for (int b = 0; b < pack.nv; ++b) {
+      const double y = inside(pack.V, b);
+      cj[b] = std::min(static_cast<int>(y), h - 1);
+    }
+    for (int a = 0; a < pack.nu; ++a)
+      for (int b = 0; b < pack.nv; ++b) {
+        const Spline& c = cell(ci[a], cj[b]);
+        const int su = span_at(c.U, inside(pack.U, a) - ci[a]), sv = span_at(c.V, inside(pack.V, b) - cj[b]);
+        const double xu[3] = {pack.U[a + 1] - ci[a], pack.U[a + 2] - ci[a], pack.U[a + 3] - ci[a]};
+        const double xv[3] = {pack.V[b + 1] - cj[b], pack.V[b + 2] - cj[b], pack.V[b + 3] - cj[b]};
+        pack.poles[static_cast<size_t>(a) * pack.nv + b] = c.blossom2(su, sv, xu, xv);
+      }
+  }
+
+  /// Largest distance between a quad's Bezier pieces and the pack's over the same squares.
+  double max_error() const {
+    double worst = 0;
+    std::vector<double> us, vs;
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i) {
+        const Spline& c = cell(i, j);
+        // The pack's spans inside this cell (they refine the quad's own).
+        us.assign(std::lower_bound(pack.U.begin(), pack.U.end(), static_cast<double>(i)),
+                  std::upper_bound(pack.U.begin(), pack.U.end(), static_cast<double>(i + 1)));
+        vs.assign(std::lower_bound(pack.V.begin(), pack.V.end(), static_cast<double>(j)),
+                  std::upper_bound(pack.V.begin(), pack.V.end(), static_cast<double>(j + 1)));
+        us.push_back(i), us.push_back(i + 1), vs.push_back(j), vs.push_back(j + 1);
+        std::sort(us.begin(), us.end());
+        us.erase(std::unique(us.begin(), us.end()), us.end());
+        std::sort(vs.begin(), vs.end());
+        vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+        for (size_t a = 0; a + 1 < us.size(); ++a)
+          for (size_t b = 0; b + 1 < vs.size(); ++b) {
+            Point3 mine[16], theirs[16];
+            c.bezier(us[a] - i, us[a + 1] - i, vs[b] - j, vs[b + 1] - j, mine);
+            pack.bezier(us[a], us[a + 1], vs[b], vs[b + 1], theirs);
+            for (int k = 0; k < 16; ++k) worst = std::max(worst, distance(mine[k], theirs[k]));
+          }
+      }
+    return worst;
+  }
+};
+
+KnotVector knot_vector(const std::vector<double>& flat) {
+  KnotVector kv;
+  for (double x : flat) {
+    if (!kv.knots.empty() && kv.knots.back() == x) {
+      ++kv.mults.back();
+    } else {
+      kv.knots.push_back(x);
+      kv.mults.push_back(1);
+    }
+  }
+  return kv;
+}
+
+/// Builds the pack's patch; false if it does not reproduce its quads within `check`.
+bool pack_surface(const PatchSet& quads, const Rect& rect, double knot_tolerance, double check, NurbsPatch& out,
+                  long long& removed) {
+  PackSurface S;
+  S.w = rect.w;
+  S.h = rect.h;
+  const Point3 origin = quads.patches[rect.cells[0] >> 2].pole(0, 0);
+  S.cells.reserve(rect.cells.size());
+  for (int c : rect.cells) S.cells.push_back(cell_spline(quads.patches[c >> 2], c & 3, origin));
+  // Each column's (row's) knots: the union of its quads' own.
+  S.col_knots.assign(S.w, {});
+  S.row_knots.assign(S.h, {});
+  for (int j = 0; j < S.h; ++j)
+    for (int i = 0; i < S.w; ++i) {
+      const std::vector<double> ku = interior(S.cell(i, j).U), kv = interior(S.cell(i, j).V);
+      S.col_knots[i].insert(S.col_knots[i].end(), ku.begin(), ku.end());
+      S.row_knots[j].insert(S.row_knots[j].end(), kv.begin(), kv.end());
+    }
+  for (auto* list : {&S.col_knots, &S.row_knots})
+    for (std::vector<double>& k : *list) {
+      std::sort(k.begin(), k.end());
+      k.erase(std::unique(k.begin(), k.end()), k.end());
+    }
+  const std::vector<double> ju = S.jumps(true), jv = S.jumps(false);
+  std::vector<char> keep_u(S.w, 1), keep_v(S.h, 1);
+  for (int i = 1; i < S.w; ++i) keep_u[i] = ju[i] > knot_tolerance;
+  for (int j = 1; j < S.h; ++j) keep_v[j] = jv[j] > knot_tolerance;
+  S.pack.U = PackSurface::knots(S.w, keep_u, S.col_knots);
+  S.pack.V = PackSurface::knots(S.h, keep_v, S.row_knots);
+  S.make_poles();
+  if (S.max_error() > check) {
+    // Blossoms far from their cell amplify rounding: keep every cell line instead.
+    std::fill(keep_u.begin(), keep_u.end(), 1);
+    std::fill(keep_v.begin(), keep_v.end(), 1);
+    S.pack.U = PackSurface::knots(S.w, keep_u, S.col_knots);
+    S.pack.V = PackSurface::knots(S.h, keep_v, S.row_knots);
+    S.make_poles();
+    if (S.max_error() > check) return false;
+  }
+  removed = std::count(keep_u.begin() + 1, keep_u.end(), 0) + std::count(keep_v.begin() + 1, keep_v.end(), 0);
+  out = NurbsPatch{};
+  out.kind = PatchKind::RegularBSpline;
+  out.knots_u = knot_vector(S.pack.U);
+  out.knots_v = knot_vector(S.pack.V);
+  out.num_poles_u = S.pack.nu;
+  out.num_poles_v = S.pack.nv;
+  out.poles.resize(S.pack.poles.size());
+  for (size_t k = 0; k < S.pack.poles.size(); ++k)
+    for (int c = 0; c < 3; ++c) out.poles[k][c] = S.pack.poles[k][c] + origin[c];
+  return true;
+}
+
+}  // namespace
+
+PackedSet unpacked(const PatchSet& quads) {
+  PackedSet out;
+  out.set = quads;
+  out.place.resize(quads.patches.size());
+  for (size_t p = 0; p < quads.patches.size(); ++p) out.place[p].patch = static_cast<int>(p);
+  out.curve.resize(quads.curves.size());
+  for (size_t k = 0; k < quads.curves.size(); ++k) out.curve[k] = static_cast<int>(k);
+  out.source_curve = out.curve;
+  for (const NurbsPatch& p : quads.patches) out.total_poles += static_cast<long long>(p.poles.size());
+  return out;
+}
+
+namespace {
+
+PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, const std::vector<char>& curve_ok,
+                    const std::vector<int>& coarse_face, double knot_tolerance, double check) {
+  const int np = static_cast<int>(quads.patches.size());
+  // The grid: packable neighbours across packable curves.
+  Grid g;
+  g.neighbour.assign(np, {{{-1, -1}, {-1, -1}, {-1, -1}, {-1, -1}}});
+  for (size_t k = 0; k < quads.curves.size(); ++k) {
+    const BoundaryCurve& c = quads.curves[k];
+    if (!curve_ok[k] || c.uses.size() != 2) continue;
+    const CurveUse& A = c.uses[0];
+    const CurveUse& B = c.uses[1];
+    if (!patch_ok[A.patch] || !patch_ok[B.patch] || A.reversed == B.reversed) continue;  // orientations must agree
+    if (A.t0 != 0 || A.t1 != 1 || B.t0 != 0 || B.t1 != 1) continue;
+    g.neighbour[A.patch][A.side] = {B.patch, B.side};
+    g.neighbour[B.patch][B.side] = {A.patch, A.side};
+  }
+
+  // Greedy, largest rectangle first. A state's key is an upper bound of its largest
+  // rectangle's area (the straight runs along u and v); popped, the exact area is computed
+  // and the state goes back in when the next key is larger (lazy evaluation).
+  const std::vector<int> run_u = run_lengths(g, 0), run_v = run_lengths(g, 1);
+  std::priority_queue<std::pair<long long, int>> queue;  // (area bound, -state): ties to the lowest state
+  for (int p = 0; p < np; ++p)
+    if (patch_ok[p])
+      for (int r = 0; r < 4; ++r) queue.push({static_cast<long long>(run_u[4 * p + r]) * run_v[4 * p + r], -(4 * p + r)});
+  std::vector<char> taken(np, 0);
+  RectFinder finder(g, taken);
+  std::vector<Rect> rects;
+  while (!queue.empty()) {
+    const int s = -queue.top().second;
+    queue.pop();
+    if (taken[s >> 2]) continue;
+    Rect r = finder.largest(s);
+    const long long area = static_cast<long long>(r.w) * r.h;
+    if (!queue.empty() && area < queue.top().first) {
+      queue.push({area, -s});
+      continue;
+    }
+    for (int c : r.cells) taken[c >> 2] = 1;
+    if (area >= 2) rects.push_back(std::move(r));
+  }
+
+  PackedSet out;
+  // Surfaces; a rectangle that does not reproduce its quads stays per quad.
+  std::vector<NurbsPatch> surfaces(rects.size());
+  std::vector<char> ok(rects.size(), 0);
+  std::vector<long long> removed(rects.size(), 0);
+  for (size_t i = 0; i < rects.size(); ++i) {
+    ok[i] = pack_surface(quads, rects[i], knot_tolerance, check, surfaces[i], removed[i]);
+    if (!ok[i]) ++out.rejected_packs;
+  }
+
+  // Output patches in the order of each one's first quad.
+  struct Member {
+    int rect = -1, i = 0, j = 0, rotation = 0;
+  };
+  std::vector<Member> member(np);
+  for (size_t ri = 0; ri < rects.size(); ++ri) {
+    if (!ok[ri]) continue;
+    const Rect& r = rects[ri];
+    for (int j = 0; j < r.h; ++j)
+      for (int i = 0; i < r.w; ++i) {
+        const int s = r.cells[static_cast<size_t>(j) * r.w + i];
+        member[s >> 2] = {static_cast<int>(ri), i, j, s & 3};
+      }
+  }
+  out.place.resize(np);
+  std::vector<int> output_of_rect(rects.size(), -1);
+  PatchSet& ps = out.set;
+  ps.model_size = quads.model_size;
+  ps.closed = quads.closed;
+  for (int p = 0; p < np; ++p) {
+    const Member& m = member[p];
+    if (m.rect < 0) {
+      out.place[p] = {static_cast<int>(ps.patches.size()), 0, 0, 0};
+      ps.patches.push_back(quads.patches[p]);
+      continue;
+    }
+    if (output_of_rect[m.rect] < 0) {
+      output_of_rect[m.rect] = static_cast<int>(ps.patches.size());
+      const Rect& r = rects[m.rect];
+      NurbsPatch pack = std::move(surfaces[m.rect]);
+      for (int j = 0; j < r.h; ++j)
+        for (int i = 0; i < r.w; ++i) {
+          const int s = r.cells[static_cast<size_t>(j) * r.w + i];
+          const NurbsPatch& q = quads.patches[s >> 2];
+          PatchCell cell;
+          cell.base_face = q.base_faces.empty() ? -1 : q.base_faces.front();
+          cell.coarse_face = coarse_face.empty() ? -1 : coarse_face[s >> 2];
+          cell.u = i;
+          cell.v = j;
+          cell.rotation = s & 3;
+          pack.cells.push_back(cell);
+          pack.base_faces.insert(pack.base_faces.end(), q.base_faces.begin(), q.base_faces.end());
+        }
+      std::sort(pack.base_faces.begin(), pack.base_faces.end());
+      pack.base_faces.erase(std::unique(pack.base_faces.begin(), pack.base_faces.end()), pack.base_faces.end());
+      auto corner_of = [&](int i, int j, int c) {
+        const int s = r.cells[static_cast<size_t>(j) * r.w + i];
+        return quads.patches[s >> 2].corners[(c + (s & 3)) & 3];
+      };
+      pack.corners = {corner_of(0, 0, 0), corner_of(r.w - 1, 0, 1), corner_of(r.w - 1, r.h - 1, 2), corner_of(0, r.h - 1, 3)};
+      pack.curves = {-1, -1, -1, -1};
+      ps.patches.push_back(std::move(pack));
+      ++out.packs;
+      out.packed_quads += r.w * r.h;
+      out.removed_knots += removed[m.rect];
+    }
+    out.place[p] = {output_of_rect[m.rect], m.i, m.j, m.rotation};
+  }
+
+  // Curves: those inside a pack go; the others follow their uses into the output patches.
+  out.curve.assign(quads.curves.size(), -1);
+  for (NurbsPatch& p : ps.patches)
+    if (!p.cells.empty()) p.split_sides = {};
+  for (size_t k = 0; k < quads.curves.size(); ++k) {
+    const BoundaryCurve& c = quads.curves[k];
+    BoundaryCurve nc = c;
+    nc.uses.clear();
+    bool inside = !c.uses.empty();
+    for (const CurveUse& use : c.uses) {
+      const Member& m = member[use.patch];
+      if (m.rect < 0) {
+        CurveUse u = use;
+        u.patch = out.place[use.patch].patch;
+        nc.uses.push_back(u);
+        inside = false;
+        continue;
+      }
+      const Rect& r = rects[m.rect];
+      const int side = (use.side - m.rotation + 4) & 3;
+      const bool interior = (side == 0 && m.j > 0) || (side == 1 && m.i < r.w - 1) || (side == 2 && m.j < r.h - 1) ||
+                            (side == 3 && m.i > 0);
+      if (interior) continue;
+      inside = false;
+      CurveUse u;
+      u.patch = output_of_rect[m.rect];
+      u.side = side;
+      u.reversed = use.reversed;
+      const int n = side % 2 == 0 ? r.w : r.h;
+      const int at = side == 0 ? m.i : side == 1 ? m.j : side == 2 ? r.w - 1 - m.i : r.h - 1 - m.j;
+      u.t0 = static_cast<double>(at) / n;
+      u.t1 = static_cast<double>(at + 1) / n;
+      nc.uses.push_back(u);
+    }
+    if (inside) continue;
+    out.curve[k] = static_cast<int>(ps.curves.size());
+    out.source_curve.push_back(static_cast<int>(k));
+    ps.curves.push_back(std::move(nc));
+  }
+  // Sides: the output patches' curve indices; a pack side of several edges is split.
+  for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
+    NurbsPatch& p = ps.patches[pi];
+    if (p.cells.empty()) {
+      for (int s = 0; s < 4; ++s) {
+        if (p.curves[s] >= 0) p.curves[s] = out.curve[p.curves[s]];
+        for (SidePiece& q : p.split_sides[s]) q.curve = out.curve[q.curve];
+      }
+    }
+  }
+  for (size_t k = 0; k < ps.curves.size(); ++k)
+    for (const CurveUse& u : ps.curves[k].uses) {
+      NurbsPatch& p = ps.patches[u.patch];
+      if (p.cells.empty()) continue;
+      p.split_sides[u.side].push_back({static_cast<int>(k), u.reversed, u.t0, u.t1});
+    }
+  for (NurbsPatch& p : ps.patches) {
+    if (p.cells.empty()) continue;
+    for (int s = 0; s < 4; ++s) {
+      std::vector<SidePiece>& pieces = p.split_sides[s];
+      std::sort(pieces.begin(), pieces.end(), [](const SidePiece& a, const SidePiece& b) { return a.t0 < b.t0; });
+      if (pieces.size() == 1) {
+        p.curves[s] = pieces[0].curve;
+        p.curve_reversed[s] = pieces[0].reversed;
+        pieces.clear();
+      }
+    }
+  }
+
+  // Corners still used, renumbered.
+  std::vector<int> corner_map(quads.corners.size(), -1);
+  auto use_corner = [&](int& c) {
+    if (c < 0) return;
+    if (corner_map[c] < 0) {
+      corner_map[c] = static_cast<int>(ps.corners.size());
+      ps.corners.push_back(quads.corners[c]);
+    }
+    c = corner_map[c];
+  };
+  for (NurbsPatch& p : ps.patches)
+    for (int& c : p.corners) use_corner(c);
+  for (BoundaryCurve& c : ps.curves) {
+    use_corner(c.corner0);
+    use_corner(c.corner1);
+  }
+  for (const NurbsPatch& p : ps.patches) out.total_poles += static_cast<long long>(p.poles.size());
+  return out;
+}
+
+}  // namespace
+
+PackedSet pack_patch_set(const PatchSet& quads, const std::vector<char>& patch_ok, const std::vector<char>& curve_ok,
+                         double knot_tolerance, double check) {
+  return pack_impl(quads, patch_ok, curve_ok, {}, knot_tolerance, check);
+}
+
+PackedSet pack_patches(const PatchBuild& b) {
+  const PatchSet& ps = b.set;
+  const SubdivLevel& la = b.refinement.levels[b.info.coarse_level];
+  std::vector<char> patch_ok(ps.patches.size(), 0), curve_ok(ps.curves.size(), 0);
+  for (size_t p = 0; p < ps.patches.size(); ++p) {
+    const NurbsPatch& q = ps.patches[p];
+    bool split = false;
+    for (const auto& pieces : q.split_sides) split = split || !pieces.empty();
+    bool simple = true;  // a regular patch's knots are simple inside (the limit is C2)
+    for (const KnotVector* kv : {&q.knots_u, &q.knots_v})
+      for (size_t i = 1; i + 1 < kv->mults.size(); ++i) simple = simple && kv->mults[i] == 1;
+    patch_ok[p] = b.coarse_face[p] >= 0 && q.kind == PatchKind::RegularBSpline && simple && q.weights.empty() &&
+                  !split && q.knots_u.knots.front() == 0 && q.knots_u.knots.back() == 1 &&
+                  q.knots_v.knots.front() == 0 && q.knots_v.knots.back() == 1;
+  }
+  for (size_t k = 0; k < ps.curves.size(); ++k) {
+    const BoundaryCurve& c = ps.curves[k];
+    if (c.uses.size() != 2 || c.continuity != Continuity::C2 || !patch_ok[c.uses[0].patch]) continue;
+    const int F = b.coarse_face[c.uses[0].patch];
+    const int e = la.mesh.corner_edge(la.mesh.face_begin(F) + c.uses[0].side);
+    curve_ok[k] = la.edge_sharpness[e] == 0.0f;
+  }
+  return pack_impl(ps, patch_ok, curve_ok, b.coarse_face, tolerances::kKnotRemoval * ps.model_size,
+                   tolerances::kSameSurface * ps.model_size);
+}
+
+}  // namespace subd2nurbs

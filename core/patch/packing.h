@@ -1,0 +1,67 @@
+// Packed faces: regular regions of the per-quad PatchSet merged into one B-spline surface each
+// (docs/patches.md, "Packed faces").
+//
+// A pack is a rectangle of mu x mv coarse quads, laid out as a grid with consistent
+// orientation, whose quads are regular patches (the exact limit: polynomial B-splines with
+// simple knots, a single span unless a semi-sharp crease runs nearby) and whose interior edges
+// are smooth C2 curves with no sharpness (never a fan ray, a crease of any sharpness, a
+// boundary or a polar cap's side). Its surface is the one bicubic B-spline over
+// [0, mu] x [0, mv] (one unit per quad, the same parameter speed as the quads' own [0,1]^2)
+// whose knots are a simple knot at every integer, minus the cell lines across which the
+// surface is one polynomial, plus in each column (row) the union of its quads' own knots.
+// Poles are blossoms of the quads' polynomial pieces, and the surface is then checked to
+// reproduce every piece of every quad (Bezier nets compared), so a pack is exactly the union
+// of its quads.
+//
+// Rectangles are chosen greedily, largest first. A pack's side is one curve, or several
+// (NurbsPatch::split_sides): the coarse edges along it, each shared with the face on the other
+// side as before, so T-junctions need no sewing. A ring of quads that closes on itself (a
+// torus, a cylinder) becomes one pack whose opposite sides share their curves: the B-rep face
+// then has seam edges, like OCCT's own cylinders and tori.
+#pragma once
+
+#include <vector>
+
+#include "core/patch/patch_set.h"
+
+namespace subd2nurbs {
+
+struct PatchBuild;
+
+/// Where a patch of the per-quad set ended up.
+struct PatchPlace {
+  int patch = -1;    ///< output patch
+  int u = 0, v = 0;  ///< its cell [u, u+1] x [v, v+1] in the output patch's domain (0, 0 if alone)
+  int rotation = 0;  ///< the quad's corner at the cell's (u, v) corner (0 if alone)
+};
+
+/// The quad's own parameters (s, t) in [0,1]^2 -> the output patch's (u, v).
+void place_parameters(const PatchPlace& place, double s, double t, double& u, double& v);
+
+struct PackedSet {
+  PatchSet set;                     ///< what is exported: packs and the patches left alone
+  std::vector<PatchPlace> place;    ///< per patch of the per-quad set
+  std::vector<int> curve;           ///< per curve of the per-quad set: output curve, -1 inside a pack
+  std::vector<int> source_curve;    ///< per output curve: the per-quad set's curve
+  int packs = 0;                    ///< output patches made of two or more quads
+  int packed_quads = 0;             ///< quads inside those
+  int rejected_packs = 0;           ///< rectangles whose surface did not reproduce its quads (kept per quad)
+  long long total_poles = 0;        ///< poles of all output patches
+  long long removed_knots = 0;      ///< knot lines dropped inside packs
+};
+
+/// Packs `quads`. `patch_ok[p]`: patch p may join a pack (it must have 4 x 4 poles and no
+/// weights); `curve_ok[k]`: two packable patches sharing curve k may be in one pack across it.
+/// Knot lines whose third-derivative jump is at most `knot_tolerance` (model units) are dropped;
+/// a pack must reproduce each quad within `check` (model units), else its quads stay alone.
+PackedSet pack_patch_set(const PatchSet& quads, const std::vector<char>& patch_ok,
+                         const std::vector<char>& curve_ok, double knot_tolerance, double check);
+
+/// Packs a build: a patch may join a pack when it is a one-span regular patch of a coarse quad,
+/// across a curve claimed C2 whose coarse edge has no sharpness at all.
+PackedSet pack_patches(const PatchBuild& build);
+
+/// The per-quad set unchanged, with the identity places (what `--faces per-quad` exports).
+PackedSet unpacked(const PatchSet& quads);
+
+}  // namespace subd2nurbs
