@@ -6,6 +6,7 @@
 #include <Geom2d_Line.hxx>
 #include <Geom_BSplineCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <GeomAdaptor_Surface.hxx>
 #include <Precision.hxx>
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
@@ -163,6 +164,8 @@ double signed_volume(const std::vector<Handle(Geom_BSplineSurface)>& surfaces, c
                                    0.4786286704993665, 0.2369268850561891};
   double volume = 0;
   for (const Handle(Geom_BSplineSurface)& s : surfaces) {
+    // The adaptor caches each span's polynomial between evaluations (a packed face has many).
+    GeomAdaptor_Surface adaptor(s);
     for (int iu = 1; iu < s->NbUKnots(); ++iu) {
       const double u0 = s->UKnot(iu), hu = (s->UKnot(iu + 1) - u0) / 2;
       for (int iv = 1; iv < s->NbVKnots(); ++iv) {
@@ -171,7 +174,7 @@ double signed_volume(const std::vector<Handle(Geom_BSplineSurface)>& surfaces, c
           for (int b = 0; b < 5; ++b) {
             gp_Pnt x;
             gp_Vec xu, xv;
-            s->D1(u0 + hu * (1 + node[a]), v0 + hv * (1 + node[b]), x, xu, xv);
+            adaptor.D1(u0 + hu * (1 + node[a]), v0 + hv * (1 + node[b]), x, xu, xv);
             volume += weight[a] * weight[b] * hu * hv * (x.XYZ() - c).Dot(xu.Crossed(xv).XYZ());
           }
       }

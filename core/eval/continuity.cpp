@@ -41,8 +41,11 @@ CurveMeasure measure_curve(const PatchSet& ps, int ci, int samples) {
   if (c.uses.size() < 2) return m;
   const CurveUse& A = c.uses[0];
   const CurveUse& B = c.uses[1];
-  for (int k = 0; k < samples; ++k) {
-    const double s = static_cast<double>(k) / (samples - 1);
+  // A curve of several spans (e.g. coarse edges joined along a packed face) gets `samples`
+  // per span.
+  const int n = 1 + (samples - 1) * std::max<int>(1, static_cast<int>(c.knots.knots.size()) - 1);
+  for (int k = 0; k < n; ++k) {
+    const double s = static_cast<double>(k) / (n - 1);
     const SideFrame fa = side_frame(ps.patches[A.patch], A.side, A.side_parameter(s));
     const SideFrame fb = side_frame(ps.patches[B.patch], B.side, B.side_parameter(s));
     m.gap = std::max(m.gap, (fa.p - fb.p).norm());

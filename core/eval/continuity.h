@@ -31,7 +31,7 @@ struct ContinuityReport {
   double max_crease_normal_angle_deg = 0;  ///< over C0 curves (sharp creases, approximate rays)
 };
 
-/// Samples every shared curve at `samples` parameters (endpoints included).
+/// Samples every shared curve at `samples` parameters per knot span (endpoints included).
 ContinuityReport measure_continuity(const PatchSet& ps, int samples = 24);
 
 /// The same for one curve.

@@ -224,37 +224,45 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   std::vector<char> measured_ok(num_curves, 0);
   parallel_for(num_curves, [&](int ci) {
     const CurveMeasure& cm = continuity.curves[ci];
-    // The quads' own curve: its uses give the coarse edge and the limit's parameters.
-    const BoundaryCurve& c = ps.curves[exported ? exported->source_curve[cm.curve] : cm.curve];
-    if (c.uses.size() != 2) return;
-    if (ps.patches[c.uses[0].patch].kind == PatchKind::PolarCap ||
-        ps.patches[c.uses[1].patch].kind == PatchKind::PolarCap)
-      return;  // a polar cap's side: the limit there is BP subdivision's
+      // The quads' own curves (several where exported faces joined coarse edges): their uses
+    // give the coarse edge and the limit's parameters.
+    const std::vector<int> one{cm.curve};
+    const std::vector<int>& sources = exported ? exported->source_curves[cm.curve] : one;
+    for (int k : sources) {
+      const BoundaryCurve& c = ps.curves[k];
+      if (c.uses.size() != 2) return;
+      if (ps.patches[c.uses[0].patch].kind == PatchKind::PolarCap ||
+          ps.patches[c.uses[1].patch].kind == PatchKind::PolarCap)
+        return;  // a polar cap's side: the limit there is BP subdivision's
+    }
     EdgeQuality& e = measured[ci];
     measured_ok[ci] = 1;
     e.curve = cm.curve;
     e.claimed = cm.claimed;
     e.gap = cm.gap;
     e.normal_jump_deg = cm.normal_angle_deg;
-    const CurveUse& u0 = c.uses[0];
-    const int F = coarse_face(b, u0.patch);
-    const int edge = La.mesh.corner_edge(La.mesh.face_begin(F) + u0.side);
-    const bool crease = La.edge_sharpness[edge] >= static_cast<float>(kInfiniteSharpness);
-    e.expected = crease ? "crease" : "smooth";
-    for (int i = 0; i < m; ++i) {
-      const double s = (i + 0.5) / m;  // interior samples: the curve's ends may be singular
-      Point3 pn[2], ln[2];
-      for (int w = 0; w < 2; ++w) {
-        const CurveUse& use = c.uses[w];
-        double pu, pv;
-        side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
-        pn[w] = unit_normal(measured_surface(b, exported, use.patch, pu, pv));
-        const LimitParam lp = patch_to_limit(b, use.patch, pu, pv);
-        ln[w] = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).normal;
+    for (int k : sources) {
+      const BoundaryCurve& c = ps.curves[k];
+      const CurveUse& u0 = c.uses[0];
+      const int F = coarse_face(b, u0.patch);
+      const int edge = La.mesh.corner_edge(La.mesh.face_begin(F) + u0.side);
+      const bool crease = La.edge_sharpness[edge] >= static_cast<float>(kInfiniteSharpness);
+      e.expected = crease ? "crease" : "smooth";
+      for (int i = 0; i < m; ++i) {
+        const double s = (i + 0.5) / m;  // interior samples: the curve's ends may be singular
+        Point3 pn[2], ln[2];
+        for (int w = 0; w < 2; ++w) {
+          const CurveUse& use = c.uses[w];
+          double pu, pv;
+          side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
+          pn[w] = unit_normal(measured_surface(b, exported, use.patch, pu, pv));
+          const LimitParam lp = patch_to_limit(b, use.patch, pu, pv);
+          ln[w] = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).normal;
+        }
+        const double pj = angle_deg(pn[0], pn[1]), lj = angle_deg(ln[0], ln[1]);
+        e.limit_normal_jump_deg = std::max(e.limit_normal_jump_deg, lj);
+        e.normal_jump_error_deg = std::max(e.normal_jump_error_deg, std::abs(pj - lj));
       }
-      const double pj = angle_deg(pn[0], pn[1]), lj = angle_deg(ln[0], ln[1]);
-      e.limit_normal_jump_deg = std::max(e.limit_normal_jump_deg, lj);
-      e.normal_jump_error_deg = std::max(e.normal_jump_error_deg, std::abs(pj - lj));
     }
   });
   for (int ci = 0; ci < num_curves; ++ci) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <climits>
+#include <map>
 #include <cmath>
 #include <queue>
 #include <utility>
@@ -179,6 +180,10 @@ struct Spline {
 
   /// The Bezier net (index x * 4 + y) over [u0, u1] x [v0, v1], which must lie in one span.
   void bezier(double u0, double u1, double v0, double v1, Point3 out[16]) const {
+    if (nu == 4 && nv == 4 && U[3] == u0 && U[4] == u1 && V[3] == v0 && V[4] == v1) {
+      std::copy(poles.begin(), poles.end(), out);  // one span, asked whole: its poles are the net
+      return;
+    }
     const int ku = span_at(U, (u0 + u1) / 2), kv = span_at(V, (v0 + v1) / 2);
     Point3 R[4][4];  // R[alpha][y]: u-pole ku-3+alpha, v Bezier point y
     for (int al = 0; al < 4; ++al) {
@@ -245,7 +250,7 @@ struct PackSurface {
   /// position at the pieces' scale: |d3 left - d3 right| h^3 / 6, h the smaller adjacent span.
   std::vector<double> jumps(bool across_u) const {
     const int n = across_u ? w : h, m = across_u ? h : w;
-    std::vector<double> jump(n, 0.0);
+    std::vector<double> jump(n, 0.0), along;
     for (int line = 1; line < n; ++line)
       for (int o = 0; o < m; ++o) {
         const Spline& A = across_u ? cell(line - 1, o) : cell(o, line - 1);
@@ -254,10 +259,10 @@ struct PackSurface {
         const std::vector<double>& KB = across_u ? B.U : B.V;
         const double ha = 1 - KA[KA.size() - 5], hb = KB[4];  // the spans next to the line
         // Both sides on the union of their knots along the line.
-        std::vector<double> along;
+        along.clear();
         for (const Spline* c : {&A, &B}) {
-          const std::vector<double> k = interior(across_u ? c->V : c->U);
-          along.insert(along.end(), k.begin(), k.end());
+          const std::vector<double>& K = across_u ? c->V : c->U;
+          along.insert(along.end(), K.begin() + 4, K.end() - 4);
         }
         along.push_back(0);
         along.push_back(1);
@@ -423,6 +428,176 @@ bool pack_surface(const PatchSet& quads, const Rect& rect, double knot_tolerance
   return true;
 }
 
+/// Inserts knot x once into the cubic B-spline (flat knots U, poles P) (Boehm's algorithm).
+void insert_knot(std::vector<double>& U, std::vector<Point3>& P, double x) {
+  const int n = static_cast<int>(P.size());
+  const int k = std::clamp(static_cast<int>(std::upper_bound(U.begin(), U.end(), x) - U.begin()) - 1, 3, n - 1);
+  const int s = static_cast<int>(std::count(U.begin(), U.end(), x));
+  std::vector<Point3> Q(n + 1);
+  for (int i = 0; i <= k - 3; ++i) Q[i] = P[i];
+  for (int i = k - s; i < n; ++i) Q[i + 1] = P[i];
+  for (int i = k - 2; i <= k - s; ++i) {
+    const double a = (x - U[i]) / (U[i + 3] - U[i]);
+    for (int c = 0; c < 3; ++c) Q[i][c] = a * P[i][c] + (1 - a) * P[i - 1][c];
+  }
+  U.insert(U.begin() + k + 1, x);
+  P.swap(Q);
+}
+
+/// The part [t0, t1] of a patch's side (side parameter, counter-clockwise) as a clamped cubic
+/// curve over [0, 1] running counter-clockwise: the boundary row or column of poles, cut out
+/// by knot insertion at its ends.
+void side_curve(const NurbsPatch& p, int side, double t0, double t1, BoundaryCurve& curve) {
+  const bool along_u = side % 2 == 0, backwards = side >= 2;
+  std::vector<double> U = (along_u ? p.knots_u : p.knots_v).flat();
+  std::vector<Point3> P;
+  if (along_u) {
+    const int j = side == 0 ? 0 : p.num_poles_v - 1;
+    for (int i = 0; i < p.num_poles_u; ++i) P.push_back(p.pole(i, j));
+  } else {
+    const int i = side == 1 ? p.num_poles_u - 1 : 0;
+    for (int j = 0; j < p.num_poles_v; ++j) P.push_back(p.pole(i, j));
+  }
+  const double lo = U.front(), hi = U.back();
+  auto x_of = [&](double t) { return t == 0 ? (backwards ? hi : lo) : t == 1 ? (backwards ? lo : hi)
+                                                                      : backwards ? hi - t * (hi - lo) : lo + t * (hi - lo); };
+  const double xa = std::min(x_of(t0), x_of(t1)), xb = std::max(x_of(t0), x_of(t1));
+  for (double x : {xa, xb})
+    if (x > lo && x < hi)
+      while (std::count(U.begin(), U.end(), x) < 3) insert_knot(U, P, x);
+  const int fa = static_cast<int>(std::lower_bound(U.begin(), U.end(), xa) - U.begin());
+  const int fb = static_cast<int>(std::lower_bound(U.begin(), U.end(), xb) - U.begin());
+  const int ia = xa == lo ? 0 : fa - 1, ib = xb == hi ? static_cast<int>(P.size()) - 1 : fb - 1;
+  std::vector<Point3> poles(P.begin() + ia, P.begin() + ib + 1);
+  std::vector<double> flat(4, 0.0);
+  for (double u : U)
+    if (u > xa && u < xb) flat.push_back((u - xa) / (xb - xa));
+  flat.insert(flat.end(), 4, 1.0);
+  if (backwards) {
+    std::reverse(poles.begin(), poles.end());
+    std::vector<double> r(flat.size());
+    for (size_t i = 0; i < flat.size(); ++i) r[i] = 1 - flat[flat.size() - 1 - i];
+    flat.swap(r);
+  }
+  curve.degree = 3;
+  curve.poles = std::move(poles);
+  curve.knots = knot_vector(flat);
+}
+
+/// Joins the curves between the same two faces, end to end, where no third face meets them:
+/// consecutive pieces of one side of each face, oriented alike, with the same continuity, at
+/// a corner no other curve uses. The joined curve is cut from a packed face's boundary.
+void merge_curves(PackedSet& out, size_t corners) {
+  PatchSet& ps = out.set;
+  const int nc = static_cast<int>(ps.curves.size());
+  std::vector<int> degree(corners, 0);
+  for (const BoundaryCurve& c : ps.curves) {
+    ++degree[c.corner0];
+    ++degree[c.corner1];
+  }
+  // Curves with two uses, each a piece of a side, keyed by (face, side) of both uses.
+  auto is_piece = [](const CurveUse& u) { return u.t0 != 0 || u.t1 != 1; };
+  std::map<std::array<int, 5>, std::vector<int>> groups;
+  for (int k = 0; k < nc; ++k) {
+    BoundaryCurve& c = ps.curves[k];
+    if (c.uses.empty() || c.uses.size() > 2) continue;
+    // The same order of the two uses for every curve between the same sides.
+    if (c.uses.size() == 2 &&
+        std::make_pair(c.uses[1].patch, c.uses[1].side) < std::make_pair(c.uses[0].patch, c.uses[0].side))
+      std::swap(c.uses[0], c.uses[1]);
+    const CurveUse& A = c.uses[0];
+    if (c.uses.size() == 1) {  // an open boundary along one side of a pack
+      if (is_piece(A) && !ps.patches[A.patch].cells.empty())
+        groups[{A.patch, A.side, -1, -1, static_cast<int>(c.continuity)}].push_back(k);
+      continue;
+    }
+    const CurveUse& B = c.uses[1];
+    if (!is_piece(A) || !is_piece(B) || A.reversed == B.reversed) continue;
+    if (ps.patches[A.patch].cells.empty() && ps.patches[B.patch].cells.empty()) continue;
+    groups[{A.patch, A.side, B.patch, B.side, static_cast<int>(c.continuity)}].push_back(k);
+  }
+  std::vector<BoundaryCurve> chains;
+  std::vector<int> chain_of(nc, -1);
+  for (auto& [key, list] : groups) {
+    // Along the first use's side in its counter-clockwise order.
+    std::sort(list.begin(), list.end(), [&](int a, int b) { return ps.curves[a].uses[0].t0 < ps.curves[b].uses[0].t0; });
+    size_t i = 0;
+    while (i < list.size()) {
+      size_t j = i + 1;
+      auto start_of = [&](int k) { const BoundaryCurve& c = ps.curves[k]; return c.uses[0].reversed ? c.corner1 : c.corner0; };
+      auto end_of = [&](int k) { const BoundaryCurve& c = ps.curves[k]; return c.uses[0].reversed ? c.corner0 : c.corner1; };
+      while (j < list.size()) {
+        const BoundaryCurve& a = ps.curves[list[j - 1]];
+        const BoundaryCurve& b = ps.curves[list[j]];
+        const int joint = end_of(list[j - 1]);
+        if (a.uses[0].t1 != b.uses[0].t0 || (a.uses.size() == 2 && b.uses[1].t1 != a.uses[1].t0) ||
+            joint != start_of(list[j]) || degree[joint] != 2 || joint == start_of(list[i]))
+          break;
+        ++j;
+      }
+      if (j - i >= 2) {
+        const BoundaryCurve& first = ps.curves[list[i]];
+        const BoundaryCurve& last = ps.curves[list[j - 1]];
+        BoundaryCurve m;
+        m.corner0 = start_of(list[i]);
+        m.corner1 = end_of(list[j - 1]);
+        m.continuity = first.continuity;
+        CurveUse A = first.uses[0];
+        A.reversed = false;
+        A.t1 = last.uses[0].t1;
+        m.uses = {A};
+        CurveUse B;
+        if (first.uses.size() == 2) {
+          B = first.uses[1];
+          B.reversed = true;
+          B.t0 = last.uses[1].t0;
+          m.uses.push_back(B);
+        }
+        if (!ps.patches[A.patch].cells.empty()) {
+          side_curve(ps.patches[A.patch], A.side, A.t0, A.t1, m);
+        } else {  // along B's side, which runs the other way
+          side_curve(ps.patches[B.patch], B.side, B.t0, B.t1, m);
+          std::reverse(m.poles.begin(), m.poles.end());
+          KnotVector r;
+          for (size_t q = m.knots.knots.size(); q-- > 0;) {
+            r.knots.push_back(1 - m.knots.knots[q]);
+            r.mults.push_back(m.knots.mults[q]);
+          }
+          m.knots = r;
+        }
+        for (size_t q = i; q < j; ++q) chain_of[list[q]] = static_cast<int>(chains.size());
+        chains.push_back(std::move(m));
+      }
+      i = j;
+    }
+  }
+  if (chains.empty()) return;
+  // Renumber: a chain takes the place of its first curve.
+  std::vector<int> renumber(nc, -1), chain_index(chains.size(), -1);
+  std::vector<BoundaryCurve> curves;
+  std::vector<std::vector<int>> sources;
+  for (int k = 0; k < nc; ++k) {
+    const int ch = chain_of[k];
+    if (ch < 0) {
+      renumber[k] = static_cast<int>(curves.size());
+      curves.push_back(std::move(ps.curves[k]));
+      sources.push_back(std::move(out.source_curves[k]));
+    } else {
+      if (chain_index[ch] < 0) {
+        chain_index[ch] = static_cast<int>(curves.size());
+        curves.push_back(std::move(chains[ch]));
+        sources.emplace_back();
+      }
+      renumber[k] = chain_index[ch];
+      sources[chain_index[ch]].insert(sources[chain_index[ch]].end(), out.source_curves[k].begin(), out.source_curves[k].end());
+    }
+  }
+  for (int& k : out.curve)
+    if (k >= 0) k = renumber[k];
+  ps.curves.swap(curves);
+  out.source_curves.swap(sources);
+}
+
 }  // namespace
 
 PackedSet unpacked(const PatchSet& quads) {
@@ -432,7 +607,8 @@ PackedSet unpacked(const PatchSet& quads) {
   for (size_t p = 0; p < quads.patches.size(); ++p) out.place[p].patch = static_cast<int>(p);
   out.curve.resize(quads.curves.size());
   for (size_t k = 0; k < quads.curves.size(); ++k) out.curve[k] = static_cast<int>(k);
-  out.source_curve = out.curve;
+  out.source_curves.resize(quads.curves.size());
+  for (size_t k = 0; k < quads.curves.size(); ++k) out.source_curves[k] = {static_cast<int>(k)};
   for (const NurbsPatch& p : quads.patches) out.total_poles += static_cast<long long>(p.poles.size());
   return out;
 }
@@ -586,31 +762,34 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
     }
     if (inside) continue;
     out.curve[k] = static_cast<int>(ps.curves.size());
-    out.source_curve.push_back(static_cast<int>(k));
+    out.source_curves.push_back({static_cast<int>(k)});
     ps.curves.push_back(std::move(nc));
   }
-  // Sides: the output patches' curve indices; a pack side of several edges is split.
+  merge_curves(out, quads.corners.size());
+  // Sides: the output patches' curve indices. A side that is several curves (a pack's, a polar
+  // cap's) is made again from the curves' uses, pieces joined above included.
+  std::vector<std::array<char, 4>> pieced(ps.patches.size(), {{0, 0, 0, 0}});
   for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
     NurbsPatch& p = ps.patches[pi];
-    if (p.cells.empty()) {
-      for (int s = 0; s < 4; ++s) {
-        if (p.curves[s] >= 0) p.curves[s] = out.curve[p.curves[s]];
-        for (SidePiece& q : p.split_sides[s]) q.curve = out.curve[q.curve];
+    for (int s = 0; s < 4; ++s) {
+      if (!p.cells.empty() || !p.split_sides[s].empty()) {
+        pieced[pi][s] = 1;
+        p.split_sides[s].clear();
+        p.curves[s] = -1;
+      } else if (p.curves[s] >= 0) {
+        p.curves[s] = out.curve[p.curves[s]];
       }
     }
   }
   for (size_t k = 0; k < ps.curves.size(); ++k)
-    for (const CurveUse& u : ps.curves[k].uses) {
-      NurbsPatch& p = ps.patches[u.patch];
-      if (p.cells.empty()) continue;
-      p.split_sides[u.side].push_back({static_cast<int>(k), u.reversed, u.t0, u.t1});
-    }
-  for (NurbsPatch& p : ps.patches) {
-    if (p.cells.empty()) continue;
+    for (const CurveUse& u : ps.curves[k].uses)
+      if (pieced[u.patch][u.side]) ps.patches[u.patch].split_sides[u.side].push_back({static_cast<int>(k), u.reversed, u.t0, u.t1});
+  for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
+    NurbsPatch& p = ps.patches[pi];
     for (int s = 0; s < 4; ++s) {
       std::vector<SidePiece>& pieces = p.split_sides[s];
       std::sort(pieces.begin(), pieces.end(), [](const SidePiece& a, const SidePiece& b) { return a.t0 < b.t0; });
-      if (pieces.size() == 1) {
+      if (pieces.size() == 1 && pieces[0].t0 == 0 && pieces[0].t1 == 1) {
         p.curves[s] = pieces[0].curve;
         p.curve_reversed[s] = pieces[0].reversed;
         pieces.clear();

@@ -14,10 +14,11 @@
 // of its quads.
 //
 // Rectangles are chosen greedily, largest first. A pack's side is one curve, or several
-// (NurbsPatch::split_sides): the coarse edges along it, each shared with the face on the other
-// side as before, so T-junctions need no sewing. A ring of quads that closes on itself (a
-// torus, a cylinder) becomes one pack whose opposite sides share their curves: the B-rep face
-// then has seam edges, like OCCT's own cylinders and tori.
+// (NurbsPatch::split_sides) where other faces meet it (T-junctions need no sewing: each curve
+// is shared by both faces). The coarse edges between the same two faces are merged into one
+// curve as long as no third face meets them. A ring of quads that closes on itself (a torus,
+// a cylinder) becomes one pack whose opposite sides share their curves: the B-rep face then
+// has seam edges, like OCCT's own cylinders and tori.
 #pragma once
 
 #include <vector>
@@ -42,7 +43,7 @@ struct PackedSet {
   PatchSet set;                     ///< what is exported: packs and the patches left alone
   std::vector<PatchPlace> place;    ///< per patch of the per-quad set
   std::vector<int> curve;           ///< per curve of the per-quad set: output curve, -1 inside a pack
-  std::vector<int> source_curve;    ///< per output curve: the per-quad set's curve
+  std::vector<std::vector<int>> source_curves;  ///< per output curve: the per-quad set's curves it joins
   int packs = 0;                    ///< output patches made of two or more quads
   int packed_quads = 0;             ///< quads inside those
   int rejected_packs = 0;           ///< rectangles whose surface did not reproduce its quads (kept per quad)

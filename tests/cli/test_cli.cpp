@@ -352,7 +352,8 @@ TEST(CliConvert, FacesPackedOrPerQuad) {
   EXPECT_EQ(python_json_check(dir.file("p.json"),
                               "r['faces'] == {'mode': 'packed', 'total': 1, 'packed': 1, 'packed_quads': 32, "
                               "'poles': 11 * 7, 'removed_knot_lines': 0} and r['brep']['faces'] == 1 and "
-                              "r['brep']['type'] == 'solid' and r['brep']['valid'] and r['curves']['total'] == 12"),
+                              "r['brep']['type'] == 'solid' and r['brep']['valid'] and r['curves']['total'] == 2 and "
+                              "r['brep']['edges'] == 2 and r['brep']['vertices'] == 1"),
             0);
   EXPECT_EQ(python_json_check(dir.file("q.json"),
                               "r['faces']['mode'] == 'per-quad' and r['faces']['total'] == r['brep']['faces'] == 32 and "
