@@ -7,6 +7,8 @@
 #                  plain STEPControl_Writer)
 #   bench_models   real models through the command line (scripts/bench_models.py): wall time,
 #                  peak RSS, STEP size, faces and poles; 3 runs each (MODEL_REPS)
+#   bench_packing  packed faces against one face per quad (scripts/bench_packing.py): wall time,
+#                  peak RSS, STEP size, faces, edges, poles; 3 runs each (PACK_REPS)
 #   bench_fit.py   convert --fit interpolate against a plain convert, 10k- and 100k-quad tori
 #                  (wall time and peak memory of separate processes; FIT_REPS repetitions,
 #                  default 3, about 10 minutes)
@@ -60,6 +62,17 @@ brackets on a busy one):
 | catmark_pawn | (8 s) | 0.9 GB | 72 MB | 588 | 1 237 |
 | 100 000-quad regular torus | (117 s) | 8.0 GB | 870 MB | 100 000 | 49 |
 BEFORE
+} >> docs/benchmarks.md.tmp
+{
+  echo
+  echo "## 8. Packed faces against one face per quad (\`scripts/bench_packing.py\`)"
+  echo
+  echo "\`subd2nurbs convert X.obj -o X.step -q --faces per-quad\` and \`--faces packed\` (the default), no"
+  echo "report: the whole pipeline from reading the OBJ to the renamed STEP file. ${PACK_REPS:-3} runs of each,"
+  echo "alternating, medians; faces, edges and poles from one more run with \`--report\`. The last column"
+  echo "divides packed by per-quad (wall time, B-rep faces, poles)."
+  echo
+  python3 scripts/bench_packing.py "$build/subd2nurbs" tests/data/corpus "${PACK_REPS:-3}"
 } >> docs/benchmarks.md.tmp
 mv docs/benchmarks.md.tmp docs/benchmarks.md
 cat docs/benchmarks.md
