@@ -27,7 +27,7 @@ void side_parameters(int side, double t, double& u, double& v);
 
 /// A patch at a side point, with derivatives taken along the side (counter-clockwise
 /// traversal, d/dt) and into the patch (d/dn): the frame in which two patches sharing a
-/// curve are compared (MATH.md 9).
+/// curve are compared (docs/math.md 10.1).
 struct SideDerivs {
   Point3 p{}, along{}, inward{}, inward2{};  ///< X, dX/dt, dX/dn, d2X/dn2
   Point3 normal{};                            ///< unit normal Xu x Xv
