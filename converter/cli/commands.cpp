@@ -353,7 +353,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                               "Radial BP pre-steps of a polar cap: 1 (default) or 2 (elongated shapes)");
   convert_command->add_flag("--separate-poles", convert.separate_poles,
                             "Poles of valence 3..5 or too close to another: one separating "
-                            "Catmull-Clark step first (MATH.md 3.4), then polar caps");
+                            "Catmull-Clark step first (docs/math.md 3.7), then polar caps");
   convert_command->add_option("--lambda", convert.lambda,
                               "Scale of a polar cap's projected 1-link, > 0 (default 0.75)");
   convert_command->add_option("--faces", convert.faces,

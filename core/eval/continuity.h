@@ -1,4 +1,4 @@
-// Continuity across the shared boundary curves of a PatchSet (MATH.md section 9): both
+// Continuity across the shared boundary curves of a PatchSet (docs/math.md section 10): both
 // patches are sampled with their own parameters at the same curve parameter. Points where a
 // patch has no normal (the pole of a polar cap, at one end of its seam) count for the gap
 // only.

@@ -2,7 +2,7 @@
 //
 // Regular patches are the limit exactly (an identity the tests check against OpenSubdiv), so
 // only the zones around irregular vertices are measured. Construction Q reparametrizes the
-// surface there (MATH.md 5.3), so the measure is the closest-point distance: the zone is
+// surface there (docs/math.md 5.6), so the measure is the closest-point distance: the zone is
 // refined `sample_levels` more levels, the limit positions of the refined vertices are the
 // samples, and each sample's distance to the nearest zone Bezier piece is found by Newton
 // iteration.
@@ -40,7 +40,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels = 2
                                   const std::vector<char>* remeasure = nullptr);
 
 /// Asymptotic factor by which Construction Q's deviation falls per extra level at an
-/// interior vertex of valence n: 1 / max(lambda_n^2, mu_n) (MATH.md 5.3). 4 for n = 4.
+/// interior vertex of valence n: 1 / max(lambda_n^2, mu_n) (docs/math.md 5.6). 4 for n = 4.
 double deviation_rate(int valence);
 
 /// Extra levels after which one fan's deviation `max` falls to `tolerance`, extrapolated with

@@ -29,7 +29,7 @@ void side_parameters(int side, double t, double& u, double& v);
 /// A patch at a side point (t in [0,1] along the whole side, whatever the patch's domain),
 /// with derivatives taken along the side (counter-clockwise traversal, in the patch's own
 /// parameter) and into the patch (d/dn): the frame in which two patches sharing a curve are
-/// compared (MATH.md 9).
+/// compared (docs/math.md 10.1).
 struct SideDerivs {
   Point3 p{}, along{}, inward{}, inward2{};  ///< X, dX/dt, dX/dn, d2X/dn2
   Point3 normal{};                            ///< unit normal Xu x Xv

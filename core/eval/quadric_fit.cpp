@@ -33,7 +33,7 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
       if (k != 6 + fixed) A(r, c++) = full[k];
     rhs(r) = -full[6 + fixed];
   }
-  // Least squares (the normal equations A^T A d = A^T c of MATH.md 8.3, solved through the SVD
+  // Least squares (the normal equations A^T A d = A^T c of docs/math.md 13, solved through the SVD
   // of A, which is the same solution with the rank visible).
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd& sv = svd.singularValues();

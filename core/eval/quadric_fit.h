@@ -1,4 +1,4 @@
-// Normal and curvature of a point set by an implicit quadric fit (seed 001, MATH.md 8.3):
+// Normal and curvature of a point set by an implicit quadric fit (seed 001, docs/math.md 13):
 // f(x) = a x^2 + b y^2 + c z^2 + d xy + e yz + g zx + gx x + gy y + gz z = 0 through p0 (at the
 // origin) and its neighbours, least squares with the largest gradient coefficient of a
 // tentative normal fixed to 1; then n = grad f / |grad f|, K = n^T adj(M) n / D^2,

@@ -76,7 +76,7 @@ struct QualityReport {
   int class_mismatches = 0;
   CurvatureSummary curvature;
   /// The cage's own curvature by implicit-quadric fits at its smooth vertices (seed 001,
-  /// MATH.md 8.3) against the exact limit curvature there.
+  /// docs/math.md 13) against the exact limit curvature there.
   VertexCurvatureComparison quadric;
 };
 

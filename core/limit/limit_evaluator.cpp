@@ -240,7 +240,7 @@ struct Grid {
 };
 
 /// Gathers real points: the face, the rows across smooth sides, the diagonal points at
-/// corners of kind Regular; then phantom points (MATH.md 1.2) across infinitely sharp sides.
+/// corners of kind Regular; then phantom points (docs/math.md 6.2) across infinitely sharp sides.
 void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, const CornerKind kind[4],
                  Grid& g) {
   const PolyMesh& m = L.mesh;
@@ -458,7 +458,7 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
   return d;
 }
 
-/// At the extraordinary vertex itself: limit position and edge-ray tangents (MATH.md 1.4).
+/// At the extraordinary vertex itself: limit position and edge-ray tangents (docs/math.md 2.2, 9.4).
 Derivs stam_at_vertex(const Prepared& pr) {
   const int n = pr.eig->n;
   Derivs d;

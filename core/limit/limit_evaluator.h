@@ -1,4 +1,4 @@
-// Exact evaluation of the Catmull-Clark limit surface at (face, u, v) (MATH.md 7).
+// Exact evaluation of the Catmull-Clark limit surface at (face, u, v) (docs/math.md 9).
 //
 // Parameters follow OpenSubdiv's ptex convention: a quad is one ptex face with (0,0) at its
 // first vertex and u running along its first edge; an n-gon (n != 4) is split into n sub-faces,
@@ -9,7 +9,7 @@
 // Method, per query, on the face that contains the point at the current level:
 //  1. the face is a regular patch (all corners smooth valence-4 interior vertices, or on
 //     infinitely sharp creases / boundaries with two faces on the face's side, or corners with
-//     one): bicubic B-spline of its 16 points, phantom points across sharp sides (MATH.md 1.2);
+//     one): bicubic B-spline of its 16 points, phantom points across sharp sides (docs/math.md 6.2);
 //  2. the face has one interior smooth extraordinary vertex (all-quad 1-ring, no sharp edge)
 //     and its other three corners are regular: Stam's eigenbasis evaluation (stam_eigen.h);
 //  3. otherwise (boundaries or creases at irregular vertices, darts, semi-sharp tags, n-gons,
@@ -20,7 +20,7 @@
 // exact limit position from limit_stencils, and derivatives / curvature from the point 2^-20
 // inside the face along its diagonal; `exact_derivatives` is false there. At an interior
 // extraordinary vertex itself ((0,0) of case 2) the position and normal are exact (limit masks,
-// MATH.md 1.4), the parametric derivatives are the edge-ray limit tangents scaled by 1/(3n)
+// docs/math.md 2.2), the parametric derivatives are the edge-ray limit tangents scaled by 1/(3n)
 // (which is exact for n = 4), and curvatures are NaN (the parametrization is singular there).
 #pragma once
 
@@ -38,7 +38,7 @@ struct LimitSample {
   Point3 duu{}, duv{}, dvv{};       ///< second derivatives
   Point3 normal{};                  ///< unit normal du x dv (outward for a counter-clockwise cage)
   /// Principal curvatures k1 >= k2, mean H = (k1 + k2) / 2 and Gaussian K = k1 k2, signed with
-  /// respect to `normal`: a sphere with outward normal has k = -1/R (MATH.md 8.3 convention).
+  /// respect to `normal`: a sphere with outward normal has k = -1/R (docs/math.md 9.6).
   double k1 = 0, k2 = 0, mean = 0, gauss = 0;
   bool exact_derivatives = true;    ///< false at the documented fallback points
 };

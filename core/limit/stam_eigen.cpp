@@ -52,7 +52,7 @@ struct SectorMesh {
 };
 
 /// Sector coordinates with one negative index mapped into the neighbouring sector
-/// (MATH.md 0): (i, -1) in s is G_{s-1}[1][i], (-1, j) in s is G_{s+1}[j][1].
+/// (docs/math.md 0.2): (i, -1) in s is G_{s-1}[1][i], (-1, j) in s is G_{s+1}[j][1].
 void normalise(int n, int& s, int& i, int& j) {
   if (j < 0) { s = s - 1; j = i; i = 1; }
   else if (i < 0) { s = s + 1; i = j; j = 1; }
@@ -138,7 +138,7 @@ std::shared_ptr<const StamEigen> build(int n) {
   E.S12 = E.A.bottomRightCorner(7, 7);
   const Eigen::MatrixXd S11 = E.A.bottomLeftCorner(7, K);
 
-  // Real Fourier subspaces of S (MATH.md 7.2). Ring index: v 0, e_r 1+r, d_r 1+n+r.
+  // Real Fourier subspaces of S (docs/math.md 9.2). Ring index: v 0, e_r 1+r, d_r 1+n+r.
   const double pi = std::acos(-1.0);
   std::vector<Eigen::MatrixXd> bases;
   {

@@ -1,7 +1,7 @@
 // Eigenstructure of the Catmull-Clark subdivision matrix around an interior extraordinary
-// vertex of valence n surrounded by quads (Stam 1998; MATH.md section 7), per valence.
+// vertex of valence n surrounded by quads (Stam 1998; docs/math.md section 9), per valence.
 //
-// Configuration (MATH.md 7.1), in sector-s coordinates (i along edge ray s, j along ray s+1):
+// Configuration (docs/math.md 9.1), in sector-s coordinates (i along edge ray s, j along ray s+1):
 //   ring  K = 2n+1 points: v, e_0..e_{n-1}, d_0..d_{n-1}, rotated so that the patch's sector is 0
 //   outer 7 points: (2,-1), (2,0), (2,1), (2,2), (1,2), (0,2), (-1,2)
 // One CC step maps the 2n+8 points to the same configuration one level finer:
@@ -9,12 +9,12 @@
 // from A-bar (2n+17 rows); here they are stored per tile as 16 x (2n+8) matrices.
 //
 // Robustness: the ring matrix S is diagonalised block by block in its real Fourier subspaces
-// (MATH.md 7.2: frequency 0 is a 3x3 block, every other frequency 2x2 blocks on cos / sin
+// (docs/math.md 9.2: frequency 0 is a 3x3 block, every other frequency 2x2 blocks on cos / sin
 // vectors), so no general non-symmetric eigen-solver touches a matrix with repeated eigenvalues.
 // The outer block S12 (eigenvalues 1/8 .. 1/64) is not diagonalised: for n = 8, 12, ... S has
 // the eigenvalue 1/8 too (frequency n/4), a double root shared with S12. The full A turns out
 // to be diagonalisable all the same (StamEigen.FullMatrixIsWellConditioned: cond(V_A) <= 265 for
-// n = 3..16, as MATH.md 7.2 says), but nothing here relies on it: the outer points are carried
+// n = 3..16, as docs/math.md 9.2 says), but nothing here relies on it: the outer points are carried
 // by the exact recurrence o_{k+1} = S11 V Lambda^k c^ + S12 o_k.
 //
 // The matrices are not typed in: they are read off one step of our own refiner (refine_once,

@@ -105,7 +105,7 @@ double FanBuilder::build(const Fan& fan, std::vector<RayKind>& kinds, std::vecto
     E1 /= ns;
     E2 /= ns;
     if (fan.mode == FanMode::Smooth) {
-      // Limit normal from the tangent masks (MATH.md 1.4).
+      // Limit normal from the tangent masks (docs/math.md 2.2).
       const double cn = std::cos(2 * kPi / ns), An = 1 + cn + std::cos(kPi / ns) * std::sqrt(2 * (9 + cn));
       Eigen::Vector3d T1 = Eigen::Vector3d::Zero(), T2 = Eigen::Vector3d::Zero();
       for (int r = 0; r < ns; ++r) {
@@ -126,7 +126,7 @@ double FanBuilder::build(const Fan& fan, std::vector<RayKind>& kinds, std::vecto
     const double psi = kPi / k;
     c = std::cos(psi);
     const Eigen::Vector3d E1 = 1.5 * (ray(0, 1) - p);
-    // Exact cross-boundary tangent for the standard rules (MATH.md 1.5), to fix the plane.
+    // Exact cross-boundary tangent for the standard rules (docs/math.md 2.3), to fix the plane.
     const double c2k = std::cos(2 * kPi / (2 * k));
     const double A = 1 + c2k + std::cos(kPi / (2 * k)) * std::sqrt(2 * (9 + c2k));
     const double lam = (5 + c2k + std::cos(kPi / (2 * k)) * std::sqrt(2 * (9 + c2k))) / 16;

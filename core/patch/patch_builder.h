@@ -46,19 +46,19 @@ struct PatchOptions {
   /// none of whose corners changed its extra levels is copied from it instead of rebuilt (the
   /// quad depends only on its own pieces and the zones at its corners).
   const struct PatchBuild* reuse = nullptr;
-  /// Polar structures of the cage (MATH.md 3.1) become one singular polar cap each (MATH.md
-  /// 4); off: every vertex goes through Catmull-Clark, poles included.
+  /// Polar structures of the cage (docs/math.md 3.1) become one singular polar cap each
+  /// (docs/math.md 4); off: every vertex goes through Catmull-Clark, poles included.
   bool polar = true;
   PolarCapOptions cap;
   /// With `polar`: poles rejected only for a valence below 6 or for being too close to
-  /// another structure get the separating first step (MATH.md 3.4, polar_separation.h) and
+  /// another structure get the separating first step (docs/math.md 3.7, polar_separation.h) and
   /// become caps of twice the valence; the patches are then built from that level-1 cage.
   bool separate_poles = false;
 };
 
 /// How the quads around one irregular vertex (one fan between sharp edges) were built.
 enum class FanMode : unsigned char {
-  Smooth,       ///< interior extraordinary vertex: Construction Q, exactly G1 (MATH.md 5.3)
+  Smooth,       ///< interior extraordinary vertex: Construction Q, exactly G1 (docs/math.md 5.3)
   Dart,         ///< one sharp edge ends here: Construction Q cut open at the sharp ray
   Crease,       ///< crease or smooth boundary vertex, k != 2 faces on this side: open fan
   Corner,       ///< corner vertex, k >= 2 faces between its sharp edges: open fan
@@ -77,13 +77,13 @@ struct IrregularFan {
   int piece = -1;        ///< index into PatchBuild::fan_pieces
 };
 
-/// A coarse edge leaving an irregular vertex: where MATH.md section 9's exact residual applies.
+/// A coarse edge leaving an irregular vertex: where the exact residual of docs/math.md 10.3 applies.
 struct RayCurve {
   int curve = -1;          ///< PatchSet curve index
   bool vertex_at_start;    ///< the irregular vertex is the curve's corner0
   int fan = -1;            ///< index into PatchBuildInfo::fans: the fan this ray belongs to
   Continuity continuity;   ///< G1 or C0 (sharp or approximate)
-  double c = 0;            ///< the fan's G1 coefficient (MATH.md 5.3: D + E = 2c(1-t)^2 e')
+  double c = 0;            ///< the fan's G1 coefficient (docs/math.md 5.4: D + E = 2c(1-t)^2 e')
 };
 
 /// One polar cap: the structure it replaces and the cap before clamping.

@@ -31,8 +31,8 @@ namespace subd2nurbs {
 
 enum class PatchKind : unsigned char {
   RegularBSpline,  ///< every sub-quad is the exact Catmull-Clark limit (C2 inside)
-  Pccm,            ///< touches an extraordinary vertex: Construction Q (MATH.md 5.3) there
-  PolarCap,        ///< singular polar cap (MATH.md 4): u = 0 collapsed, periodic around the pole
+  Pccm,            ///< touches an extraordinary vertex: Construction Q (docs/math.md 5) there
+  PolarCap,        ///< singular polar cap (docs/math.md 4): u = 0 collapsed, periodic around the pole
 };
 const char* to_string(PatchKind kind);
 

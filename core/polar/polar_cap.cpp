@@ -95,7 +95,7 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
     n *= 2;
   }
   auto c = [&](int r, int j) { return to_eigen(rows[static_cast<size_t>(r) * n + (j + n) % n]); };
-  // Seam clamp (MATH.md 4.5), column j = blossom f(j-1, j, j+1): n + 3 columns per row.
+  // Seam clamp (docs/math.md 4.4), column j = blossom f(j-1, j, j+1): n + 3 columns per row.
   std::vector<std::vector<V3>> clamped_v(num_rows);
   for (int r = 0; r < num_rows; ++r) {
     std::vector<V3>& D = clamped_v[r];
@@ -105,7 +105,7 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements) {
     D.push_back((c(r, n - 1) + 2 * c(r, 0)) / 3);
     D.push_back(D.front());
   }
-  // Outer clamp (MATH.md 4.1 (v)): rows c_0..c_m kept, then (c_m + 2c_{m+1})/3 and
+  // Outer clamp (docs/math.md 4.1 (v), 4.4): rows c_0..c_m kept, then (c_m + 2c_{m+1})/3 and
   // (c_m + 4c_{m+1} + c_{m+2})/6.
   const int m = cap.m;
   NurbsPatch patch;

@@ -1,9 +1,9 @@
-// The finite singular polar cap (MATH.md section 4; Myles-Karciauskas-Peters 2008, section 3):
+// The finite singular polar cap (docs/math.md section 4; Myles-Karciauskas-Peters 2008, section 3):
 // one polynomial bicubic B-spline per polar structure, periodic around the pole, with its
 // u = 0 edge collapsed to the BP limit point, and joining the surrounding bicubic surface C2
 // along the polar structure's 2-link (ring 2 of the input).
 //
-// Steps (MATH.md 4.1): (i) `radial_steps` radial BP steps of rings 0..3; (ii) row r = ring r,
+// Steps (docs/math.md 4.1): (i) `radial_steps` radial BP steps of rings 0..3; (ii) row r = ring r,
 // column j = spoke j, column j centred at v = j; (iii) row 0 := the BP limit point, u knots
 // start with a 4-fold knot; (iv) row 1 := its projection onto the first Fourier mode scaled by
 // lambda, so that the limit normal is defined and equals BP's; (v) clamp the outer end.
@@ -19,7 +19,7 @@ namespace subd2nurbs {
 
 struct PolarCapOptions {
   int radial_steps = 1;   ///< radial BP pre-steps (1 or 2 in the front ends; >= 1 required)
-  double lambda = 0.75;   ///< scale of the projected 1-link (MATH.md 4.1 (iv)); > 0
+  double lambda = 0.75;   ///< scale of the projected 1-link (docs/math.md 4.1 (iv)); > 0
 };
 
 struct PolarCap {
@@ -41,8 +41,8 @@ PolarNet polar_net_of(const PolarStructure& s, const std::vector<Point3>& positi
 /// radial_steps < 1 or lambda <= 0
 PolarCap build_polar_cap(const PolarNet& rings0to3, const PolarCapOptions& options = {});
 
-/// The cap as a clamped PatchSet patch over [0,1]^2 (step (v) and the seam clamp of MATH.md
-/// 4.5): u radial (u = 0 the collapsed pole, u = 1 the 2-link), v around the pole with spoke
+/// The cap as a clamped PatchSet patch over [0,1]^2 (step (v) and the seam clamp of docs/math.md
+/// 4.4): u radial (u = 0 the collapsed pole, u = 1 the 2-link), v around the pole with spoke
 /// j at v = j / n. `circular_refinements` circular knot-insertion steps first (exact), so
 /// that the boundary has n * 2^circular_refinements spans, one per neighbouring patch.
 NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements = 0);
@@ -50,7 +50,7 @@ NurbsPatch polar_cap_patch(const PolarCap& cap, int circular_refinements = 0);
 /// The cap next to its pole, over 64 directions: the angle between its normal and the BP
 /// limit normal, and the largest principal curvature |k|, at radial distances 1e-2 and 1e-4
 /// (in cap spans) from the collapsed edge. Evaluated relative to the centre. Bounded
-/// curvature means the two maxima are close (MATH.md 4.4).
+/// curvature means the two maxima are close (docs/math.md 4.3, 10.5).
 struct CapPoleMeasure {
   double distance[2] = {1e-2, 1e-4};
   double normal_angle_deg[2] = {0, 0};

@@ -1,4 +1,4 @@
-// Bi-cubic polar (BP) subdivision on a polar net (MATH.md section 2; Karciauskas & Peters 2007,
+// Bi-cubic polar (BP) subdivision on a polar net (docs/math.md section 3; Karciauskas & Peters 2007,
 // with the parameters of Myles-Karciauskas-Peters 2008: beta = 5/8, alpha = 3/8).
 //
 // A polar net is a pole p0 and R rings of n points each. Ring r (r >= 1), spoke j is
@@ -23,26 +23,26 @@ struct PolarNet {
   Point3& at(int r, int j);
 };
 
-/// BP weights. beta = 5/8 gives the C1, bounded-curvature spectrum for n >= 6 (MATH.md 2.3).
+/// BP weights. beta = 5/8 gives the C1, bounded-curvature spectrum for n >= 6 (docs/math.md 3.4).
 struct BpParameters {
   double beta = 5.0 / 8.0;
   double alpha() const { return beta - 0.25; }
 };
 
-/// One radial BP step (MATH.md 2.1): rings 0..R become rings 0..2R-1; n is unchanged.
+/// One radial BP step (docs/math.md 3.2): rings 0..R become rings 0..2R-1; n is unchanged.
 /// \throw std::invalid_argument for fewer than 2 rings or n < 3
 PolarNet radial_step(const PolarNet& net, const BpParameters& bp = {});
 
-/// One circular step (MATH.md 2.2): every ring is refined as a closed uniform cubic B-spline
+/// One circular step (docs/math.md 3.3): every ring is refined as a closed uniform cubic B-spline
 /// (knot insertion), n becomes 2n; the pole is unchanged. The result is not a BP net: BP
-/// continues from the radial-only net (MATH.md 3.2).
+/// continues from the radial-only net (docs/math.md 3.6).
 PolarNet circular_step(const PolarNet& net);
 
-/// Limit point of the pole under BP subdivision (MATH.md 2.4): ((1-beta) p0 + alpha m) /
+/// Limit point of the pole under BP subdivision (docs/math.md 3.5): ((1-beta) p0 + alpha m) /
 /// (1 - beta + alpha), m the mean of ring 1; (p0 + m) / 2 for beta = 5/8.
 Point3 bp_limit_point(const PolarNet& net, const BpParameters& bp = {});
 
-/// Unit limit normal at the pole (MATH.md 2.4): t1 x t2 with t1 = sum cos(theta_j) ring1_j,
+/// Unit limit normal at the pole (docs/math.md 3.5): t1 x t2 with t1 = sum cos(theta_j) ring1_j,
 /// t2 = sum sin(theta_j) ring1_j. Valid for a radial-only net with n >= 5.
 Point3 bp_limit_normal(const PolarNet& net);
 

@@ -1,5 +1,5 @@
 // Refinement of a cage with polar structures: the combined 4-step procedure of
-// Myles-Karciauskas-Peters 2008, section 2 (MATH.md 3.2, 3.3).
+// Myles-Karciauskas-Peters 2008, section 2 (docs/math.md 3.6).
 //
 //   1. Split: each polar structure (rings 0..3) is copied out.
 //   2. Each structure gets k radial BP steps (saved: BP always continues from the radial-only
@@ -25,7 +25,7 @@ struct PolarRefinement {
   std::vector<Point3> positions;
   int structures = 0;            ///< polar structures refined by BP
   /// Largest |BP - Catmull-Clark| over the overlap rings 2^(k+1) - 1 .. 2^(k+1) + 1 of every
-  /// structure (0 up to rounding: MATH.md 3.3).
+  /// structure (0 up to rounding: docs/math.md 3.6).
   double max_overlap_difference = 0;
 };
 

@@ -1,4 +1,4 @@
-// The separating first step (MATH.md 3.4; Myles-Karciauskas-Peters 2008, section 2): one
+// The separating first step (docs/math.md 3.7; Myles-Karciauskas-Peters 2008, section 2): one
 // Catmull-Clark step of the whole cage in which the triangles around chosen poles are
 // treated as degenerate quads (pole, p_i, p_i+1, pole). Each such pole then has 2n
 // triangles around it (valence 3 -> 6, 4 -> 8, 5 -> 10), and poles that were too close to
@@ -8,7 +8,7 @@
 //   face point of triangle i:   (2 p0 + p_i + p_i+1) / 4
 //   edge points, vertex points: the smooth Catmull-Clark rules with those face points
 //   new pole:                   (1 - w) p0 + w m, m the mean of ring 1 (w = 3/8, the BP
-//                               pole weight; MATH.md 3.4 reconstructs it from the seed)
+//                               pole weight; docs/math.md 3.7 on how it was read)
 // and each level-1 quad at the pole, (P0', E_i, F_i, E_i+1), becomes the two triangles
 // (P0', E_i, F_i) and (P0', F_i, E_i+1).
 #pragma once
@@ -20,7 +20,7 @@
 
 namespace subd2nurbs {
 
-/// Weight of the mean of ring 1 in the new pole (MATH.md 3.4: w = 3/8, low-medium confidence).
+/// Weight of the mean of ring 1 in the new pole (docs/math.md 3.7: w = 3/8, low-medium confidence).
 constexpr double kSeparationPoleWeight = 3.0 / 8.0;
 
 /// Empty if the separating step can be applied at vertex `pole`: an interior vertex whose

@@ -104,7 +104,7 @@ PolarDetection detect_polar_structures(const SubdivLevel& level, int min_valence
     if (n < min_valence) {
       rejected.push_back({v, n,
                           "valence " + std::to_string(n) + " is below " + std::to_string(min_valence) +
-                              " (BP subdivision needs n >= 6, MATH.md 2.3)",
+                              " (BP subdivision needs n >= 6, docs/math.md 3.4)",
                           RejectedPole::Kind::LowValence});
       continue;
     }

@@ -1,4 +1,4 @@
-// Detection of polar structures (MATH.md 3.1; Myles-Karciauskas-Peters 2008, section 1.1).
+// Detection of polar structures (docs/math.md 3.1; Myles-Karciauskas-Peters 2008, section 1.1).
 //
 // A polar vertex is an interior vertex whose incident faces are all triangles. It is a polar
 // structure when its 1-layer and 2-layer are quads and its 1-link and 2-link vertices are all
@@ -20,7 +20,7 @@
 
 namespace subd2nurbs {
 
-/// Smallest pole valence BP subdivision supports (MATH.md 2.3: n < 6 gives unbounded
+/// Smallest pole valence BP subdivision supports (docs/math.md 3.4: n < 6 gives unbounded
 /// curvature or a non-affine rule).
 constexpr int kMinPolarValence = 6;
 
@@ -38,7 +38,7 @@ struct PolarStructure {
 /// A vertex that looks like a pole (interior, all incident faces triangles, valence >= 3)
 /// but is not a polar structure.
 struct RejectedPole {
-  /// Why: the two cases the separating first step (MATH.md 3.4, polar_separation.h) can
+  /// Why: the two cases the separating first step (docs/math.md 3.7, polar_separation.h) can
   /// mend, or anything else about the rings.
   enum class Kind : unsigned char { LowValence, TooClose, Structure };
   int vertex = -1;

@@ -1,4 +1,4 @@
-// Limit positions of vertices (MATH.md 1.4-1.5; OpenSubdiv's catmarkScheme.h limit masks).
+// Limit positions of vertices (docs/math.md section 2; OpenSubdiv's catmarkScheme.h limit masks).
 #include <Eigen/Dense>
 
 #include "core/refine/refiner.h"

@@ -1,7 +1,7 @@
 // Uniform Catmull-Clark refinement. The rules follow OpenSubdiv (our oracle) exactly:
 // sdc/catmarkScheme.h (masks), sdc/scheme.h (rule transitions), sdc/crease.cpp (sharpness
 // decay and fractional weights), vtr/refinement.cpp (which rule a child vertex gets) and
-// far/topologyRefinerFactory.cpp (base-level boundary tagging). MATH.md section 1.
+// far/topologyRefinerFactory.cpp (base-level boundary tagging). docs/math.md section 1.
 #include "core/refine/refiner.h"
 
 #include <algorithm>
@@ -390,7 +390,7 @@ RefinementStep refine_once(const SubdivLevel& parent) {
       for (int i = 0; i < nf; ++i) quads &= pm.face_size(pm.corner_face(vc[i])) == 4;
       if (quads) {
         // Smooth rule with the face centres expanded: each quad (v, e_r, d_r, e_r+1) adds
-        // 1/(4n^2) to its four corners (MATH.md 1.1).
+        // 1/(4n^2) to its four corners (docs/math.md 1.1).
         const double n = nf, fw = 0.25 / (n * n), ew = 1.0 / (n * n) + 2.0 * fw;
         auto [idx, w] = append_row(1 + 2 * nf);
         idx[0] = v;

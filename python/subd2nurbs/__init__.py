@@ -390,7 +390,7 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         diagonal, or in model units with absolute=True); each fan gets the levels it needs, as
         --tolerance / --absolute. Excludes level. With neither: DEFAULT_TOLERANCE (1e-4), as the
         command line does.
-    polar: polar structures (triangle fans around a pole, MATH.md 3.1) become one singular
+    polar: polar structures (triangle fans around a pole, docs/math.md 3.1) become one singular
         polar cap each (as --polar on, the default); False: Catmull-Clark everywhere.
     radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
     separate_poles: poles of valence 3..5 or too close to another get the separating first
