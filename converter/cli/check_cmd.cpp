@@ -23,6 +23,10 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
                 "levels convert's default tolerance chooses)")
       ->check(CLI::Range(0, 12))
       ->each([&o](const std::string&) { o.level_given = true; });
+  c->add_option("--faces", o.faces,
+                "The faces measured: packed (default, as convert exports them) or per-quad; every sample "
+                "of a coarse quad is taken on the face that holds it")
+      ->check(CLI::IsMember({"packed", "per-quad"}));
   c->add_option("--json", o.json, "Write the quality report as JSON");
   c->add_option("--samples", o.samples, "Samples per patch side (default 9)")->check(CLI::Range(2, 64));
   c->add_flag("-q,--quiet", o.quiet, "No progress and no summary (warnings are still printed)");
@@ -47,6 +51,7 @@ void run_check(const CheckOptions& o, std::ostream& err) {
   settings.tolerance = pipeline::kDefaultTolerance;
   settings.tolerance_is_default = !o.level_given;
   settings.build_brep = false;
+  settings.faces = o.faces == "per-quad" ? pipeline::FaceMode::PerQuad : pipeline::FaceMode::Packed;
   settings.limits = limits;
   pipeline::ConversionProgress progress;
   if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
@@ -65,6 +70,8 @@ void run_check(const CheckOptions& o, std::ostream& err) {
                        ",\n  \"coarse_level\": " + std::to_string(c.build.info.coarse_level) +
                        ",\n  \"level\": " + std::to_string(c.build.info.level) +
                        ",\n  \"patches\": " + std::to_string(c.build.set.patches.size()) +
+                       ",\n  \"faces\": {\"mode\": " + pipeline::json_string(pipeline::to_string(c.faces)) +
+                       ", \"total\": " + std::to_string(c.exported.set.patches.size()) + "}" +
                        ",\n  \"quality_ms\": " + pipeline::json_number(ms) + "\n}\n";
     text = add_quality_member(text, quality_json(q, size, 2));
     write_file_atomically(o.json, [&](std::ostream& out) { out << text; });

@@ -1,4 +1,4 @@
-// `subd2nurbs check MESH [--level N] [--json R.json] [--samples N]`: the conversion's patches
+// `subd2nurbs check MESH [--level N] [--faces packed|per-quad] [--json R.json] [--samples N]`: the conversion's patches
 // (no B-rep) measured against the exact limit surface (core/eval/quality.h): deviation, joins
 // against the class each edge should have, curvature. Summary on stderr, JSON on request
 // (docs/formats.md, "Quality report").
@@ -21,6 +21,7 @@ struct CheckOptions {
   bool level_given = false;
   std::string json;  ///< output path, empty for none
   int samples = 9;   ///< per patch side
+  std::string faces = "packed";  ///< the faces measured: packed or per-quad (as convert --faces)
   bool quiet = false;
   LimitOptionValues limits;  ///< --max-faces, --max-memory
 };

@@ -22,6 +22,7 @@
 
 #include "converter/occt/brep_builder.h"
 #include "converter/occt/shape_check.h"
+#include "core/patch/packing.h"
 #include "core/patch/patch_builder.h"
 #include "core/polar/polar_structure.h"
 #include "io/obj_reader.h"
@@ -170,6 +171,7 @@ inline TopoDS_Shape faces_along(const TopoDS_Shape& shape, const std::vector<Top
 struct CorpusBrep {
   ExpectedBrep expected;
   PatchBuild build;
+  PackedSet packed;  ///< the faces that were built: packed (corpus_brep(..., packed = true)) or build.set as is
   occt::BrepResult brep;
   /// The whole shape (counts, free edges, validity), measured along the smooth edges only.
   occt::ShapeSummary smooth;
@@ -183,7 +185,7 @@ struct CorpusBrep {
   double patch_seconds = 0, brep_seconds = 0, summary_seconds = 0;
 };
 
-inline CorpusBrep corpus_brep(const std::string& shape, int samples_per_edge = 16) {
+inline CorpusBrep corpus_brep(const std::string& shape, int samples_per_edge = 16, bool packed = false) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
@@ -193,13 +195,14 @@ inline CorpusBrep corpus_brep(const std::string& shape, int samples_per_edge = 1
   r.expected = expected_brep(cage.input, base.face_hole, detect_polar_structures(base).structures);
   auto t = Clock::now();
   r.build = build_patches(base, std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()));
+  r.packed = packed ? pack_patches(r.build) : unpacked(r.build.set);
   r.patch_seconds = since(t);
   t = Clock::now();
-  r.brep = occt::build_brep(r.build.set);
+  r.brep = occt::build_brep(r.packed.set);
   r.brep_seconds = since(t);
   t = Clock::now();
-  const std::vector<TopoDS_Shape> smooth = shared_edges(r.build.set, r.brep, true);
-  const std::vector<TopoDS_Shape> sharp = shared_edges(r.build.set, r.brep, false);
+  const std::vector<TopoDS_Shape> smooth = shared_edges(r.packed.set, r.brep, true);
+  const std::vector<TopoDS_Shape> sharp = shared_edges(r.packed.set, r.brep, false);
   r.smooth_edge_count = static_cast<int>(smooth.size());
   r.sharp_edge_count = static_cast<int>(sharp.size());
   r.smooth = occt::summarize(r.brep.shape, smooth, samples_per_edge, /*mass_properties=*/false);

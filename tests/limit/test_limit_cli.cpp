@@ -151,6 +151,22 @@ TEST(CheckCli, WritesTheQualityReportAndUsesTheDocumentedExitCodes) {
                          quote(dir.file("r.json")))
                             .c_str()),
             0);
+  // Packed or per quad, the same quads are sampled on the faces that hold them: the same
+  // surface, so the same deviation (the packed torus is one face, 32 quads).
+  const std::string torus = limit_corpus_path("catmark_torus");
+  ASSERT_EQ(sh("check " + quote(torus) + " -q --json " + quote(dir.file("tp.json"))).exit_code, 0);
+  ASSERT_EQ(sh("check " + quote(torus) + " -q --faces per-quad --json " + quote(dir.file("tq.json"))).exit_code, 0);
+  const std::string faces =
+      "import json,sys; a=json.load(open(sys.argv[1])); b=json.load(open(sys.argv[2]));"
+      "assert a['faces']=={'mode':'packed','total':1} and b['faces']=={'mode':'per-quad','total':32}, (a['faces'], b['faces']);"
+      "assert a['patches']==b['patches']==32;"
+      "da, db = a['quality']['deviation'], b['quality']['deviation'];"
+      "assert da['samples']==db['samples'] and abs(da['parametric_max']-db['parametric_max']) <= 1e-12*a['model_size'];"
+      "assert da['parametric_max'] <= 1e-12*a['model_size']";
+  EXPECT_EQ(std::system(("python3 -c " + quote(faces) + " " + quote(dir.file("tp.json")) + " " + quote(dir.file("tq.json")))
+                            .c_str()),
+            0);
+  EXPECT_EQ(sh("check " + quote(torus) + " --faces some").exit_code, 1);
   EXPECT_EQ(sh("check /nonexistent.obj").exit_code, 2);
   EXPECT_EQ(sh("check " + quote(cube) + " --samples 1").exit_code, 1);
   EXPECT_EQ(sh("check " + quote(cube) + " --json /nonexistent_dir/q.json").exit_code, 3);
