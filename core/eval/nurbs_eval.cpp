@@ -62,10 +62,16 @@ int basis_derivatives(const std::vector<double>& U, int p, double x, int nd, dou
   return span;
 }
 
-SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v) {
-  const std::vector<double> U = patch.knots_u.flat(), V = patch.knots_v.flat();
+SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v) { return PatchEvaluator(patch).derivs(u, v); }
+
+PatchEvaluator::PatchEvaluator(const NurbsPatch& patch)
+    : patch_(&patch), U_(patch.knots_u.flat()), V_(patch.knots_v.flat()) {}
+
+SurfaceDerivs PatchEvaluator::derivs(double u, double v, int order) const {
+  if (order < 0 || order > 2) throw std::invalid_argument("PatchEvaluator: derivatives of order 0 to 2");
+  const NurbsPatch& patch = *patch_;
   double Nu[3][4], Nv[3][4];
-  const int su = basis_derivatives(U, 3, u, 2, Nu), sv = basis_derivatives(V, 3, v, 2, Nv);
+  const int su = basis_derivatives(U_, 3, u, order, Nu), sv = basis_derivatives(V_, 3, v, order, Nv);
   // Homogeneous sums S[k][l] = sum Nu^(k) Nv^(l) w P  and  W[k][l] = sum Nu^(k) Nv^(l) w.
   double S[3][3][3] = {}, W[3][3] = {};
   const bool rational = !patch.weights.empty();
@@ -74,17 +80,17 @@ SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v) {
       const int i = su - 3 + a, j = sv - 3 + b;
       const Point3& P = patch.pole(i, j);
       const double w = rational ? patch.weights[static_cast<size_t>(i) * patch.num_poles_v + j] : 1.0;
-      for (int k = 0; k <= 2; ++k)
-        for (int l = 0; l + k <= 2; ++l) {
+      for (int k = 0; k <= order; ++k)
+        for (int l = 0; l + k <= order; ++l) {
           const double bw = Nu[k][a] * Nv[l][b] * w;
           for (int c = 0; c < 3; ++c) S[k][l][c] += bw * P[c];
           W[k][l] += bw;
         }
     }
-  // Quotient rule (Piegl & Tiller A4.4) up to second order.
-  Point3 D[3][3];
-  for (int k = 0; k <= 2; ++k)
-    for (int l = 0; l + k <= 2; ++l)
+  // Quotient rule (Piegl & Tiller A4.4) up to the order asked.
+  Point3 D[3][3] = {};
+  for (int k = 0; k <= order; ++k)
+    for (int l = 0; l + k <= order; ++l)
       for (int c = 0; c < 3; ++c) {
         double x = S[k][l][c];
         if (rational) {

@@ -12,8 +12,26 @@ struct SurfaceDerivs {
 };
 
 /// Position and derivatives up to second order at (u, v) in the patch's domain ([0,1]^2, or
-/// [0, mu] x [0, mv] for a packed face).
+/// [0, mu] x [0, mv] for a packed face). Expands the knot vectors on every call: to evaluate
+/// one patch many times, use a PatchEvaluator.
 SurfaceDerivs evaluate(const NurbsPatch& patch, double u, double v);
+
+/// A patch with its knot vectors expanded once (every knot repeated by its multiplicity), for
+/// evaluating it many times: a packed face has hundreds of knots. The patch must outlive it.
+class PatchEvaluator {
+ public:
+  explicit PatchEvaluator(const NurbsPatch& patch);
+  /// As evaluate(patch, u, v), with the derivatives up to `order` (0, 1 or 2); the higher
+  /// ones are left zero.
+  SurfaceDerivs derivs(double u, double v, int order = 2) const;
+  /// The position alone.
+  Point3 point(double u, double v) const { return derivs(u, v, 0).p; }
+  const NurbsPatch& patch() const { return *patch_; }
+
+ private:
+  const NurbsPatch* patch_;
+  std::vector<double> U_, V_;
+};
 
 /// Unit normal Xu x Xv; the zero vector where the parametrization is singular
 /// (|Xu x Xv| <= 1e-12 (|Xu|^2 + |Xv|^2), e.g. the collapsed edge of a polar cap).

@@ -2,8 +2,11 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
-#include <set>
+#include <vector>
+
+#include "core/util/parallel.h"
 
 namespace subd2nurbs {
 
@@ -23,7 +26,7 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
     for (int k = 0; k < 3; ++k) rho += (q[k] - p0[k]) * (q[k] - p0[k]);
   rho = std::sqrt(rho / rows);
   if (!(rho > 0)) return out;
-  Eigen::MatrixXd A(rows, 8);
+  Eigen::Matrix<double, Eigen::Dynamic, 8> A(rows, 8);
   Eigen::VectorXd rhs(rows);
   for (int r = 0; r < rows; ++r) {
     const double x = (nb[r][0] - p0[0]) / rho, y = (nb[r][1] - p0[1]) / rho, z = (nb[r][2] - p0[2]) / rho;
@@ -35,10 +38,10 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
   }
   // Least squares (the normal equations A^T A d = A^T c of docs/math.md 13, solved through the SVD
   // of A, which is the same solution with the rank visible).
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 8>> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
   if (!(sv(7) > 1e-9 * sv(0))) return out;  // rank-deficient: e.g. neighbours on a few lines
-  const Eigen::VectorXd d = svd.solve(rhs);
+  const Eigen::Matrix<double, 8, 1> d = svd.solve(rhs);
   double coef[9];
   for (int k = 0, c = 0; k < 9; ++k) coef[k] = k == 6 + fixed ? 1.0 : d(c++);
   Eigen::Vector3d grad(coef[6], coef[7], coef[8]);
@@ -69,64 +72,89 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
   return out;
 }
 
-VertexCurvatureComparison compare_vertex_curvature(const LimitEvaluator& limit) {
-  VertexCurvatureComparison r;
+namespace {
+
+/// The exact mean curvature at vertex v and the quadric fits' errors there (one vertex of
+/// compare_vertex_curvature; `measured` is false where the vertex is not compared).
+struct VertexFitError {
+  bool measured = false;
+  double exact_H = 0, cage_error = 0, limit_error = 0;
+};
+
+/// The distinct vertices of the faces around each of `centers`.
+std::vector<int> face_neighbours(const PolyMesh& m, const std::vector<int>& centers) {
+  std::vector<int> out;
+  for (int x : centers) {
+    const int* cs = m.vertex_corners(x);
+    for (int i = 0; i < m.vertex_face_count(x); ++i) {
+      const int f = m.corner_face(cs[i]);
+      for (int h = m.face_begin(f); h < m.face_end(f); ++h) out.push_back(m.corner_vertex(h));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+VertexFitError vertex_fit_error(const LimitEvaluator& limit, int v) {
+  VertexFitError r;
   const SubdivLevel& L = limit.base();
   const PolyMesh& m = L.mesh;
   const std::vector<Point3>& P = limit.positions();
+  if (m.is_unused_vertex(v) || m.is_boundary_vertex(v) || L.vertex_sharpness[v] != 0.0f) return r;
+  const int n = m.vertex_face_count(v);
+  const int* c = m.vertex_corners(v);
+  for (int i = 0; i < n; ++i) {
+    const int f = m.corner_face(c[i]);
+    if (m.face_size(f) != 4 || L.face_hole[f] || L.edge_sharpness[m.corner_edge(c[i])] != 0.0f) return r;
+  }
+  // 2-ring: every vertex of every face touching a vertex of v's faces.
+  std::vector<int> ring2 = face_neighbours(m, face_neighbours(m, {v}));
+  ring2.erase(std::find(ring2.begin(), ring2.end(), v));
+  // Exact: the limit at v (any face corner at v).
+  const int h0 = c[0];
+  const int f0 = m.corner_face(h0);
+  const int k = h0 - m.face_begin(f0);
+  const LimitSample exact = limit.evaluate(f0, 0, (k == 1 || k == 2) ? 1.0 : 0.0, (k == 2 || k == 3) ? 1.0 : 0.0);
+  if (!exact.exact_derivatives || !std::isfinite(exact.mean)) return r;  // an EV: no curvature
+  std::vector<Point3> cage_pts, limit_pts;
+  for (int x : ring2) cage_pts.push_back(P[x]);
+  // Limit points of the 2-ring vertices: the limit at a face corner of each.
+  for (int x : ring2) {
+    const int hx = m.vertex_corners(x)[0];
+    const int fx = m.corner_face(hx);
+    if (m.face_size(fx) != 4 || L.face_hole[fx]) continue;
+    const int kx = hx - m.face_begin(fx);
+    limit_pts.push_back(limit.evaluate_point(fx, 0, (kx == 1 || kx == 2) ? 1.0 : 0.0, (kx == 2 || kx == 3) ? 1.0 : 0.0).p);
+  }
+  const QuadricFit fc = fit_quadric(P[v], cage_pts, exact.normal);
+  const QuadricFit fl = fit_quadric(exact.p, limit_pts, exact.normal);
+  if (!fc.ok || !fl.ok) return r;
+  r.measured = true;
+  r.exact_H = exact.mean;
+  r.cage_error = std::abs(fc.H - exact.mean);
+  r.limit_error = std::abs(fl.H - exact.mean);
+  return r;
+}
+
+}  // namespace
+
+VertexCurvatureComparison compare_vertex_curvature(const LimitEvaluator& limit) {
+  // Vertices are fitted in parallel, then summed in vertex order (the result does not depend
+  // on the threads).
+  const int num_vertices = limit.base().mesh.num_vertices();
+  std::vector<VertexFitError> fits(static_cast<size_t>(num_vertices));
+  parallel_for(num_vertices, [&](int v) { fits[static_cast<size_t>(v)] = vertex_fit_error(limit, v); });
+  VertexCurvatureComparison r;
   double sum_cage = 0, sum_limit = 0;
-  for (int v = 0; v < m.num_vertices(); ++v) {
-    if (m.is_unused_vertex(v) || m.is_boundary_vertex(v) || L.vertex_sharpness[v] != 0.0f) continue;
-    const int n = m.vertex_face_count(v);
-    const int* c = m.vertex_corners(v);
-    bool smooth = true;
-    for (int i = 0; i < n && smooth; ++i) {
-      const int f = m.corner_face(c[i]);
-      smooth = m.face_size(f) == 4 && !L.face_hole[f] && L.edge_sharpness[m.corner_edge(c[i])] == 0.0f;
-    }
-    if (!smooth) continue;
-    // 2-ring: every vertex of every face touching a vertex of v's faces.
-    std::set<int> ring1, ring2;
-    for (int i = 0; i < n; ++i) {
-      const int f = m.corner_face(c[i]);
-      for (int h = m.face_begin(f); h < m.face_end(f); ++h) ring1.insert(m.corner_vertex(h));
-    }
-    for (int w : ring1) {
-      const int* cw = m.vertex_corners(w);
-      for (int i = 0; i < m.vertex_face_count(w); ++i) {
-        const int f = m.corner_face(cw[i]);
-        for (int h = m.face_begin(f); h < m.face_end(f); ++h) ring2.insert(m.corner_vertex(h));
-      }
-    }
-    ring2.erase(v);
-    // Exact: the limit at v (corner 0 of the face whose first... any face corner at v).
-    const int h0 = c[0];
-    const int f0 = m.corner_face(h0);
-    const int k = h0 - m.face_begin(f0);
-    const double u = (k == 1 || k == 2) ? 1.0 : 0.0, w = (k == 2 || k == 3) ? 1.0 : 0.0;
-    const LimitSample exact = limit.evaluate(f0, 0, u, w);
-    if (!exact.exact_derivatives || !std::isfinite(exact.mean)) continue;  // an EV: no curvature
-    std::vector<Point3> cage_pts, limit_pts;
-    for (int x : ring2) cage_pts.push_back(P[x]);
-    // Limit points of the 2-ring vertices: the limit at a face corner of each.
-    for (int x : ring2) {
-      const int hx = m.vertex_corners(x)[0];
-      const int fx = m.corner_face(hx);
-      if (m.face_size(fx) != 4 || L.face_hole[fx]) continue;
-      const int kx = hx - m.face_begin(fx);
-      limit_pts.push_back(limit.evaluate(fx, 0, (kx == 1 || kx == 2) ? 1.0 : 0.0,
-                                         (kx == 2 || kx == 3) ? 1.0 : 0.0).p);
-    }
-    const QuadricFit fc = fit_quadric(P[v], cage_pts, exact.normal);
-    const QuadricFit fl = fit_quadric(exact.p, limit_pts, exact.normal);
-    if (!fc.ok || !fl.ok) continue;
+  for (const VertexFitError& e : fits) {
+    if (!e.measured) continue;
     ++r.vertices;
-    const double ec = std::abs(fc.H - exact.mean), el = std::abs(fl.H - exact.mean);
-    r.max_abs_H_error_cage = std::max(r.max_abs_H_error_cage, ec);
-    r.max_abs_H_error_limit = std::max(r.max_abs_H_error_limit, el);
-    r.max_abs_H = std::max(r.max_abs_H, std::abs(exact.mean));
-    sum_cage += ec;
-    sum_limit += el;
+    r.max_abs_H_error_cage = std::max(r.max_abs_H_error_cage, e.cage_error);
+    r.max_abs_H_error_limit = std::max(r.max_abs_H_error_limit, e.limit_error);
+    r.max_abs_H = std::max(r.max_abs_H, std::abs(e.exact_H));
+    sum_cage += e.cage_error;
+    sum_limit += e.limit_error;
   }
   if (r.vertices > 0) {
     r.mean_abs_H_error_cage = sum_cage / r.vertices;

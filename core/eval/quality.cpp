@@ -55,15 +55,29 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x) 
   return best;
 }
 
-/// The surface measured at quad patch `pi`'s parameters (s, t): the patch itself, or the
-/// exported face holding it.
-SurfaceDerivs measured_surface(const PatchBuild& b, const PackedSet* exported, int pi, double s, double t) {
-  if (!exported) return evaluate(b.set.patches[static_cast<size_t>(pi)], s, t);
-  const PatchPlace& place = exported->place[static_cast<size_t>(pi)];
-  double u, v;
-  place_parameters(place, s, t, u, v);
-  return evaluate(exported->set.patches[static_cast<size_t>(place.patch)], u, v);
-}
+/// The surfaces measured: the quad patches themselves, or the exported faces holding them,
+/// each with its knots expanded once.
+class MeasuredSurfaces {
+ public:
+  MeasuredSurfaces(const PatchBuild& b, const PackedSet* exported) : exported_(exported) {
+    const PatchSet& set = exported ? exported->set : b.set;
+    faces_.reserve(set.patches.size());
+    for (const NurbsPatch& p : set.patches) faces_.emplace_back(p);
+  }
+  /// The surface at quad patch `pi`'s parameters (s, t), with derivatives up to `order` (in
+  /// the exported face's parameters).
+  SurfaceDerivs at(int pi, double s, double t, int order) const {
+    if (!exported_) return faces_[static_cast<size_t>(pi)].derivs(s, t, order);
+    const PatchPlace& place = exported_->place[static_cast<size_t>(pi)];
+    double u, v;
+    place_parameters(place, s, t, u, v);
+    return faces_[static_cast<size_t>(place.patch)].derivs(u, v, order);
+  }
+
+ private:
+  const PackedSet* exported_;
+  std::vector<PatchEvaluator> faces_;
+};
 
 }  // namespace
 
@@ -139,6 +153,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
     LimitSample L;
   };
   const int num_patches = static_cast<int>(ps.patches.size());
+  const MeasuredSurfaces measured_surface(b, exported);
   constexpr int kBlock = 256;
   std::vector<std::vector<Evaluated>> block(kBlock);
   for (int first = 0; first < num_patches; first += kBlock) {
@@ -156,7 +171,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
         d.s = st[0];
         d.t = st[1];
         d.limit = patch_to_limit(b, d.patch, d.s, d.t);
-        d.point = measured_surface(b, exported, pi, d.s, d.t).p;
+        d.point = measured_surface.at(pi, d.s, d.t, 0).p;
         e.L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
         d.parametric = norm(sub(d.point, e.L.p));
         // The closest-point distance is at most the same-parameter one; searching for it only
@@ -255,7 +270,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
           const CurveUse& use = c.uses[w];
           double pu, pv;
           side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
-          pn[w] = unit_normal(measured_surface(b, exported, use.patch, pu, pv));
+          pn[w] = unit_normal(measured_surface.at(use.patch, pu, pv, 1));
           const LimitParam lp = patch_to_limit(b, use.patch, pu, pv);
           ln[w] = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).normal;
         }

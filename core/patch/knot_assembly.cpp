@@ -270,61 +270,15 @@ void fill_poles(const std::vector<PatchLeaf>& leaves, const LeafIndex& index, co
   }
 }
 
-}  // namespace
-
-namespace {
-
-// Position-only evaluation of a clamped bicubic with its flat knots computed once.
-class FastEvaluator {
- public:
-  explicit FastEvaluator(const NurbsPatch& p) : p_(p), U_(p.knots_u.flat()), V_(p.knots_v.flat()) {}
-  Point3 operator()(double u, double v) const {
-    double bu[4], bv[4];
-    const int iu = basis(U_, u, bu), iv = basis(V_, v, bv);
-    Point3 out{0, 0, 0};
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) {
-        const Point3& q = p_.pole(iu - 3 + a, iv - 3 + b);
-        const double w = bu[a] * bv[b];
-        for (int d = 0; d < 3; ++d) out[d] += w * q[d];
-      }
-    return out;
-  }
-
- private:
-  // Span index k (U[k] <= t < U[k+1], clamped to the last span) and the 4 nonzero cubic basis values.
-  static int basis(const std::vector<double>& U, double t, double N[4]) {
-    const int n = static_cast<int>(U.size()) - 4;  // poles
-    int k = static_cast<int>(std::upper_bound(U.begin(), U.end(), t) - U.begin()) - 1;
-    k = std::clamp(k, 3, n - 1);
-    double left[4], right[4];
-    N[0] = 1;
-    for (int j = 1; j <= 3; ++j) {
-      left[j] = t - U[k + 1 - j];
-      right[j] = U[k + j] - t;
-      double saved = 0;
-      for (int r = 0; r < j; ++r) {
-        const double tmp = N[r] / (right[r + 1] + left[j - r]);
-        N[r] = saved + right[r + 1] * tmp;
-        saved = left[j - r] * tmp;
-      }
-      N[j] = saved;
-    }
-    return k;
-  }
-  const NurbsPatch& p_;
-  std::vector<double> U_, V_;
-};
-
 // Largest distance between the patch and a piece at 4 x 4 parameters inside the piece: two
 // bicubics that agree there are the same polynomial.
-double leaf_error_with(const PatchLeaf& leaf, const FastEvaluator& eval) {
+double leaf_error_with(const PatchLeaf& leaf, const PatchEvaluator& eval) {
   double worst = 0;
   for (double s : kNodes)
     for (double t : kNodes) {
       const double u = leaf.u0 + s * leaf.size, v = leaf.v0 + t * leaf.size;
       const Point3 q = eval_leaf(leaf, u, v);
-      const Point3 p = eval(u, v);
+      const Point3 p = eval.point(u, v);
       worst = std::max(worst, std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2])));
     }
   return worst;
@@ -332,7 +286,7 @@ double leaf_error_with(const PatchLeaf& leaf, const FastEvaluator& eval) {
 
 }  // namespace
 
-double leaf_error(const PatchLeaf& leaf, const NurbsPatch& patch) { return leaf_error_with(leaf, FastEvaluator(patch)); }
+double leaf_error(const PatchLeaf& leaf, const NurbsPatch& patch) { return leaf_error_with(leaf, PatchEvaluator(patch)); }
 
 AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::vector<double>& double_u,
                              const std::vector<double>& double_v, double tolerance, double check,
@@ -382,7 +336,7 @@ AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::ve
   for (int round = 0;; ++round) {
     fill_poles(leaves, index, ru, rv, double_u, double_v, patch);
     if (ru.size() == us.size() && rv.size() == vs.size()) break;  // nothing removed: exact by construction
-    const FastEvaluator eval(patch);
+    const PatchEvaluator eval(patch);
     // A piece needs checking only where its span lost knots in u or v.
     auto merged = [](const std::vector<double>& kept, const std::vector<double>& all, double mid) {
       const auto hi = std::upper_bound(kept.begin(), kept.end(), mid);

@@ -6,6 +6,7 @@
 // exact G1 identity D + E = 2c(1-t)^2 e' of Construction Q.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -39,6 +40,71 @@ TEST(Patches, RegularTorusIsOneC2BSplinePerQuad) {
   EXPECT_LT(r.max_c2_jump, 1e-10);
   EXPECT_LT(max_piece_error(b), tol);
   EXPECT_LT(max_corner_limit_error(b), tol);
+}
+
+// PatchEvaluator against the rational Bernstein form written out (a bicubic Bezier patch on
+// the domain [1, 3] x [-1, 2], weights not 1): position and first derivatives by the quotient
+// rule, second derivatives by central differences of the first; lower orders give the same
+// numbers as order 2.
+TEST(Patches, PatchEvaluatorIsTheRationalBernsteinForm) {
+  NurbsPatch p;
+  p.knots_u = {{1.0, 3.0}, {4, 4}};
+  p.knots_v = {{-1.0, 2.0}, {4, 4}};
+  p.num_poles_u = p.num_poles_v = 4;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      p.poles.push_back({i + 0.3 * j * j, j - 0.2 * i * j, std::sin(i + 2.0 * j)});
+      p.weights.push_back(1.0 + 0.1 * ((i * 7 + j * 3) % 5));
+    }
+  auto bern = [](double t, double b[4], double db[4]) {
+    const double s = 1 - t;
+    b[0] = s * s * s; b[1] = 3 * t * s * s; b[2] = 3 * t * t * s; b[3] = t * t * t;
+    db[0] = -3 * s * s; db[1] = 3 * s * s - 6 * t * s; db[2] = 6 * t * s - 3 * t * t; db[3] = 3 * t * t;
+  };
+  const PatchEvaluator eval(p);
+  for (double u : {1.0, 1.37, 2.5, 3.0})
+    for (double v : {-1.0, 0.2, 1.9, 2.0}) {
+      double bu[4], dbu[4], bv[4], dbv[4];
+      bern((u - 1) / 2, bu, dbu);
+      bern((v + 1) / 3, bv, dbv);
+      double A[3] = {}, Au[3] = {}, Av[3] = {}, w = 0, wu = 0, wv = 0;
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+          const double wt = p.weights[i * 4 + j];
+          w += bu[i] * bv[j] * wt;
+          wu += dbu[i] / 2 * bv[j] * wt;
+          wv += bu[i] * dbv[j] / 3 * wt;
+          for (int c = 0; c < 3; ++c) {
+            A[c] += bu[i] * bv[j] * wt * p.pole(i, j)[c];
+            Au[c] += dbu[i] / 2 * bv[j] * wt * p.pole(i, j)[c];
+            Av[c] += bu[i] * dbv[j] / 3 * wt * p.pole(i, j)[c];
+          }
+        }
+      const SurfaceDerivs d = eval.derivs(u, v);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(d.p[c], A[c] / w, 1e-14);
+        EXPECT_NEAR(d.du[c], (Au[c] - wu * A[c] / w) / w, 1e-13);
+        EXPECT_NEAR(d.dv[c], (Av[c] - wv * A[c] / w) / w, 1e-13);
+      }
+      const double h = 1e-5;
+      const double ui = std::clamp(u, 1 + h, 3 - h), vi = std::clamp(v, -1 + h, 2 - h);
+      const SurfaceDerivs c0 = eval.derivs(ui, vi), up = eval.derivs(ui + h, vi), um = eval.derivs(ui - h, vi),
+                          vp = eval.derivs(ui, vi + h), vm = eval.derivs(ui, vi - h);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(c0.duu[c], (up.du[c] - um.du[c]) / (2 * h), 1e-7);
+        EXPECT_NEAR(c0.duv[c], (vp.du[c] - vm.du[c]) / (2 * h), 1e-7);
+        EXPECT_NEAR(c0.dvv[c], (vp.dv[c] - vm.dv[c]) / (2 * h), 1e-7);
+      }
+      const SurfaceDerivs d1 = eval.derivs(u, v, 1);
+      EXPECT_EQ(eval.point(u, v), d.p);
+      EXPECT_EQ(d1.p, d.p);
+      EXPECT_EQ(d1.du, d.du);
+      EXPECT_EQ(d1.dv, d.dv);
+      EXPECT_EQ(d1.duu, (Point3{0, 0, 0}));
+      const SurfaceDerivs e = evaluate(p, u, v);
+      EXPECT_EQ(e.duv, d.duv);
+    }
+  EXPECT_THROW(eval.derivs(2, 0, 3), std::invalid_argument);
 }
 
 TEST(Patches, StarsAreExactlyG1AtTheExtraordinaryVertex) {
