@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/util/constants.h"
 
 namespace subd2nurbs {
 namespace {
@@ -28,7 +29,7 @@ SideFrame side_frame(const NurbsPatch& patch, int side, double t) {
 double angle_deg(const V3& a, const V3& b) {
   if (a.norm() == 0 || b.norm() == 0) return 0;
   // atan2 of |a x b| and a.b keeps precision for tiny angles (acos floors at ~1e-6 degrees).
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / 3.14159265358979323846;
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / kPi;
 }
 
 }  // namespace

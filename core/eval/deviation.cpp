@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include "core/patch/quad_frames.h"
+#include "core/util/constants.h"
 #include "core/util/parallel.h"
 
 namespace subd2nurbs {
@@ -17,7 +18,6 @@ namespace {
 
 using V3 = Eigen::Vector3d;
 V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
-constexpr double kPi = 3.14159265358979323846;
 
 // Cubic Bernstein values and first derivatives.
 void bernstein(double t, double b[4], double db[4]) {
