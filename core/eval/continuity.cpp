@@ -10,12 +10,12 @@
 
 #include "core/eval/nurbs_eval.h"
 #include "core/util/constants.h"
+#include "core/util/eigen_point.h"
 
 namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
 
 // The side frame of nurbs_eval.h in Eigen vectors.
 struct SideFrame {
@@ -23,7 +23,7 @@ struct SideFrame {
 };
 SideFrame side_frame(const NurbsPatch& patch, int side, double t) {
   const SideDerivs d = side_derivatives(patch, side, t);
-  return {v3(d.p), v3(d.along), v3(d.inward), v3(d.inward2), v3(d.normal)};
+  return {to_eigen(d.p), to_eigen(d.along), to_eigen(d.inward), to_eigen(d.inward2), to_eigen(d.normal)};
 }
 
 double angle_deg(const V3& a, const V3& b) {
