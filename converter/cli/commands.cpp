@@ -140,10 +140,6 @@ std::string json_histogram(const std::map<int, int>& histogram) {
   return s + "}";
 }
 
-std::string json_point(const Point3& p) {
-  return "[" + json_number(p[0]) + ", " + json_number(p[1]) + ", " + json_number(p[2]) + "]";
-}
-
 void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
   const SubdivOptions& o = loaded.level.options;
   auto flag = [](bool b) { return b ? "true" : "false"; };
