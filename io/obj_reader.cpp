@@ -498,9 +498,9 @@ LoadedCage parse_obj(const std::string& text, const std::string& name) {
 
 LoadedCage read_obj(const std::string& path) { return parse_obj(read_input_file(path, "an OBJ file"), path); }
 
-SubdivLevel load_and_validate(const LoadedCage& cage, Diagnostics* diagnostics) {
+PolyMesh validate_cage(const LoadedCage& cage, Diagnostics* diagnostics) {
   try {
-    return SubdivLevel::from_input(cage.input, diagnostics);
+    return validate_and_build(cage.input, diagnostics);
   } catch (const InvalidMeshError& e) {
     throw locate(cage, e);
   }

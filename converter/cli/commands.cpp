@@ -183,7 +183,7 @@ LoadedInput load_input(const std::string& path) {
   LoadedInput result;
   result.cage = read_cage(path);
   Diagnostics validation;
-  result.level = load_and_validate(result.cage, &validation);
+  result.level = SubdivLevel::from_validated(validate_cage(result.cage, &validation), result.cage.input);
   for (const Diagnostic& d : result.cage.diagnostics)
     result.warnings.push_back(format_diagnostic(result.cage, d));
   for (const Diagnostic& d : validation) result.warnings.push_back(format_diagnostic(result.cage, d));

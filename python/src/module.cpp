@@ -200,7 +200,7 @@ py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
 py::dict read_cage_file(const std::string& path) {
   const LoadedCage cage = read_cage(path);
   Diagnostics validation;
-  load_and_validate(cage, &validation);
+  validate_cage(cage, &validation);
   py::dict d = cage_dict(cage.input);
   std::vector<std::string> warnings;
   for (const Diagnostic& diag : cage.diagnostics) warnings.push_back(format_diagnostic(cage, diag));

@@ -55,7 +55,7 @@ TEST(FitPipeline, BrepPassesThroughTheInputVertices) {
                                   limit_corpus_path("catmark_cube_creases1"), limit_corpus_path("catmark_nonquads"),
                                   limit_corpus_path("catmark_helmet")}) {
     const LoadedCage cage = read_obj(path);
-    const SubdivLevel level = load_and_validate(cage);
+    const SubdivLevel level = SubdivLevel::from_input(cage.input);
     const std::vector<Point3> pts(cage.input.positions.begin(), cage.input.positions.end());
     const double diag = diagonal(pts);
     pipeline::ConversionSettings settings;
@@ -84,7 +84,7 @@ TEST(FitPipeline, BrepPassesThroughTheInputVertices) {
 // lie on BP's limit, which the cap approximates (its reported bp_distance bounds the miss).
 TEST(FitPipeline, PolarCapsPassThroughThePoles) {
   const LoadedCage cage = read_obj(sample_path("capped_cylinder.obj"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> pts(cage.input.positions.begin(), cage.input.positions.end());
   const double diag = diagonal(pts);
   pipeline::ConversionSettings settings;
@@ -145,7 +145,7 @@ TEST(FitCli, FairKeepsVerticesAndLowersTheEnergy) {
                                 " --weight 0.5 --keep boundary --keep tagged --report " + quote(report));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const LoadedCage a = read_obj(in), b = read_obj(out);
-  const SubdivLevel la = load_and_validate(a);
+  const SubdivLevel la = SubdivLevel::from_input(a.input);
   const std::vector<char> keep = kept_vertices(la, {true, false, true});
   ASSERT_EQ(a.input.positions.size(), b.input.positions.size());
   int kept = 0, moved = 0;
@@ -161,7 +161,7 @@ TEST(FitCli, FairKeepsVerticesAndLowersTheEnergy) {
   EXPECT_GT(moved, 0);
   EXPECT_EQ(a.input.creases.size(), b.input.creases.size());
   // Energy recomputed independently of the command's report.
-  const SubdivLevel lb = load_and_validate(b);
+  const SubdivLevel lb = SubdivLevel::from_input(b.input);
   const auto K = energy_matrix(la);
   const double ea = energy(K, {a.input.positions.begin(), a.input.positions.end()});
   const double eb = energy(K, {b.input.positions.begin(), b.input.positions.end()});
