@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const LoadedCage cage = read_obj(argv[1]);
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const long before = peak_kb();
   const auto t0 = std::chrono::steady_clock::now();

@@ -1,10 +1,13 @@
 #include "io/input_file.h"
 
 #include <fcntl.h>
+#include <locale.h>
+#include <stdlib.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 
@@ -100,6 +103,21 @@ std::string read_input_file(const std::string& path, const std::string& what) {
   }
   contents.resize(have);
   return contents;
+}
+
+bool parse_double(std::string_view token, double& value) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  const char* end = token.data() + token.size();
+  auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  if (ptr != end) return false;
+  if (ec == std::errc::result_out_of_range) {
+    // from_chars leaves `value` unset here; strtod saturates (input_file.h), read in the C
+    // locale since the token's decimal point is '.'.
+    static const locale_t c_locale = ::newlocale(LC_NUMERIC_MASK, "C", locale_t{});
+    value = ::strtod_l(std::string(token).c_str(), nullptr, c_locale);
+    return true;
+  }
+  return ec == std::errc();
 }
 
 }  // namespace subd2nurbs

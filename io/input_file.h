@@ -1,6 +1,6 @@
 // Reading an input file safely: regular files only (a FIFO, directory, socket or device is
-// refused before anything could block on it), a size cap, and names made printable for
-// messages.
+// refused before anything could block on it), a size cap, names made printable for messages,
+// and numbers parsed the same in every locale.
 #pragma once
 
 #include <cstddef>
@@ -26,5 +26,10 @@ const char* file_kind(unsigned mode);
 /// \xNN (so a file name or token never moves the terminal or hides text), and anything longer
 /// than `max_bytes` shortened to its start and end around "...".
 std::string printable(std::string_view text, std::size_t max_bytes = 160);
+
+/// Parses the whole token as a double (locale independent, correctly rounded; accepts
+/// "nan", "inf" and a leading '+'). Values beyond the double range become +-inf (the caller's
+/// range check then rejects them), values below it 0 or a subnormal, as with strtod.
+bool parse_double(std::string_view token, double& value);
 
 }  // namespace subd2nurbs

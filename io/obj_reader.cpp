@@ -17,7 +17,6 @@
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <cstdlib>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -44,22 +43,6 @@ std::vector<std::string_view> split_tokens(std::string_view line) {
     if (i > begin) tokens.push_back(line.substr(begin, i - begin));
   }
   return tokens;
-}
-
-/// Parses the whole token as a double (locale independent, correctly rounded; accepts
-/// "nan", "inf" and a leading '+'). Values beyond the double range become +-inf (validation
-/// then rejects them), values below it 0 or a subnormal, as with strtod.
-bool parse_double(std::string_view token, double& value) {
-  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
-  const char* end = token.data() + token.size();
-  auto [ptr, ec] = std::from_chars(token.data(), end, value);
-  if (ptr != end) return false;
-  if (ec == std::errc::result_out_of_range) {
-    // from_chars leaves `value` unset here; strtod saturates as documented above.
-    value = std::strtod(std::string(token).c_str(), nullptr);
-    return true;
-  }
-  return ec == std::errc();
 }
 
 /// Parses the whole token as an int (leading '+' accepted).
@@ -515,9 +498,9 @@ LoadedCage parse_obj(const std::string& text, const std::string& name) {
 
 LoadedCage read_obj(const std::string& path) { return parse_obj(read_input_file(path, "an OBJ file"), path); }
 
-SubdivLevel load_and_validate(const LoadedCage& cage, Diagnostics* diagnostics) {
+PolyMesh validate_cage(const LoadedCage& cage, Diagnostics* diagnostics) {
   try {
-    return SubdivLevel::from_input(cage.input, diagnostics);
+    return validate_and_build(cage.input, diagnostics);
   } catch (const InvalidMeshError& e) {
     throw locate(cage, e);
   }

@@ -25,7 +25,7 @@
 
 #include "core/mesh/errors.h"
 #include "core/mesh/mesh_input.h"
-#include "core/refine/refiner.h"
+#include "core/mesh/poly_mesh.h"
 #include "io/input_error.h"
 
 namespace subd2nurbs {
@@ -54,7 +54,7 @@ struct LoadedCage {
   } recovery;
 };
 
-/// Reads an OBJ file. Topology is not validated yet (see load_and_validate).
+/// Reads an OBJ file. Topology is not validated yet (see validate_cage).
 /// \throw InputError (naming the file and line) if the file cannot be read, a statement is
 /// malformed, a face has fewer than 3 vertices or uses vertex index 0, or a tag is malformed
 /// (code MeshErrorCode::InvalidTag).
@@ -65,13 +65,14 @@ LoadedCage read_obj(const std::string& path);
 /// The same from OBJ text in memory; `name` stands for the file in messages.
 LoadedCage parse_obj(const std::string& text, const std::string& name);
 
-/// Validates the cage and applies the base-level tagging (SubdivLevel::from_input).
+/// Validates the cage (validate_and_build, core/mesh/validate.h) and returns its connectivity;
+/// SubdivLevel::from_validated(mesh, cage.input) (core/refine/refiner.h) makes the base level.
 /// Validation warnings (e.g. unused vertices) are appended to `diagnostics` if given; they
 /// name mesh elements, use source_line() or format_diagnostic() to locate them.
 /// \throw InputError with the MeshErrorCode of the problem and the line of the offending
 /// face, vertex or tag: for an edge, the face that made it non-manifold; for inconsistent
 /// orientation, the later of the two faces.
-SubdivLevel load_and_validate(const LoadedCage& cage, Diagnostics* diagnostics = nullptr);
+PolyMesh validate_cage(const LoadedCage& cage, Diagnostics* diagnostics = nullptr);
 
 /// The source line a diagnostic refers to, or 0 if it cannot be located.
 int source_line(const LoadedCage& cage, const Diagnostic& diagnostic);

@@ -52,21 +52,6 @@ const char* kExitCodeHelp =
     "  4  internal error, or the export failed (OCCT refused the shape or the B-rep is not\n"
     "     valid; nothing is written)";
 
-const char* boundary_name(BoundaryRule rule) {
-  switch (rule) {
-    case BoundaryRule::None: return "none";
-    case BoundaryRule::EdgeOnly: return "edge-only";
-    case BoundaryRule::EdgeAndCorner: return "edge-and-corner";
-  }
-  return "?";
-}
-const char* crease_method_name(CreaseMethod m) {
-  return m == CreaseMethod::Chaikin ? "chaikin" : "uniform";
-}
-const char* triangle_rule_name(TriangleRule r) {
-  return r == TriangleRule::Smooth ? "smooth" : "catmark";
-}
-
 std::string number(double x) {
   if (!std::isfinite(x)) return "-";  // never "nan" / "inf" in a description
   char buffer[32];
@@ -107,8 +92,8 @@ void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
       << "  bounds       [" << number(b.min[0]) << ", " << number(b.min[1]) << ", "
       << number(b.min[2]) << "] .. [" << number(b.max[0]) << ", " << number(b.max[1]) << ", "
       << number(b.max[2]) << "], diagonal " << number(b.diagonal) << "\n"
-      << "  options      boundary " << boundary_name(o.boundary) << ", creases "
-      << crease_method_name(o.crease_method) << ", triangles " << triangle_rule_name(o.triangles)
+      << "  options      boundary " << to_string(o.boundary) << ", creases "
+      << to_string(o.crease_method) << ", triangles " << to_string(o.triangles)
       << "\n";
   const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
   if (q.applied)
@@ -140,10 +125,6 @@ std::string json_histogram(const std::map<int, int>& histogram) {
   return s + "}";
 }
 
-std::string json_point(const Point3& p) {
-  return "[" + json_number(p[0]) + ", " + json_number(p[1]) + ", " + json_number(p[2]) + "]";
-}
-
 void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
   const SubdivOptions& o = loaded.level.options;
   auto flag = [](bool b) { return b ? "true" : "false"; };
@@ -170,9 +151,9 @@ void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
       << "  \"bounds\": {\"min\": " << json_point(s.bounds.min) << ", \"max\": "
       << json_point(s.bounds.max) << ", \"diagonal\": " << json_number(s.bounds.diagonal)
       << "},\n"
-      << "  \"options\": {\"boundary\": " << json_string(boundary_name(o.boundary))
-      << ", \"crease_method\": " << json_string(crease_method_name(o.crease_method))
-      << ", \"triangles\": " << json_string(triangle_rule_name(o.triangles)) << "},\n";
+      << "  \"options\": {\"boundary\": " << json_string(to_string(o.boundary))
+      << ", \"crease_method\": " << json_string(to_string(o.crease_method))
+      << ", \"triangles\": " << json_string(to_string(o.triangles)) << "},\n";
   const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
   if (q.applied)
     out << "  \"quad_recovery\": {\"source_triangles\": " << q.source_triangles << ", \"quads\": " << q.quads
@@ -202,7 +183,7 @@ LoadedInput load_input(const std::string& path) {
   LoadedInput result;
   result.cage = read_cage(path);
   Diagnostics validation;
-  result.level = load_and_validate(result.cage, &validation);
+  result.level = SubdivLevel::from_validated(validate_cage(result.cage, &validation), result.cage.input);
   for (const Diagnostic& d : result.cage.diagnostics)
     result.warnings.push_back(format_diagnostic(result.cage, d));
   for (const Diagnostic& d : validation) result.warnings.push_back(format_diagnostic(result.cage, d));

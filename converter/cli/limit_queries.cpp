@@ -22,16 +22,6 @@ bool parse_int(const std::string& s, int& x) {
   }
 }
 
-bool parse_double(const std::string& s, double& x) {
-  try {
-    size_t used = 0;
-    x = std::stod(s, &used);
-    return used == s.size();
-  } catch (const std::exception&) {
-    return false;
-  }
-}
-
 }  // namespace
 
 std::vector<Query> read_queries(std::istream& in, const std::string& name, const PolyMesh& mesh) {

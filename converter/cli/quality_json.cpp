@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <memory>
-#include <cstdio>
 #include <stdexcept>
 
 #include "converter/cli/convert.h"
@@ -16,27 +15,16 @@ namespace subd2nurbs::cli {
 
 namespace {
 
-using pipeline::json_number;
-using pipeline::json_string;
-
-std::string point(const Point3& p) {
-  return "[" + json_number(p[0]) + ", " + json_number(p[1]) + ", " + json_number(p[2]) + "]";
-}
+using pipeline::short_number;
 
 std::string sample(const DeviationSample& d) {
   return "{\"patch\": " + std::to_string(d.patch) + ", \"s\": " + json_number(d.s) +
          ", \"t\": " + json_number(d.t) + ", \"face\": " + std::to_string(d.limit.face) +
          ", \"sub\": " + std::to_string(d.limit.sub) + ", \"u\": " + json_number(d.limit.u) +
-         ", \"v\": " + json_number(d.limit.v) + ", \"point\": " + point(d.point) + "}";
+         ", \"v\": " + json_number(d.limit.v) + ", \"point\": " + json_point(d.point) + "}";
 }
 
 const char* continuity_name(Continuity c) { return to_string(c); }
-
-std::string g(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", x);
-  return b;
-}
 
 }  // namespace
 
@@ -131,32 +119,33 @@ StagedFile stage_preview(const ConvertOptions& o, const SubdivLevel& base, const
   StagedFile file = stage_preview_glb(o.preview, mesh, o.mesh + " (" + o.preview_color + ")");
   if (!o.quiet)
     err << "  preview    " << mesh.indices.size() / 3 << " triangles, " << o.preview_color << " from "
-        << g(mesh.value_min) << " to " << g(mesh.value_max) << "\n";
+        << short_number(mesh.value_min) << " to " << short_number(mesh.value_max) << "\n";
   return file;
 }
 
 void print_quality_summary(std::ostream& err, const QualityReport& q, double size) {
   const DeviationSample& w = q.worst;
-  err << "quality: deviation from the exact limit max " << g(q.deviation_max) << " ("
-      << g(size > 0 ? q.deviation_max / size : 0) << " x size), mean " << g(q.deviation_mean)
-      << " over " << q.deviation_samples << " samples";
+  err << "quality: deviation from the exact limit max " << short_number(q.deviation_max) << " ("
+      << short_number(size > 0 ? q.deviation_max / size : 0) << " x size), mean "
+      << short_number(q.deviation_mean) << " over " << q.deviation_samples << " samples";
   if (w.patch >= 0)
     err << "; worst at patch " << w.patch << " = face " << w.limit.face
         << (w.limit.sub ? " sub-face " + std::to_string(w.limit.sub) : std::string()) << " (u "
-        << g(w.limit.u) << ", v " << g(w.limit.v) << ")";
+        << short_number(w.limit.u) << ", v " << short_number(w.limit.v) << ")";
   err << "\n";
   err << "quality: edges " << q.smooth_edges << " smooth, " << q.crease_edges << " crease, "
-      << q.boundary_edges << " boundary; max gap " << g(q.max_gap) << ", max normal jump on smooth edges "
-      << g(q.max_smooth_normal_jump_deg) << " deg, max |patch - limit| normal jump "
-      << g(q.max_normal_jump_error_deg) << " deg, " << q.class_mismatches << " class mismatches\n";
+      << q.boundary_edges << " boundary; max gap " << short_number(q.max_gap)
+      << ", max normal jump on smooth edges " << short_number(q.max_smooth_normal_jump_deg)
+      << " deg, max |patch - limit| normal jump " << short_number(q.max_normal_jump_error_deg) << " deg, "
+      << q.class_mismatches << " class mismatches\n";
   const CurvatureSummary& c = q.curvature;
-  err << "quality: limit curvature k in [" << g(c.min_k) << ", " << g(c.max_k) << "], max |H| "
-      << g(c.max_abs_mean) << ", mean |H| " << g(c.mean_abs_mean) << ", max |K| " << g(c.max_abs_gauss)
-      << "\n";
+  err << "quality: limit curvature k in [" << short_number(c.min_k) << ", " << short_number(c.max_k)
+      << "], max |H| " << short_number(c.max_abs_mean) << ", mean |H| " << short_number(c.mean_abs_mean)
+      << ", max |K| " << short_number(c.max_abs_gauss) << "\n";
   if (q.quadric.vertices > 0)
     err << "quality: quadric-fit H at " << q.quadric.vertices << " cage vertices vs exact: mean error "
-        << g(q.quadric.mean_abs_H_error_cage) << " (cage points), " << g(q.quadric.mean_abs_H_error_limit)
-        << " (limit points)\n";
+        << short_number(q.quadric.mean_abs_H_error_cage) << " (cage points), "
+        << short_number(q.quadric.mean_abs_H_error_limit) << " (limit points)\n";
 }
 
 }  // namespace subd2nurbs::cli

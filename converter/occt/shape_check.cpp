@@ -28,6 +28,7 @@
 
 #include "converter/occt/occt_util.h"
 #include "converter/occt/writers.h"
+#include "core/util/constants.h"
 #include "io/input_error.h"
 
 namespace subd2nurbs::occt {
@@ -136,7 +137,7 @@ class FaceSide {
 /// acos of a dot product floors at about 1e-6 degrees.
 double angle_deg(const gp_Vec& a, const gp_Vec& b) {
   const gp_Vec na = a.Normalized(), nb = b.Normalized();
-  return std::atan2(na.Crossed(nb).Magnitude(), na.Dot(nb)) * 180.0 / M_PI;
+  return std::atan2(na.Crossed(nb).Magnitude(), na.Dot(nb)) * 180.0 / kPi;
 }
 
 ShapeSummary summarize_impl(const TopoDS_Shape& shape, const std::vector<TopoDS_Shape>* only,

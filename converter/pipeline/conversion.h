@@ -13,6 +13,7 @@
 
 #include "converter/occt/brep_builder.h"
 #include "converter/pipeline/resources.h"
+#include "converter/pipeline/text.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
 #include "core/fit/fairing.h"
@@ -183,12 +184,5 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
 
 /// The quality report (subd2nurbs-report v1, docs/formats.md) as JSON text.
 std::string report_json(const ConversionResult& result);
-
-/// A short number for messages ("%.3g").
-std::string short_number(double x);
-
-/// JSON text helpers: a quoted, escaped string, and a number with "%.17g" (null when not finite).
-std::string json_string(const std::string& s);
-std::string json_number(double x);
 
 }  // namespace subd2nurbs::pipeline

@@ -1,27 +1,17 @@
 #include "converter/pipeline/resources.h"
 
-
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <set>
 
+#include "converter/pipeline/text.h"
+
 namespace subd2nurbs::pipeline {
-
-namespace {
-
-std::string short_text(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", x);
-  return buffer;
-}
-
-}  // namespace
 
 double default_max_memory() {
   double physical = 0;
@@ -43,7 +33,7 @@ std::string bytes_text(double bytes) {
     bytes /= 1024;
     ++u;
   }
-  return short_text(bytes) + " " + units[u];
+  return short_number(bytes) + " " + units[u];
 }
 
 bool parse_memory_size(const std::string& text, double& bytes) {
@@ -118,8 +108,8 @@ void check_resources(const ResourceEstimate& estimate, const ResourceLimits& lim
   const double max_faces = limits.max_faces > 0 ? limits.max_faces : default_max_faces;
   const double max_memory = limits.max_memory > 0 ? limits.max_memory : default_max_memory();
   if (estimate.faces > max_faces)
-    throw ResourceError(what + " would make about " + short_text(estimate.faces) + " faces (limit " +
-                        short_text(max_faces) + (limits.max_faces > 0 ? "" : ", the default") + "); " + advice +
+    throw ResourceError(what + " would make about " + short_number(estimate.faces) + " faces (limit " +
+                        short_number(max_faces) + (limits.max_faces > 0 ? "" : ", the default") + "); " + advice +
                         ", or raise the limit with --max-faces N (Python: max_faces=N)");
   if (estimate.bytes > max_memory)
     throw ResourceError(what + " would need about " + bytes_text(estimate.bytes) + " of memory (limit " +

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/refine/refiner.h"
-#include "core/refine/stencil_table.h"
+#include "core/util/point3.h"
 
 namespace subd2nurbs {
 

@@ -9,12 +9,13 @@
 #include <Eigen/Geometry>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/util/constants.h"
+#include "core/util/eigen_point.h"
 
 namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
 
 // The side frame of nurbs_eval.h in Eigen vectors.
 struct SideFrame {
@@ -22,13 +23,13 @@ struct SideFrame {
 };
 SideFrame side_frame(const NurbsPatch& patch, int side, double t) {
   const SideDerivs d = side_derivatives(patch, side, t);
-  return {v3(d.p), v3(d.along), v3(d.inward), v3(d.inward2), v3(d.normal)};
+  return {to_eigen(d.p), to_eigen(d.along), to_eigen(d.inward), to_eigen(d.inward2), to_eigen(d.normal)};
 }
 
 double angle_deg(const V3& a, const V3& b) {
   if (a.norm() == 0 || b.norm() == 0) return 0;
   // atan2 of |a x b| and a.b keeps precision for tiny angles (acos floors at ~1e-6 degrees).
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / 3.14159265358979323846;
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / kPi;
 }
 
 }  // namespace

@@ -10,14 +10,14 @@
 #include <Eigen/Dense>
 
 #include "core/patch/quad_frames.h"
+#include "core/util/constants.h"
+#include "core/util/eigen_point.h"
 #include "core/util/parallel.h"
 
 namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-V3 v3(const Point3& p) { return V3(p[0], p[1], p[2]); }
-constexpr double kPi = 3.14159265358979323846;
 
 // Cubic Bernstein values and first derivatives.
 void bernstein(double t, double b[4], double db[4]) {
@@ -34,7 +34,7 @@ NetPoint eval_net(const Point3* net, double u, double v) {
   NetPoint r{V3::Zero(), V3::Zero(), V3::Zero()};
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) {
-      const V3 P = v3(net[i * 4 + j]);
+      const V3 P = to_eigen(net[i * 4 + j]);
       r.p += bu[i] * bv[j] * P;
       r.du += dbu[i] * bv[j] * P;
       r.dv += bu[i] * dbv[j] * P;
@@ -189,7 +189,7 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels, co
         const int v = level.mesh.corner_vertex(h);
         if (done[v]) continue;
         done[v] = 1;
-        const V3 q = v3(limit[v]);
+        const V3 q = to_eigen(limit[v]);
         double d = 1e300;
         for (int c : candidates)
           if (piece.has_net[c]) d = std::min(d, distance_to_net(&piece.nets[static_cast<size_t>(c) * 16], q));

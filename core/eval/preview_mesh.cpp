@@ -6,6 +6,7 @@
 
 #include "core/eval/nurbs_eval.h"
 #include "core/eval/quality.h"
+#include "core/util/constants.h"
 
 namespace subd2nurbs {
 
@@ -58,13 +59,12 @@ PreviewMesh build_preview(const PatchBuild& b, const LimitEvaluator* limit, Prev
   m.positions.reserve(3 * nv);
   m.normals.reserve(3 * nv);
   m.values.reserve(nv);
-  const double pi = std::acos(-1.0);
-  for (size_t pi_ = 0; pi_ < ps.patches.size(); ++pi_) {
+  for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
     const uint32_t base = static_cast<uint32_t>(m.values.size());
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         const double s = static_cast<double>(i) / (n - 1), t = static_cast<double>(j) / (n - 1);
-        const SurfaceDerivs d = evaluate(ps.patches[pi_], s, t);
+        const SurfaceDerivs d = evaluate(ps.patches[pi], s, t);
         Point3 nn = unit_normal(d);
         for (int k = 0; k < 3; ++k) {
           m.positions.push_back(static_cast<float>(d.p[k]));
@@ -73,16 +73,16 @@ PreviewMesh build_preview(const PatchBuild& b, const LimitEvaluator* limit, Prev
         double value = 0;
         switch (color) {
           case PreviewColor::Deviation:  // 0 on polar caps (not Catmull-Clark surfaces)
-            value = ps.patches[pi_].kind == PatchKind::PolarCap
+            value = ps.patches[pi].kind == PatchKind::PolarCap
                         ? 0.0
-                        : limit_distance(b, *limit, static_cast<int>(pi_), s, t);
+                        : limit_distance(b, *limit, static_cast<int>(pi), s, t);
             break;
           case PreviewColor::Curvature:
             value = mean_curvature(d, nn);
             break;
           case PreviewColor::Zebra: {
             const double angle = std::acos(std::clamp(nn[2], -1.0, 1.0));
-            value = static_cast<int>(std::floor(angle / pi * 12)) % 2 == 0 ? 1.0 : 0.0;
+            value = static_cast<int>(std::floor(angle / kPi * 12)) % 2 == 0 ? 1.0 : 0.0;
             break;
           }
         }

@@ -8,6 +8,8 @@
 
 #include "core/util/parallel.h"
 
+#include "core/util/eigen_point.h"
+
 namespace subd2nurbs {
 
 QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Point3& tn) {
@@ -47,7 +49,7 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
   Eigen::Vector3d grad(coef[6], coef[7], coef[8]);
   Eigen::Matrix3d M;
   M << 2 * coef[0], coef[3], coef[5], coef[3], 2 * coef[1], coef[4], coef[5], coef[4], 2 * coef[2];
-  if (grad.dot(Eigen::Vector3d(tn[0], tn[1], tn[2])) < 0) {  // orient f so that grad f is on tn's side
+  if (grad.dot(to_eigen(tn)) < 0) {  // orient f so that grad f is on tn's side
     grad = -grad;
     M = -M;
   }
@@ -67,7 +69,7 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
   adj(2, 2) = M(0, 0) * M(1, 1) - M(0, 1) * M(1, 0);
   out.K = n.dot(adj * n) / (D * D) / (rho * rho);
   out.H = n.dot((M - M.trace() * Eigen::Matrix3d::Identity()) * n) / (2 * D) / rho;
-  out.normal = {n(0), n(1), n(2)};
+  out.normal = to_point(n);
   out.ok = true;
   return out;
 }

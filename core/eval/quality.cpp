@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/eval/nurbs_eval.h"
+#include "core/util/constants.h"
 #include "core/util/parallel.h"
 #include "core/util/tolerances.h"
 
@@ -22,7 +23,7 @@ double angle_deg(const Point3& a, const Point3& b) {
   if (!(na > 0 && nb > 0)) return 0;
   // atan2 of |a x b| and a.b: accurate for small angles too.
   const Point3 c = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-  return std::atan2(norm(c), dot(a, b)) * 180.0 / std::acos(-1.0);
+  return std::atan2(norm(c), dot(a, b)) * 180.0 / kPi;
 }
 
 /// Level-a face of a patch.

@@ -44,7 +44,7 @@ struct InterpolationResult {
   std::vector<Point3> positions;   ///< the solved cage
   FieldStats residual;             ///< |L P - c| (model units)
   FieldStats displacement;         ///< |P - c|
-  double condition = 0;            ///< estimate of cond_1(L)
+  double condition = 0;            ///< estimate of cond_2(L) = sigma_max / sigma_min
   int polar_vertices = 0;          ///< rows from BP
   int local_rows = 0;              ///< rows from the local refinement of semi-sharp fans
   std::vector<int> no_surface;     ///< vertices without limit surface (kept at their target)

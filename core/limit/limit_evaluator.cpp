@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/limit/stam_eigen.h"
+#include "core/util/constants.h"
 
 namespace subd2nurbs {
 
@@ -462,19 +463,18 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
 Derivs stam_at_vertex(const Prepared& pr) {
   const int n = pr.eig->n;
   Derivs d;
-  const double pi = std::acos(-1.0);
-  const double cn = std::cos(2 * pi / n);
-  const double An = 1 + cn + std::cos(pi / n) * std::sqrt(2 * (9 + cn));
+  const double cn = std::cos(2 * kPi / n);
+  const double An = 1 + cn + std::cos(kPi / n) * std::sqrt(2 * (9 + cn));
   Point3 T1{}, T2{};
   for (int r = 0; r < n; ++r) {
-    const double th = 2 * pi * r / n, th1 = 2 * pi * (r + 1) / n;
+    const double th = 2 * kPi * r / n, th1 = 2 * kPi * (r + 1) / n;
     for (int c = 0; c < 3; ++c) {
       T1[c] += An * std::cos(th) * pr.ring(1 + r, c) + (std::cos(th) + std::cos(th1)) * pr.ring(1 + n + r, c);
       T2[c] += An * std::sin(th) * pr.ring(1 + r, c) + (std::sin(th) + std::sin(th1)) * pr.ring(1 + n + r, c);
     }
   }
   d.p = pr.limit;
-  const double ca = std::cos(2 * pi / n), sa = std::sin(2 * pi / n), sc = 1.0 / (3 * n);
+  const double ca = std::cos(2 * kPi / n), sa = std::sin(2 * kPi / n), sc = 1.0 / (3 * n);
   for (int c = 0; c < 3; ++c) {
     d.ds[c] = sc * T1[c];
     d.dt[c] = sc * (ca * T1[c] + sa * T2[c]);

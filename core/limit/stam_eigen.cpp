@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/refine/refiner.h"
+#include "core/util/constants.h"
 
 namespace subd2nurbs {
 
@@ -139,7 +140,6 @@ std::shared_ptr<const StamEigen> build(int n) {
   const Eigen::MatrixXd S11 = E.A.bottomLeftCorner(7, K);
 
   // Real Fourier subspaces of S (docs/math.md 9.2). Ring index: v 0, e_r 1+r, d_r 1+n+r.
-  const double pi = std::acos(-1.0);
   std::vector<Eigen::MatrixXd> bases;
   {
     Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(K, 3);
@@ -151,7 +151,7 @@ std::shared_ptr<const StamEigen> build(int n) {
     for (int kind = 0; kind < 2; ++kind) {  // cos, sin
       Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(K, 2);
       for (int r = 0; r < n; ++r) {
-        const double te = 2 * pi * l * r / n, td = 2 * pi * l * (r + 0.5) / n;
+        const double te = 2 * kPi * l * r / n, td = 2 * kPi * l * (r + 0.5) / n;
         Q(1 + r, 0) = kind == 0 ? std::cos(te) : std::sin(te);
         Q(1 + n + r, 1) = kind == 0 ? std::cos(td) : std::sin(td);
       }

@@ -1,5 +1,5 @@
 // MeshInput: the plain-array form in which every front end hands a cage to the core.
-// No logic lives here; PolyMesh::build and validate() check it.
+// No logic lives here beyond the options' names; PolyMesh::build and validate() check it.
 #pragma once
 
 #include <array>
@@ -22,6 +22,12 @@ enum class CreaseMethod { Uniform, Chaikin };
 
 /// Edge rule next to triangles: standard Catmull-Clark, or OpenSubdiv's TRI_SUB_SMOOTH.
 enum class TriangleRule { Catmark, Smooth };
+
+/// The options' names, as `info` and the Python module give them: "none", "edge-only",
+/// "edge-and-corner"; "uniform", "chaikin"; "catmark", "smooth".
+const char* to_string(BoundaryRule rule);
+const char* to_string(CreaseMethod method);
+const char* to_string(TriangleRule rule);
 
 struct SubdivOptions {
   BoundaryRule boundary = BoundaryRule::EdgeAndCorner;

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <utility>
 
+#include "core/util/constants.h"
+
 namespace subd2nurbs {
 
 namespace {
@@ -23,7 +25,7 @@ double angle_deg(const P& a, const P& b) {
   const double na = norm(a), nb = norm(b);
   if (!(na > 0) || !(nb > 0)) return -1;
   const double c = std::clamp(dot(a, b) / (na * nb), -1.0, 1.0);
-  return std::acos(c) * 180.0 / M_PI;
+  return std::acos(c) * 180.0 / kPi;
 }
 
 constexpr double kRightAngle = 90.0;

@@ -6,12 +6,9 @@
 #include <Eigen/Geometry>
 
 #include "core/patch/quad_frames.h"
+#include "core/util/constants.h"
 
 namespace subd2nurbs {
-
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}  // namespace
 
 using frames::face_net_index;
 using frames::rotation_in_face;

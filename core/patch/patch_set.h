@@ -23,9 +23,10 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <vector>
 
-#include "core/refine/stencil_table.h"  // Point3
+#include "core/util/point3.h"
 
 namespace subd2nurbs {
 

@@ -10,13 +10,13 @@
 #include "core/eval/nurbs_eval.h"
 #include "core/limit/limit_evaluator.h"  // sample_from_derivatives: curvature
 
+#include "core/util/constants.h"
 #include "core/util/eigen_point.h"
 
 namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-constexpr double kPi = 3.14159265358979323846;
 
 /// Clamped knots 0 (x4), 1, ..., count-1, count (x4), divided by count.
 KnotVector clamped_uniform(int count) {

@@ -6,13 +6,13 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "core/util/constants.h"
 #include "core/util/eigen_point.h"
 
 namespace subd2nurbs {
 namespace {
 
 using V3 = Eigen::Vector3d;
-constexpr double kPi = 3.14159265358979323846;
 
 int wrap(int j, int n) { return ((j % n) + n) % n; }
 

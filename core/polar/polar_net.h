@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "core/refine/stencil_table.h"  // Point3
+#include "core/util/point3.h"
 
 namespace subd2nurbs {
 

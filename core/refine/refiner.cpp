@@ -183,8 +183,12 @@ bool is_sharpened_by_tagging(const PolyMesh& mesh, BoundaryRule rule, int v) {
 }
 
 SubdivLevel SubdivLevel::from_input(const MeshInput& input, Diagnostics* diagnostics) {
+  return from_validated(validate_and_build(input, diagnostics), input);
+}
+
+SubdivLevel SubdivLevel::from_validated(PolyMesh mesh, const MeshInput& input) {
   SubdivLevel level;
-  level.mesh = validate_and_build(input, diagnostics);
+  level.mesh = std::move(mesh);
   level.options = input.options;
   const PolyMesh& m = level.mesh;
   level.edge_sharpness.assign(m.num_edges(), 0.0f);

@@ -30,6 +30,9 @@ struct SubdivLevel {
   /// corners sharpened for BoundaryRule::EdgeAndCorner, boundary faces made holes for
   /// BoundaryRule::None). \throw InvalidMeshError
   static SubdivLevel from_input(const MeshInput& input, Diagnostics* diagnostics = nullptr);
+  /// The tagging alone, for an input validated already: `mesh` is validate_and_build(input)
+  /// (core/mesh/validate.h), e.g. from io's validate_cage, which names the file line of a problem.
+  static SubdivLevel from_validated(PolyMesh mesh, const MeshInput& input);
 
   /// Largest finite (semi-sharp) sharpness on any edge or vertex, 0 if none.
   double max_semi_sharpness() const;

@@ -3,14 +3,12 @@
 // topology work is done once and positions are applied last.
 #pragma once
 
-#include <array>
 #include <vector>
 
 #include "core/util/default_init_vector.h"
+#include "core/util/point3.h"
 
 namespace subd2nurbs {
-
-using Point3 = std::array<double, 3>;
 
 struct StencilTable {
   int num_sources = 0;

@@ -3,7 +3,7 @@
 
 #include <Eigen/Core>
 
-#include "core/refine/stencil_table.h"  // Point3
+#include "core/util/point3.h"
 
 namespace subd2nurbs {
 

@@ -25,11 +25,13 @@ FACES = ["Packed", "PerQuad"]
 OUTPUT = ["Solid", "Shell"]
 
 
-def _add(obj, kind, name, group, doc, value=None, read_only=False, hidden=False):
+def _add(obj, kind, name, group, doc, choices=None, read_only=False, hidden=False):
+    """Adds the property unless the object has it (a document read back); `choices`: an
+    enumeration's values, set only when the property is new (setting them resets the choice)."""
     if name not in obj.PropertiesList:
         obj.addProperty(kind, name, group, doc)
-    if value is not None:
-        setattr(obj, name, value)
+        if choices is not None:
+            setattr(obj, name, choices)
     if read_only or hidden:
         obj.setEditorMode(name, (["ReadOnly"] if read_only else []) + (["Hidden"] if hidden else []))
 
@@ -95,15 +97,10 @@ class CageFeature(_Stateless):
         _add(obj, "App::PropertyString", "SourceFile", g, "The file the cage was read from", read_only=True)
         _add(obj, "App::PropertyInteger", "RecoveredQuads", g,
              "Quads recovered from triangle pairs (glTF sources), -1 if not a triangle source", read_only=True)
-        if "Boundary" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "Boundary", "Subdivision", "Boundary interpolation")
-            obj.Boundary = BOUNDARY
-        if "CreaseMethod" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "CreaseMethod", "Subdivision", "Semi-sharp crease decay")
-            obj.CreaseMethod = CREASE_METHOD
-        if "TriangleRule" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "TriangleRule", "Subdivision", "Edge rule next to triangles")
-            obj.TriangleRule = TRIANGLES
+        s = "Subdivision"
+        _add(obj, "App::PropertyEnumeration", "Boundary", s, "Boundary interpolation", choices=BOUNDARY)
+        _add(obj, "App::PropertyEnumeration", "CreaseMethod", s, "Semi-sharp crease decay", choices=CREASE_METHOD)
+        _add(obj, "App::PropertyEnumeration", "TriangleRule", s, "Edge rule next to triangles", choices=TRIANGLES)
 
     @staticmethod
     def store(obj, cage, path=""):
@@ -272,27 +269,19 @@ class NurbsFeature(_Stateless):
         _add(obj, "App::PropertyFloat", "Tolerance", g,
              "If > 0: the deviation from the limit surface to reach (relative to the model size); "
              "each irregular vertex gets the levels it needs, and Level is ignored")
-        if "PolarHandling" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "PolarHandling", g,
-                 "Polar structures (triangle fans around a pole): one singular polar cap each, or "
-                 "Catmull-Clark patches like every other vertex")
-            obj.PolarHandling = POLAR
-        if "OutputType" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "OutputType", g, "A solid (closed cages) or a shell")
-            obj.OutputType = OUTPUT
-        if "Fit" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "Fit", g,
-                 "Approximate: the cage's own limit surface (it misses the cage's vertices); Interpolate: "
-                 "the surface passes through every cage vertex (the cage is solved for first)")
-            obj.Fit = FIT
+        _add(obj, "App::PropertyEnumeration", "PolarHandling", g,
+             "Polar structures (triangle fans around a pole): one singular polar cap each, or "
+             "Catmull-Clark patches like every other vertex", choices=POLAR)
+        _add(obj, "App::PropertyEnumeration", "OutputType", g, "A solid (closed cages) or a shell", choices=OUTPUT)
+        _add(obj, "App::PropertyEnumeration", "Fit", g,
+             "Approximate: the cage's own limit surface (it misses the cage's vertices); Interpolate: "
+             "the surface passes through every cage vertex (the cage is solved for first)", choices=FIT)
         _add(obj, "App::PropertyFloat", "FairWeight", g,
              "With Fit = Interpolate: if > 0, trade exact interpolation for fairness (least squares with "
              "the thin-plate energy weighted this much); 0: exact")
-        if "Faces" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "Faces", g,
-                 "Packed: each regular region of quads is one B-spline face (fewer, larger faces); "
-                 "PerQuad: one face per coarse quad")
-            obj.Faces = FACES
+        _add(obj, "App::PropertyEnumeration", "Faces", g,
+             "Packed: each regular region of quads is one B-spline face (fewer, larger faces); "
+             "PerQuad: one face per coarse quad", choices=FACES)
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
         lim = "Limits"
         _add(obj, "App::PropertyFloat", "MaxFaces", lim,
@@ -427,11 +416,9 @@ class ColorMapFeature(_Stateless):
     def setup(obj):
         g = "Color map"
         _add(obj, "App::PropertyLink", "Nurbs", g, "The NURBS object to colour")
-        if "Coloring" not in obj.PropertiesList:
-            _add(obj, "App::PropertyEnumeration", "Coloring", g,
-                 "Mean curvature (blue negative, red positive), deviation from the exact limit surface "
-                 "(blue 0 .. red max) or zebra stripes of the normal")
-            obj.Coloring = COLORINGS
+        _add(obj, "App::PropertyEnumeration", "Coloring", g,
+             "Mean curvature (blue negative, red positive), deviation from the exact limit surface "
+             "(blue 0 .. red max) or zebra stripes of the normal", choices=COLORINGS)
         _add(obj, "App::PropertyInteger", "Samples", g, "Grid points per patch side (>= 2)")
         r = "Result"
         _add(obj, "App::PropertyVectorList", "Points", r, "Tessellation vertices", read_only=True, hidden=True)

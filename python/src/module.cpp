@@ -116,14 +116,6 @@ BoundaryRule boundary_rule(const std::string& s) {
   if (s == "edge-and-corner") return BoundaryRule::EdgeAndCorner;
   throw pipeline::SettingsError("boundary must be none, edge-only or edge-and-corner, not '" + s + "'");
 }
-const char* boundary_name(BoundaryRule r) {
-  switch (r) {
-    case BoundaryRule::None: return "none";
-    case BoundaryRule::EdgeOnly: return "edge-only";
-    case BoundaryRule::EdgeAndCorner: return "edge-and-corner";
-  }
-  return "?";
-}
 
 /// A cage as the package passes it: (positions Nx3, face_sizes, face_indices,
 /// creases [(a, b, s)], corners [(v, s)], holes [f], options {boundary, crease_method, triangles}).
@@ -178,9 +170,9 @@ py::dict cage_dict(const MeshInput& in) {
   d["corners"] = corners;
   d["holes"] = in.holes;
   py::dict o;
-  o["boundary"] = boundary_name(in.options.boundary);
-  o["crease_method"] = in.options.crease_method == CreaseMethod::Chaikin ? "chaikin" : "uniform";
-  o["triangles"] = in.options.triangles == TriangleRule::Smooth ? "smooth" : "catmark";
+  o["boundary"] = to_string(in.options.boundary);
+  o["crease_method"] = to_string(in.options.crease_method);
+  o["triangles"] = to_string(in.options.triangles);
   d["options"] = o;
   return d;
 }
@@ -208,7 +200,7 @@ py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
 py::dict read_cage_file(const std::string& path) {
   const LoadedCage cage = read_cage(path);
   Diagnostics validation;
-  load_and_validate(cage, &validation);
+  validate_cage(cage, &validation);
   py::dict d = cage_dict(cage.input);
   std::vector<std::string> warnings;
   for (const Diagnostic& diag : cage.diagnostics) warnings.push_back(format_diagnostic(cage, diag));

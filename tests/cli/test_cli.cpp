@@ -12,6 +12,7 @@
 
 #include "common/gltf_writer.h"
 #include "common/run_command.h"
+#include "core/refine/refiner.h"
 #include "io/obj_reader.h"
 #include "io/temp_dir.h"
 
@@ -169,7 +170,7 @@ TEST(Cli, InfoJsonIsWellFormedAndMatchesTheMesh) {
                             "unused_vertices", "components", "euler_characteristic", "closed",
                             "bounds", "options", "warnings"})
       EXPECT_NE(r.out.find("\"" + std::string(key) + "\":"), std::string::npos) << key;
-    const SubdivLevel level = load_and_validate(read_obj(file));
+    const SubdivLevel level = SubdivLevel::from_input(read_obj(file).input);
     EXPECT_EQ(json_int(r.out, "vertices"), level.mesh.num_vertices()) << file;
     EXPECT_EQ(json_int(r.out, "faces"), level.mesh.num_faces()) << file;
     EXPECT_EQ(json_int(r.out, "edges"), level.mesh.num_edges()) << file;
@@ -195,7 +196,7 @@ TEST(Cli, RefineWritesTheRefinedMesh) {
   const LoadedCage cage = read_obj(out);
   EXPECT_EQ(cage.input.num_faces(), 24 * 16);
   EXPECT_EQ(cage.input.num_vertices(), 386);  // V - E + F = 2 with E = 2F
-  EXPECT_NO_THROW(load_and_validate(cage));
+  EXPECT_NO_THROW(validate_cage(cage));
 }
 
 TEST(Cli, RefineReportsProgressOnStderrForBigMeshes) {
@@ -495,7 +496,7 @@ TEST(CliConvert, ApproximateFansReportTheirNormalJump) {
   // catmark_val2_interior: its interior valence-2 vertices without a sharp edge have no exact
   // construction (approximate fans, C0 rays), and the report lists each with its normal jump.
   const std::string file = data("corpus/catmark_val2_interior.obj");
-  const SubdivLevel level = load_and_validate(read_obj(file));
+  const SubdivLevel level = SubdivLevel::from_input(read_obj(file).input);
   const PolyMesh& m = level.mesh;
   std::string expected;
   int count = 0;

@@ -191,7 +191,7 @@ inline CorpusBrep corpus_brep(const std::string& shape, int samples_per_edge = 1
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   CorpusBrep r;
   const LoadedCage cage = read_obj(corpus_file(shape));
-  const SubdivLevel base = load_and_validate(cage);
+  const SubdivLevel base = SubdivLevel::from_input(cage.input);
   r.expected = expected_brep(cage.input, base.face_hole, detect_polar_structures(base).structures);
   auto t = Clock::now();
   r.build = build_patches(base, std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()));

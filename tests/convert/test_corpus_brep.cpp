@@ -116,7 +116,7 @@ TEST(CorpusBrepList, CoversEveryManifoldShape) {
 /// The torus's patches, built and ready to be damaged.
 PatchBuild torus() {
   const LoadedCage cage = read_obj(corpus_file("catmark_torus"));
-  return build_patches(load_and_validate(cage),
+  return build_patches(SubdivLevel::from_input(cage.input),
                        std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()));
 }
 
@@ -153,13 +153,13 @@ TEST(CorpusBrepChecks, CountsFollowHolesAndComponents) {
   // The cube with its first face tagged as a hole: 5 faces, an open shell with 4 free edges.
   LoadedCage cage = read_obj(corpus_file("catmark_cube"));
   ASSERT_EQ(cage.input.num_faces(), 6);
-  const SubdivLevel closed = load_and_validate(cage);
+  const SubdivLevel closed = SubdivLevel::from_input(cage.input);
   const ExpectedBrep e_closed = expected_brep(cage.input, closed.face_hole);
   EXPECT_EQ(e_closed.faces, 6);
   EXPECT_TRUE(e_closed.closed);
   EXPECT_EQ(e_closed.components, 1);
   cage.input.holes.push_back(0);
-  const SubdivLevel holed = load_and_validate(cage);
+  const SubdivLevel holed = SubdivLevel::from_input(cage.input);
   const ExpectedBrep e = expected_brep(cage.input, holed.face_hole);
   EXPECT_EQ(e.faces, 5);
   EXPECT_EQ(e.free_edges, 4);

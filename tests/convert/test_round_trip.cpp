@@ -25,7 +25,7 @@ occt::BrepResult convert(const std::string& shape, int extra_levels = 0) {
   const LoadedCage cage = read_obj(corpus_file(shape));
   PatchOptions options;
   options.extra_levels = extra_levels;
-  const PatchBuild build = build_patches(load_and_validate(cage),
+  const PatchBuild build = build_patches(SubdivLevel::from_input(cage.input),
                                          std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()),
                                          options);
   return occt::build_brep(build.set);

@@ -84,7 +84,7 @@ const std::map<std::string, std::string>& no_interpolant_shapes() {
 
 TEST_P(CorpusInterpolation, LimitPassesThroughEveryVertex) {
   const LoadedCage cage = read_obj(limit_corpus_path(GetParam()));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   if (no_interpolant_shapes().count(GetParam())) {
     try {
@@ -127,7 +127,7 @@ TEST(LimitRows, LocalFanRefinementEqualsGlobalRefinement) {
   double worst = 0;
   for (const std::string& name : manifold_corpus_shapes()) {
     const LoadedCage cage = read_obj(limit_corpus_path(name));
-    const SubdivLevel level = load_and_validate(cage);
+    const SubdivLevel level = SubdivLevel::from_input(cage.input);
     const double s = level.max_semi_sharpness();
     if (s == 0.0 || level.mesh.num_faces() * std::pow(4.0, std::ceil(s) + 1) > 2e5) continue;
     ++shapes;
@@ -188,7 +188,7 @@ std::vector<Point3> bp_ring_limit_by_iteration(PolarNet net, int r, int j, int l
 TEST(PolarInterpolation, BpLimitPassesThroughPoleAndRings) {
   for (const char* name : {"capped_cylinder.obj", "mushroom.obj"}) {
     const LoadedCage cage = read_obj(sample_path(name));
-    const SubdivLevel level = load_and_validate(cage);
+    const SubdivLevel level = SubdivLevel::from_input(cage.input);
     const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
     const double diag = diagonal(targets);
     InterpolationOptions opt;
@@ -238,7 +238,7 @@ TEST(PolarInterpolation, BpLimitPassesThroughPoleAndRings) {
 // the cap and Catmull-Clark is interpolated consistently).
 TEST(PolarInterpolation, RingTwoRowIsTheCatmullClarkRow) {
   const LoadedCage cage = read_obj(sample_path("capped_cylinder.obj"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   const PolarDetection det = detect_polar_structures(level);
   ASSERT_FALSE(det.structures.empty());
   const StencilTable cc = limit_stencils(level);
@@ -263,7 +263,7 @@ TEST(PolarInterpolation, RingTwoRowIsTheCatmullClarkRow) {
 // nearest to the targets is returned, flagged singular.
 TEST(InterpolationErrors, SingularSystemNamesVertices) {
   const LoadedCage cage = read_obj(limit_corpus_path("catmark_cube"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const InterpolationResult ok = interpolate(level, targets);
   EXPECT_TRUE(ok.singular);
@@ -298,7 +298,7 @@ TEST(InterpolationErrors, SingularSystemNamesVertices) {
 // same cage as the LU solve on a well-conditioned system.
 TEST(InterpolationErrors, RegularisedPathAgreesWithLu) {
   const LoadedCage cage = read_obj(limit_corpus_path("catmark_xord_interior"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const InterpolationResult a = interpolate(level, targets);
   InterpolationOptions opt;
@@ -315,7 +315,7 @@ TEST(InterpolationErrors, ConditionOfRegularPartIsSmall) {
   // On a regular closed grid the limit operator is the tensor mask (1, 4, 1)/6 (x) (1, 4, 1)/6,
   // eigenvalues (2 + cos a)(2 + cos b)/9 in [1/9, 1]: condition number <= 9.
   const LoadedCage cage = read_obj(limit_corpus_path("catmark_torus"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
   const InterpolationResult r = interpolate(level, targets);
   EXPECT_GT(r.condition, 1.0);
@@ -332,7 +332,7 @@ TEST(CorpusInterpolationSpecial, OpenSubdivConvergesToTargetsAtDartsAndValenceTw
   int vertices = 0;
   for (const char* name : {"catmark_cubes_infsharp", "catmark_inf_crease0", "catmark_inf_crease1"}) {
     const LoadedCage cage = read_obj(limit_corpus_path(name));
-    const SubdivLevel level = load_and_validate(cage);
+    const SubdivLevel level = SubdivLevel::from_input(cage.input);
     const std::vector<Point3> targets(cage.input.positions.begin(), cage.input.positions.end());
     const double diag = diagonal(targets);
     const InterpolationResult res = interpolate(level, targets);

@@ -1,5 +1,5 @@
 // libFuzzer target: read -> validate -> patches at level 0 -> continuity (core only, no OCCT):
-// an OBJ cage from the fuzzer's bytes through parse_obj, load_and_validate, build_patches and
+// an OBJ cage from the fuzzer's bytes through parse_obj, validate_cage, build_patches and
 // measure_continuity. Small work only: the resource guard's estimate (converter/pipeline),
 // which decides what a real run refuses, here at 2e4 refined faces.
 #include <cstddef>
@@ -18,7 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const subd2nurbs::LoadedCage cage = subd2nurbs::parse_obj(text, "fuzz.obj");
     if (cage.input.num_faces() > 64 || cage.input.face_indices.size() > 512) return 0;
-    const subd2nurbs::SubdivLevel level = subd2nurbs::load_and_validate(cage);
+    const subd2nurbs::SubdivLevel level =
+        subd2nurbs::SubdivLevel::from_validated(subd2nurbs::validate_cage(cage), cage.input);
     // The pipeline's resource estimate (converter/pipeline/resources.h) at a fuzzing scale.
     if (subd2nurbs::pipeline::estimate_conversion(level, 0, false).faces > 20000) return 0;
     const std::vector<subd2nurbs::Point3> positions(cage.input.positions.begin(), cage.input.positions.end());

@@ -13,7 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const subd2nurbs::LoadedCage cage = subd2nurbs::parse_obj(text, "fuzz.obj");
     subd2nurbs::Diagnostics diagnostics;
-    subd2nurbs::load_and_validate(cage, &diagnostics);
+    subd2nurbs::validate_cage(cage, &diagnostics);
     for (const subd2nurbs::Diagnostic& d : diagnostics) subd2nurbs::format_diagnostic(cage, d);
   } catch (const subd2nurbs::InputError&) {
   }

@@ -1,4 +1,4 @@
-// read_obj and load_and_validate on OpenSubdiv's regression shapes.
+// read_obj and validate_cage on OpenSubdiv's regression shapes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/corpus.h"
+#include "core/refine/refiner.h"
 #include "io/obj_reader.h"
 
 using namespace subd2nurbs;
@@ -70,9 +71,9 @@ TEST_P(CorpusFile, ValidatesUnlessNonManifold) {
   const auto& rejected_shapes = subd2nurbs::testing::non_manifold_corpus_shapes();
   const auto rejected = rejected_shapes.find(GetParam());
   try {
-    const SubdivLevel level = load_and_validate(cage);
+    const PolyMesh mesh = validate_cage(cage);
     EXPECT_EQ(rejected, rejected_shapes.end()) << "accepted, but expected to be rejected";
-    EXPECT_EQ(level.mesh.num_faces(), cage.input.num_faces());
+    EXPECT_EQ(mesh.num_faces(), cage.input.num_faces());
   } catch (const InputError& e) {
     ASSERT_NE(rejected, rejected_shapes.end()) << e.what();
     ASSERT_TRUE(e.code().has_value()) << e.what();
@@ -104,7 +105,7 @@ TEST(CorpusReading, Holes) {
   EXPECT_EQ(read_obj(corpus("catmark_hole_test1")).input.holes, (std::vector<int>{1}));
   EXPECT_EQ(read_obj(corpus("catmark_hole_test2")).input.holes, (std::vector<int>{5, 6, 9, 10}));
   EXPECT_EQ(read_obj(corpus("catmark_hole_test3")).input.holes.size(), 8u);
-  const SubdivLevel level = load_and_validate(read_obj(corpus("catmark_hole_test2")));
+  const SubdivLevel level = SubdivLevel::from_input(read_obj(corpus("catmark_hole_test2")).input);
   EXPECT_EQ(std::count(level.face_hole.begin(), level.face_hole.end(), 1), 4);
 }
 
@@ -132,14 +133,14 @@ TEST(CorpusReading, UnsupportedTagsAreWarnings) {
   EXPECT_EQ(hedit.diagnostics[0].index, 47);  // the line
   EXPECT_NE(hedit.diagnostics[1].message.find("edgeedit"), std::string::npos);
   EXPECT_EQ(hedit.diagnostics[1].index, 48);
-  EXPECT_NO_THROW(load_and_validate(hedit));
+  EXPECT_NO_THROW(validate_cage(hedit));
 }
 
 TEST(CorpusReading, BareVerticesAreWarnings) {
   // catmark_nonman_bareverts: a grid with vertices that no face uses. Valid, with warnings.
   const LoadedCage cage = read_obj(corpus("catmark_nonman_bareverts"));
   Diagnostics diagnostics;
-  load_and_validate(cage, &diagnostics);
+  validate_cage(cage, &diagnostics);
   ASSERT_FALSE(diagnostics.empty());
   for (const Diagnostic& d : diagnostics) {
     EXPECT_EQ(d.code, "unused-vertex");

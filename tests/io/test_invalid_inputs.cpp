@@ -49,7 +49,7 @@ std::string invalid_dir() { return std::string(SUBD2NURBS_TEST_DATA_DIR) + "/inv
 /// Reads and validates; returns the error (fails the test if there is none).
 std::optional<InputError> load_error(const std::string& path) {
   try {
-    load_and_validate(read_obj(path));
+    validate_cage(read_obj(path));
   } catch (const InputError& e) {
     return e;
   }

@@ -15,7 +15,7 @@ namespace {
 
 MeshStats stats_of(const std::string& path) {
   const LoadedCage cage = read_obj(path);
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   return compute_stats(level, {cage.input.positions.begin(), cage.input.positions.end()});
 }
 
@@ -122,6 +122,6 @@ TEST(MeshStats, TorusHasEulerCharacteristicZero) {
 
 TEST(MeshStats, PositionCountMustMatch) {
   const LoadedCage cage = read_obj(valid("unused_vertex.obj"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   EXPECT_THROW(compute_stats(level, {}), std::invalid_argument);
 }

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "core/refine/refiner.h"
 #include "io/obj_reader.h"
 #include "io/temp_dir.h"
 
@@ -122,7 +123,7 @@ TEST(ObjReader, UnsupportedTagsAndStatementsAreWarningsWithLines) {
 TEST(ObjReader, UnusedVertexIsAWarningNotAnError) {
   const LoadedCage cage = read_obj(valid("unused_vertex.obj"));
   Diagnostics diagnostics;
-  const SubdivLevel level = load_and_validate(cage, &diagnostics);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input, &diagnostics);
   EXPECT_EQ(level.mesh.num_vertices(), 5);
   ASSERT_EQ(diagnostics.size(), 1u);
   EXPECT_EQ(diagnostics[0].code, "unused-vertex");
@@ -220,7 +221,7 @@ TEST(ObjReader, FaceWithMoreThan255Vertices) {
   const LoadedCage cage = read_obj(dir.write("ngon.obj", obj + face + "\n"));
   ASSERT_EQ(cage.input.face_sizes, (std::vector<int>{n}));
   for (int i = 0; i < n; ++i) ASSERT_EQ(cage.input.face_indices[i], i);
-  EXPECT_EQ(load_and_validate(cage).mesh.num_edges(), n);
+  EXPECT_EQ(SubdivLevel::from_input(cage.input).mesh.num_edges(), n);
 }
 
 TEST(ObjReader, MalformedFaceCornersNameTheirLine) {

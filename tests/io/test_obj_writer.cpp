@@ -70,7 +70,7 @@ std::vector<std::string> valid_corpus_shapes() {
   for (const auto& e : std::filesystem::directory_iterator(SUBD2NURBS_CORPUS_DIR)) {
     if (e.path().extension() != ".obj") continue;
     try {
-      load_and_validate(read_obj(e.path().string()));
+      validate_cage(read_obj(e.path().string()));
       names.push_back(e.path().stem().string());
     } catch (const InputError&) {
       // non-manifold shapes: see test_corpus_reading.cpp
@@ -97,7 +97,7 @@ class RoundTrip : public ::testing::TestWithParam<std::string> {};
 
 TEST(ObjWriter, WritesTagsThatReproduceTheLevel) {
   const LoadedCage cage = read_obj(valid("all_tags.obj"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   TempDir dir;
   const std::string path = dir.file("out.obj");
   write_obj(path, positions_of(cage), level);
@@ -124,7 +124,7 @@ TEST(ObjWriter, WritesTagsThatReproduceTheLevel) {
 
   const LoadedCage again = read_obj(path);
   EXPECT_TRUE(again.diagnostics.empty());
-  expect_same_level(level, load_and_validate(again), "all_tags.obj");
+  expect_same_level(level, SubdivLevel::from_input(again.input), "all_tags.obj");
 }
 
 TEST(ObjWriter, AutomaticCornersAreNotWrittenAsTags) {
@@ -132,7 +132,7 @@ TEST(ObjWriter, AutomaticCornersAreNotWrittenAsTags) {
   TempDir dir;
   const LoadedCage cage = read_obj(
       dir.write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   ASSERT_EQ(std::count(level.vertex_sharpness.begin(), level.vertex_sharpness.end(), 0.0), 0);
   write_obj(dir.file("out.obj"), positions_of(cage), level);
   const std::string text = read_text(dir.file("out.obj"));
@@ -140,19 +140,19 @@ TEST(ObjWriter, AutomaticCornersAreNotWrittenAsTags) {
   EXPECT_NE(text.find("\nt interpolateboundary 1/0/0 1\n"), std::string::npos);
   EXPECT_EQ(text.find("creasemethod"), std::string::npos);
   EXPECT_EQ(text.find("smoothtriangles"), std::string::npos);
-  expect_same_level(level, load_and_validate(read_obj(dir.file("out.obj"))), "quad");
+  expect_same_level(level, SubdivLevel::from_input(read_obj(dir.file("out.obj")).input), "quad");
 }
 
 TEST(ObjWriter, UnusedVerticesNeedNoCornerTag) {
   const LoadedCage cage = read_obj(valid("unused_vertex.obj"));
   Diagnostics diagnostics;
-  const SubdivLevel level = load_and_validate(cage, &diagnostics);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input, &diagnostics);
   TempDir dir;
   write_obj(dir.file("out.obj"), positions_of(cage), level);
   const std::string text = read_text(dir.file("out.obj"));
   EXPECT_EQ(count_lines_starting(text, "t corner"), 0) << text;
   EXPECT_NE(text.find("\nv 5 5 5\n"), std::string::npos);  // still written, as vertex 5
-  expect_same_level(level, load_and_validate(read_obj(dir.file("out.obj")), &diagnostics),
+  expect_same_level(level, SubdivLevel::from_input(read_obj(dir.file("out.obj")).input, &diagnostics),
                     "unused_vertex.obj");
 }
 
@@ -163,19 +163,19 @@ TEST(ObjWriter, BoundaryRuleNoneWritesBoundaryCreasesAndHoles) {
   const LoadedCage cage = read_obj(
       dir.write("none.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"
                             "t interpolateboundary 1/0/0 0\n"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   ASSERT_EQ(level.face_hole, (std::vector<char>{1}));
   write_obj(dir.file("out.obj"), positions_of(cage), level);
   const std::string text = read_text(dir.file("out.obj"));
   EXPECT_EQ(count_lines_starting(text, "t crease 2/1/0 "), 4) << text;
   EXPECT_NE(text.find("\nt crease 2/1/0 0 1 10\n"), std::string::npos) << text;
   EXPECT_NE(text.find("\nt hole 1/0/0 0\n"), std::string::npos) << text;
-  expect_same_level(level, load_and_validate(read_obj(dir.file("out.obj"))), "none");
+  expect_same_level(level, SubdivLevel::from_input(read_obj(dir.file("out.obj")).input), "none");
 }
 
 TEST(ObjWriter, MismatchedPositionsAreRejectedAndNothingIsWritten) {
   const LoadedCage cage = read_obj(valid("all_tags.obj"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   std::vector<Point3> positions = positions_of(cage);
   positions.pop_back();
   TempDir dir;
@@ -185,7 +185,7 @@ TEST(ObjWriter, MismatchedPositionsAreRejectedAndNothingIsWritten) {
 
 TEST(ObjWriter, UnwritableLocationThrowsWriteError) {
   const LoadedCage cage = read_obj(valid("all_tags.obj"));
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   TempDir dir;
   EXPECT_THROW(write_obj(dir.file("missing/out.obj"), positions_of(cage), level), WriteError);
   EXPECT_TRUE(dir.entries().empty());
@@ -193,7 +193,7 @@ TEST(ObjWriter, UnwritableLocationThrowsWriteError) {
 
 TEST_P(RoundTrip, BaseAndRefinedLevelsSurviveWriteAndRead) {
   const LoadedCage cage = read_obj(corpus(GetParam()));
-  const SubdivLevel base = load_and_validate(cage);
+  const SubdivLevel base = SubdivLevel::from_input(cage.input);
   const int levels = base.mesh.num_faces() > 2000 ? 1 : 2;
   const Refinement refinement = refine_uniform(base, levels);
   const std::vector<std::vector<Point3>> positions = refinement.positions(positions_of(cage));
@@ -205,7 +205,7 @@ TEST_P(RoundTrip, BaseAndRefinedLevelsSurviveWriteAndRead) {
     const LoadedCage again = read_obj(path);
     EXPECT_TRUE(again.diagnostics.empty()) << what;
     EXPECT_TRUE(same_bits(positions_of(again), positions[k])) << what;
-    expect_same_level(refinement.levels[k], load_and_validate(again), what);
+    expect_same_level(refinement.levels[k], SubdivLevel::from_input(again.input), what);
   }
 }
 

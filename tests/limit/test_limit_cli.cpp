@@ -33,7 +33,7 @@ Result run_limit(const std::string& mesh, const std::string& queries, bool as_fi
 TEST(LimitCli, PrintsOneLinePerQueryWithTheLibraryValues) {
   const std::string mesh = limit_corpus_path("catmark_nonquads");
   const LoadedCage cage = read_obj(mesh);
-  const LimitEvaluator ev(load_and_validate(cage), positions_of(cage.input));
+  const LimitEvaluator ev(SubdivLevel::from_input(cage.input), positions_of(cage.input));
   // A quad face and an n-gon's sub-faces, with comments and blank lines in between.
   int quad = -1, ngon = -1;
   for (int f = 0; f < ev.base().mesh.num_faces(); ++f)
@@ -72,7 +72,7 @@ TEST(LimitCli, PrintsOneLinePerQueryWithTheLibraryValues) {
 TEST(LimitCli, BadQueryLinesNameTheLineAndExitWith2) {
   const std::string mesh = limit_corpus_path("catmark_nonquads");
   const LoadedCage cage = read_obj(mesh);
-  const SubdivLevel level = load_and_validate(cage);
+  const SubdivLevel level = SubdivLevel::from_input(cage.input);
   int quad = -1, ngon = -1;
   for (int f = 0; f < level.mesh.num_faces(); ++f) (level.mesh.face_size(f) == 4 ? quad : ngon) = f;
   const std::string ok = std::to_string(quad) + " 0.5 0.5\n";

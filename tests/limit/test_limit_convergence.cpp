@@ -2,7 +2,7 @@
 //  - Exact: at the parameters of a level-L vertex the limit surface is that vertex's limit
 //    position (limit masks, MATH.md 1.4, checked against OpenSubdiv in tests/oracle).
 //  - Rate: the level-L control points converge to our limit values, 4x per level at a regular
-//    vertex and mu_n per level at the extraordinary vertex itself (MATH.md 7.2, l = 0 block).
+//    vertex and nu_n+ per level at the extraordinary vertex itself (MATH.md 7.2, l = 0 block).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -73,14 +73,14 @@ TEST(LimitConvergence, ExactAtRefinedVerticesAndTheRightRatesAtValence3To12) {
     for (int l = 2; l <= L; ++l)
       err.push_back(dist(lp[l][vertex_at(r, 0, l, 1 << (l - 2), 1 << (l - 1))], q.p));
     EXPECT_NEAR(err.back() / err[err.size() - 2], 0.25, 0.01);
-    // The EV itself: ratio mu_n.
+    // The EV itself: ratio nu_n+.
     const LimitSample c = ev.evaluate(0, 0, 0.0, 0.0);
-    const double mu = (3.0 * n - 7 + std::sqrt(5.0 * n * n - 30.0 * n + 49.0)) / (8.0 * n);
+    const double nu = (3.0 * n - 7 + std::sqrt(5.0 * n * n - 30.0 * n + 49.0)) / (8.0 * n);
     std::vector<double> ev_err;
     for (int l = 1; l <= L; ++l) ev_err.push_back(dist(lp[l][0], c.p));
-    // Asymptotic: the last ratio (the other l = 0 mode, mu_minus <= 1/6 mu, has died out).
-    EXPECT_NEAR(ev_err.back() / ev_err[ev_err.size() - 2], mu, 0.01 * mu);
-    std::printf("n=%2d exact %.2e, rate at EV %.4f (mu %.4f)\n", n, worst,
-                ev_err.back() / ev_err[ev_err.size() - 2], mu);
+    // Asymptotic: the last ratio (the other l = 0 mode, nu_n- <= 1/6 nu_n+, has died out).
+    EXPECT_NEAR(ev_err.back() / ev_err[ev_err.size() - 2], nu, 0.01 * nu);
+    std::printf("n=%2d exact %.2e, rate at EV %.4f (nu_n+ %.4f)\n", n, worst,
+                ev_err.back() / ev_err[ev_err.size() - 2], nu);
   }
 }

@@ -93,7 +93,7 @@ TEST(LimitCurvature, SphereLikeSignConvention) {
   // The limit of a cube is convex: with outward normals both principal curvatures are
   // negative everywhere (MATH.md 8.3: a sphere with outward normal has k = -1/R).
   const LoadedCage cage = read_obj(limit_corpus_path("catmark_cube"));
-  const LimitEvaluator ev(load_and_validate(cage), positions_of(cage.input));
+  const LimitEvaluator ev(SubdivLevel::from_input(cage.input), positions_of(cage.input));
   for (int f = 0; f < 6; ++f)
     for (double u : {0.1, 0.5, 0.8})
       for (double v : {0.2, 0.5, 0.9}) {

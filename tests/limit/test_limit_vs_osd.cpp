@@ -12,7 +12,7 @@
 #include <stdexcept>
 
 #include "common/corpus.h"
-#include "io/input_error.h"
+#include "core/mesh/errors.h"
 #include "limit_test_util.h"
 #include "oracle/osd_limit_eval.h"
 
@@ -31,8 +31,8 @@ void compare_shape(const std::string& path, Tally& total) {
   const LoadedCage cage = read_obj(path);
   SubdivLevel level;
   try {
-    level = load_and_validate(cage);
-  } catch (const InputError&) {
+    level = SubdivLevel::from_input(cage.input);
+  } catch (const InvalidMeshError&) {
     return;  // not a 2-manifold cage (OpenSubdiv's non-manifold tests): nothing to compare
   }
   const OsdLimitEvaluator osd(cage.input, 10);
@@ -127,7 +127,7 @@ TEST(LimitVsOsd, OsdScalesNgonDerivativesByTwo) {
   const LoadedCage cage = read_obj(limit_corpus_path("catmark_nonquads"));
   const OsdLimitEvaluator osd(cage.input, 10);
   ASSERT_TRUE(osd.ok());
-  const LimitEvaluator ours(load_and_validate(cage), positions_of(cage.input));
+  const LimitEvaluator ours(SubdivLevel::from_input(cage.input), positions_of(cage.input));
   int checked[2] = {0, 0};
   for (int ptex = 0; ptex < osd.num_ptex_faces(); ++ptex) {
     const bool quad = ours.base().mesh.face_size(ours.ptex_to_face(ptex)) == 4;

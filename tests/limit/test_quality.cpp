@@ -35,7 +35,7 @@ struct Converted {
 Converted convert_shape(const std::string& name) {
   Converted c;
   const LoadedCage cage = read_obj(limit_corpus_path(name));
-  c.base = load_and_validate(cage);
+  c.base = SubdivLevel::from_input(cage.input);
   c.pos = positions_of(cage.input);
   c.result = pipeline::convert(c.base, c.pos, pipeline::ConversionSettings{});
   return c;

@@ -19,7 +19,7 @@
 #include <memory>
 
 #include "core/mesh/mesh_input.h"
-#include "core/refine/stencil_table.h"  // Point3
+#include "core/util/point3.h"
 
 namespace subd2nurbs::testing {
 

@@ -28,12 +28,12 @@ TEST_P(CliRefine, OutputMatchesOpenSubdiv) {
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   LoadedCage written = read_obj(out.string());
   fs::remove(out);
-  SubdivLevel written_level = load_and_validate(written);
+  SubdivLevel written_level = SubdivLevel::from_input(written.input);
 
   LoadedCage original = read_obj(in);
   OsdRefinement osd = osd_refine(original.input, levels);
   ASSERT_TRUE(osd.refiner);
-  Refinement ours = refine_uniform(load_and_validate(original), levels);
+  Refinement ours = refine_uniform(SubdivLevel::from_input(original.input), levels);
   OsdMapping map = map_to_osd(ours, *osd.refiner);
   const auto& tl = osd.refiner->GetLevel(levels);
   const PolyMesh& m = written_level.mesh;

@@ -28,7 +28,7 @@ double dist(const Point3& a, const Point3& b) {
 // children in between) and compares the grandchildren's corners with the uniform refinement.
 double worst_local_refinement_error(const std::string& name, int rings = 2) {
   const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj");
-  const SubdivLevel base = load_and_validate(cage);
+  const SubdivLevel base = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> x0(cage.input.positions.begin(), cage.input.positions.end());
   const Refinement r = refine_uniform(base, 2);
   const std::vector<std::vector<Point3>> X = r.positions(x0);
@@ -191,7 +191,7 @@ TEST(PatchReuse, RebuildingOnlyTheDeepenedCornersGivesTheSamePatches) {
   // A tolerance rebuilds with more levels at some vertices, reusing the other quads: the result
   // must equal a build from scratch with the same levels, pole for pole.
   const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/catmark_xord_interior.obj");
-  const SubdivLevel base = load_and_validate(cage);
+  const SubdivLevel base = SubdivLevel::from_input(cage.input);
   const std::vector<Point3> x(cage.input.positions.begin(), cage.input.positions.end());
   const PatchBuild first = build_patches(base, x);
   ASSERT_FALSE(first.info.fans.empty());

@@ -101,7 +101,7 @@ TEST(PolarSeparation, OnlyForLowValenceAndTooClose) {
   const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/catmark_pole8.obj");
   PatchOptions o;
   o.separate_poles = true;
-  const PatchBuild b = build_patches(load_and_validate(cage),
+  const PatchBuild b = build_patches(SubdivLevel::from_input(cage.input),
                                      std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end()), o);
   EXPECT_TRUE(b.info.caps.empty());
   EXPECT_TRUE(b.info.separated_poles.empty());
