@@ -6,9 +6,8 @@
 #include <cmath>
 #include <vector>
 
-#include "core/util/parallel.h"
-
 #include "core/util/eigen_point.h"
+#include "core/util/parallel.h"
 
 namespace subd2nurbs {
 
