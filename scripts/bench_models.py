@@ -84,7 +84,9 @@ def main():
             size, r = runs[-1][2], runs[-1][3]
             ms = r["timings_ms"]
             quality_s = r.get("quality_ms", 0.0) / 1000.0
-            poles = r["patches"]["poles"]
+            # The B-rep's faces and their poles (packed faces by default; the quad patches
+            # before packing are r["patches"]).
+            poles = r["faces"]["poles"]
             nfaces = r["brep"]["faces"]
             print("| %s (%d) | %.2f | %.0f | %.1f | %d | %d | %.1f | %.2f / %.2f |"
                   % (label, faces, wall, rss, size, nfaces, poles, poles / nfaces,
