@@ -2,6 +2,7 @@
 // so that everything except process start-up can be reused and tested.
 #pragma once
 
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -51,13 +52,17 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
 
 /// The --max-faces / --max-memory options of a subcommand.
 struct LimitOptionValues {
-  double max_faces = 0;    ///< 0: the default
+  std::optional<double> max_faces;  ///< not given: the default
   std::string max_memory;  ///< empty: the default; else bytes with an optional K/M/G/T suffix
 };
 /// Registers --max-faces and --max-memory on `command`.
 void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning);
-/// \throw UsageError for a malformed --max-memory
+/// \throw pipeline::SettingsError (pipeline::validate's rules, a malformed --max-memory)
 pipeline::ResourceLimits resource_limits(const LimitOptionValues& values);
+
+/// The command-line spelling of a pipeline setting (pipeline::SettingsError::setting):
+/// "radial_steps" -> "--radial-steps", "polar_lambda" -> "--lambda".
+std::string option_name(const std::string& setting);
 
 struct InfoOptions {
   std::string mesh;

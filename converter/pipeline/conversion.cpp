@@ -72,32 +72,59 @@ const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed
 
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
-void check_settings(const ConversionSettings& settings) {
+FitMode fit_mode(const std::string& name) {
+  if (name == "approximate") return FitMode::Approximate;
+  if (name == "interpolate") return FitMode::Interpolate;
+  throw SettingsError("fit", "must be approximate or interpolate");
+}
+
+FaceMode face_mode(const std::string& name) {
+  if (name == "packed") return FaceMode::Packed;
+  if (name == "per-quad") return FaceMode::PerQuad;
+  throw SettingsError("faces", "must be packed or per-quad");
+}
+
+PreviewColor preview_color(const std::string& name) {
+  if (name == "deviation" || name == "curvature" || name == "zebra") return preview_color_from_string(name);
+  throw SettingsError("preview", "must be deviation, curvature or zebra");
+}
+
+void check_samples(const std::string& setting, int samples) {
+  if (samples < 2 || samples > 64) throw SettingsError(setting, "must be 2 .. 64");
+}
+
+void validate(const ConversionSettings& settings) {
+  auto positive = [](std::optional<double> x) { return !x || (*x > 0 && std::isfinite(*x)); };
+  if (settings.level && (*settings.level < 0 || *settings.level > kMaxLevel))
+    throw SettingsError("level", "must be 0 .. " + std::to_string(kMaxLevel));
+  if (!positive(settings.tolerance)) throw SettingsError("tolerance", "must be a positive number");
+  if (settings.level && settings.tolerance)
+    throw SettingsError("tolerance", "excludes a level (the tolerance chooses the levels)");
+  if (settings.absolute && !settings.tolerance) throw SettingsError("absolute", "needs a tolerance");
+  const PolarCapOptions& cap = settings.patch.cap;
+  if (cap.radial_steps < 1 || cap.radial_steps > kMaxRadialSteps)
+    throw SettingsError("radial_steps", "must be 1 or " + std::to_string(kMaxRadialSteps));
+  if (!positive(cap.lambda)) throw SettingsError("polar_lambda", "must be a positive number");
+  if (settings.patch.separate_poles && !settings.patch.polar) throw SettingsError("separate_poles", "needs polar caps");
   const FitSettings& fit = settings.fit;
-  if (!(fit.fair_weight >= 0 && std::isfinite(fit.fair_weight)))
-    throw SettingsError("the fairing weight must be a positive number");
-  if (fit.fair_weight > 0 && fit.mode != FitMode::Interpolate)
-    throw SettingsError("a fairing weight needs the interpolating fit");
+  if (!positive(fit.fair_weight)) throw SettingsError("fair", "must be a positive number (the weight of the fairing energy)");
+  if (fit.fair_weight && fit.mode != FitMode::Interpolate) throw SettingsError("fair", "needs the interpolating fit");
   if (fit.mode == FitMode::Interpolate && settings.patch.separate_poles)
-    throw SettingsError("the interpolating fit does not support the separating first step (separate poles): "
-                        "it changes the subdivision rule the fit solves for");
-  if (fit.energy.levels < 0 || fit.energy.levels > 4) throw SettingsError("the fairing energy levels must be 0 .. 4");
-  if (settings.level < 0) throw SettingsError("the level must be >= 0");
-  if (settings.patch.cap.radial_steps < 1 || settings.patch.cap.radial_steps > 4)
-    throw SettingsError("the radial pre-steps of polar caps must be 1 .. 4");
-  if (!(settings.patch.cap.lambda > 0 && std::isfinite(settings.patch.cap.lambda)))
-    throw SettingsError("the polar cap's lambda must be a positive number");
-  if (settings.tolerance_given && !(settings.tolerance > 0 && std::isfinite(settings.tolerance)))
-    throw SettingsError("the tolerance must be a positive number");
+    throw SettingsError("separate_poles", "is not supported by the interpolating fit (the separating step changes "
+                                          "the subdivision rule the fit solves for)");
+  if (fit.energy.levels < 0 || fit.energy.levels > 4) throw SettingsError("fair_levels", "must be 0 .. 4");
+  validate(settings.limits);
 }
 
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const ConversionSettings& settings, const ConversionProgress& progress,
                          std::vector<std::string> warnings) {
-  check_settings(settings);
+  validate(settings);
   ConversionResult c;
   c.warnings = std::move(warnings);
-  c.tolerance_given = settings.tolerance_given;
+  // A level pins the levels; else a tolerance (the user's or the default) chooses them.
+  const bool tolerance_given = !settings.level;
+  c.tolerance_given = tolerance_given;
   c.tolerance_absolute = settings.absolute;
   auto stage = [&](const std::string& what) {
     if (progress.stage) progress.stage(what);
@@ -106,7 +133,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     if (progress.warning) progress.warning(w);
     c.warnings.push_back(w);
   };
-  const int level = settings.tolerance_given ? 0 : settings.level;
+  const int level = settings.level.value_or(0);
   bool any_surface = false;
   for (const char hole : base.face_hole) any_surface = any_surface || !hole;
   if (!any_surface)
@@ -152,13 +179,13 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     const auto t0 = Clock::now();
     FitReport& fr = c.fit;
     fr.mode = FitMode::Interpolate;
-    fr.fair_weight = settings.fit.fair_weight;
+    fr.fair_weight = settings.fit.fair_weight.value_or(0);
     std::vector<PolarStructure> polar;
     if (settings.patch.polar) polar = detect_polar_structures(base).structures;
-    if (settings.fit.fair_weight > 0) {
-      stage("fitting the cage to its vertices (fairing weight " + short_number(settings.fit.fair_weight) + ")");
+    if (settings.fit.fair_weight) {
+      stage("fitting the cage to its vertices (fairing weight " + short_number(fr.fair_weight) + ")");
       FairOptions fo;
-      fo.weight = settings.fit.fair_weight;
+      fo.weight = fr.fair_weight;
       fo.energy = settings.fit.energy;
       fo.polar = polar;
       const FairResult r = fair(base, positions, positions, fo);
@@ -209,13 +236,13 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   };
   build(level);
 
-  if (settings.tolerance_given) {
+  if (tolerance_given) {
     // Each fan gets the extra levels its own deviation needs (per-valence rates), so a
     // tolerance deepens only the fans that miss it; measured again after each rebuild.
     ToleranceResult& tr = c.tolerance;
-    tr.requested = settings.tolerance;
-    tr.is_default = settings.tolerance_is_default;
-    tr.absolute = settings.absolute ? settings.tolerance : settings.tolerance * c.build.set.model_size;
+    tr.requested = settings.tolerance.value_or(kDefaultTolerance);
+    tr.is_default = !settings.tolerance;
+    tr.absolute = settings.absolute ? tr.requested : tr.requested * c.build.set.model_size;
     measure_deviation_now();
     tr.first_max = c.deviation.max;
     std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
@@ -287,7 +314,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   stage("measuring continuity");
   c.continuity = measure_continuity(c.exported.set, kContinuitySamples);
   c.ms.continuity = ms_since(t);
-  if (!settings.tolerance_given) measure_deviation_now();
+  if (!tolerance_given) measure_deviation_now();
   collect_fans(c);
   measure_caps(c);
   c.polar = settings.patch.polar;

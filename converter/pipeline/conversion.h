@@ -7,15 +7,18 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "converter/occt/brep_builder.h"
 #include "converter/pipeline/resources.h"
+#include "converter/pipeline/settings_error.h"
 #include "converter/pipeline/text.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
+#include "core/eval/preview_mesh.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
 #include "core/patch/packing.h"
@@ -44,10 +47,12 @@ constexpr int kDeviationSampleLevels = 2;
 /// least squares with the thin-plate energy as regulariser).
 enum class FitMode { Approximate, Interpolate };
 const char* to_string(FitMode mode);
+/// "approximate" or "interpolate". \throw SettingsError (setting "fit")
+FitMode fit_mode(const std::string& name);
 
 struct FitSettings {
   FitMode mode = FitMode::Approximate;
-  double fair_weight = 0;  ///< > 0: the fair fit with this weight (Interpolate only); 0: exact
+  std::optional<double> fair_weight;  ///< given: the fair fit with this weight (> 0, Interpolate only); else exact
   EnergyOptions energy;    ///< the fairing energy of a fair fit
 };
 
@@ -55,28 +60,30 @@ struct FitSettings {
 /// (core/patch/packing.h), or one face per coarse quad.
 enum class FaceMode { Packed, PerQuad };
 const char* to_string(FaceMode mode);
+/// "packed" or "per-quad". \throw SettingsError (setting "faces")
+FaceMode face_mode(const std::string& name);
 
-/// What to convert with. `patch` is handed to build_patches untouched, except that its
-/// extra_levels is set from `level` or chosen by `tolerance`.
+/// Most extra levels a level setting pins (as many as a tolerance adds at one fan).
+constexpr int kMaxLevel = kMaxFanExtraLevels;
+/// The radial pre-steps of a polar cap the front ends offer: the joins and the B-rep are
+/// measured with 1 and 2 (docs/polar.md); the core takes any count >= 1.
+constexpr int kMaxRadialSteps = 2;
+
+/// What to convert with, as the user gave it; validate() checks it. `patch` is handed to
+/// build_patches untouched, except that its extra_levels is set from `level` or chosen by the
+/// tolerance.
 struct ConversionSettings {
   PatchOptions patch;
-  int level = 0;                ///< extra levels beyond the minimum, >= 0 (ignored with a tolerance)
-  bool tolerance_given = false;  ///< choose the level so that the deviation is <= tolerance
-  double tolerance = 0;         ///< > 0 when given
+  std::optional<int> level;         ///< pin the extra levels beyond the minimum at every fan
+  std::optional<double> tolerance;  ///< choose each fan's levels for this deviation; with
+                                    ///< neither, kDefaultTolerance
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
-  bool tolerance_is_default = false;  ///< the tolerance is kDefaultTolerance, not the user's
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
   FaceMode faces = FaceMode::Packed;
   FitSettings fit;
   /// Refused before any work when estimate_conversion exceeds them (resources.h); with a
   /// tolerance, the extra levels are capped to stay within them.
   ResourceLimits limits;
-};
-
-/// A setting that cannot be used (negative level, bad tolerance, a level too deep for the cage).
-class SettingsError : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
 };
 
 /// Progress reporting; every member may be empty.
@@ -167,13 +174,18 @@ struct ConversionResult {
   Timings ms;             ///< load and write are the caller's to fill
 };
 
-/// Checks `settings` on their own (level >= 0, a positive finite tolerance).
-/// \throw SettingsError
-void check_settings(const ConversionSettings& settings);
+/// Checks `settings` on their own: the one place of the rules of every conversion setting.
+/// \throw SettingsError naming the first setting that breaks its rule
+void validate(const ConversionSettings& settings);
+
+/// The preview colouring: "deviation", "curvature" or "zebra". \throw SettingsError ("preview")
+PreviewColor preview_color(const std::string& name);
+/// Samples per patch side of a preview or a quality measure: 2 .. 64. \throw SettingsError (`setting`)
+void check_samples(const std::string& setting, int samples);
 
 /// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
 /// result's warning list.
-/// \throw SettingsError (see check_settings), ResourceError (the estimate exceeds
+/// \throw SettingsError (see validate), ResourceError (the estimate exceeds
 ///        settings.limits, resources.h), InvalidMeshError (every face is a hole: no surface),
 ///        FitError (FitMode::Interpolate: no cage interpolates the vertices; names them),
 ///        std::invalid_argument (topology the patch builder does not support),
