@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <functional>
 
 #include "converter/cli/commands.h"
 #include "converter/cli/quality_json.h"
@@ -27,7 +28,7 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
                 "of a coarse quad is taken on the face that holds it");
   c->add_option("--json", o.json, "Write the quality report as JSON");
   c->add_option("--samples", o.samples, "Samples per patch side (default 9)");
-  c->add_flag("-q,--quiet", o.quiet, "No progress and no summary (warnings are still printed)");
+  c->add_flag("-q,--quiet", o.quiet, "No progress, notes or summary (warnings are still printed)");
   add_limit_options(*c, o.limits, "the faces of the refined mesh the patches are built from (as convert)");
   return c;
 }
@@ -51,8 +52,10 @@ void run_check(const CheckOptions& o, std::ostream& err) {
 
   pipeline::ConversionProgress progress;
   if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
-  progress.warning = [&](const std::string& w) { err << w << "\n"; };
+  DiagnosticPrinter diagnostics(err, o.quiet);
+  progress.diagnostic = std::ref(diagnostics);
   const pipeline::ConversionResult c = pipeline::convert(base, positions, settings, progress, warnings);
+  diagnostics.finish();
 
   if (!o.quiet) err << "subd2nurbs: measuring against the exact limit surface...\n";
   const auto t = Clock::now();

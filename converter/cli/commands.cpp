@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <new>
 #include <vector>
 
@@ -226,6 +227,33 @@ pipeline::ResourceLimits resource_limits(const LimitOptionValues& values) {
   return limits;
 }
 
+void DiagnosticPrinter::operator()(const pipeline::ConversionDiagnostic& d) {
+  if (quiet_ && d.severity == pipeline::Severity::Note) return;
+  if (d.code == pipeline::DiagnosticCode::PoleNotPolar) poles_.push_back(d);
+  else err_ << pipeline::report_text(d) << "\n";
+}
+
+void DiagnosticPrinter::finish() {
+  if (poles_.size() <= kListedPoles) {
+    for (const pipeline::ConversionDiagnostic& d : poles_) err_ << pipeline::report_text(d) << "\n";
+  } else {
+    std::map<std::string, int> by_category;
+    int mendable = 0;
+    for (const pipeline::ConversionDiagnostic& d : poles_) {
+      ++by_category[d.category];
+      mendable += !d.remedy.empty();
+    }
+    std::string counts;
+    for (const auto& [category, count] : by_category)
+      counts += (counts.empty() ? "" : ", ") + std::to_string(count) + ": " + category;
+    err_ << "subd2nurbs: note: " << poles_.size() << " vertices are not polar structures, Catmull-Clark is used there ("
+         << counts << ")";
+    if (mendable > 0) err_ << "; " << option_name("separate_poles") << " may make " << mendable << " of them polar caps";
+    err_ << "; `subd2nurbs info --json` lists them all\n";
+  }
+  poles_.clear();
+}
+
 std::string option_name(const std::string& setting) {
   if (setting == "polar_lambda") return "--lambda";
   if (setting == "preview") return "--color";
@@ -363,7 +391,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                     "the polynomial pieces the patches are built from, estimated (default " +
                         number(pipeline::kDefaultMaxConvertFaces) + ")");
   convert_command->add_flag("-q,--quiet", convert.quiet,
-                            "No progress and no summary on stderr (warnings are still printed)");
+                            "No progress, notes or summary on stderr (warnings are still printed)");
 
   LimitOptions limit;
   CLI::App* limit_command = add_limit_command(app, limit);

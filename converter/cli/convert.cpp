@@ -245,7 +245,8 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   callbacks.brep_fraction = [&](double fraction) {
     if (brep_percent) brep_percent(fraction);
   };
-  callbacks.warning = [&](const std::string& w) { err << w << "\n"; };
+  DiagnosticPrinter diagnostics(err, options.quiet);
+  callbacks.diagnostic = std::ref(diagnostics);
   ConversionResult c;
   try {
     c = pipeline::convert(base, positions, settings, callbacks, std::move(load_warnings));
@@ -254,6 +255,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     throw;
   }
   progress.done();
+  diagnostics.finish();
   c.input = options.mesh;
   c.output.path = options.output;
   c.output.format = output_kind_name(kind);

@@ -72,6 +72,33 @@ const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed
 
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
+const char* to_string(Severity severity) { return severity == Severity::Note ? "note" : "warning"; }
+
+const char* to_string(DiagnosticCode code) {
+  switch (code) {
+    case DiagnosticCode::InterpolationSingular: return "interpolation_singular";
+    case DiagnosticCode::ToleranceCapped: return "tolerance_capped";
+    case DiagnosticCode::ToleranceNotMet: return "tolerance_not_met";
+    case DiagnosticCode::PacksRejected: return "packs_rejected";
+    case DiagnosticCode::PoleNotPolar: return "pole_not_polar";
+    case DiagnosticCode::PolesSeparated: return "poles_separated";
+  }
+  return "?";
+}
+
+std::string report_text(const ConversionDiagnostic& d) {
+  std::string text = std::string("subd2nurbs: ") + to_string(d.severity) + ": " + d.message;
+  if (d.code == DiagnosticCode::PoleNotPolar && !d.remedy.empty()) text += " (--separate-poles may make it a polar cap)";
+  if (d.code == DiagnosticCode::ToleranceCapped && !d.remedy.empty()) text.insert(text.size() - 1, ", --max-faces / --max-memory");
+  return text;
+}
+
+std::vector<std::string> warning_texts(const ConversionResult& result) {
+  std::vector<std::string> texts = result.warnings;
+  for (const ConversionDiagnostic& d : result.diagnostics) texts.push_back(report_text(d));
+  return texts;
+}
+
 FitMode fit_mode(const std::string& name) {
   if (name == "approximate") return FitMode::Approximate;
   if (name == "interpolate") return FitMode::Interpolate;
@@ -129,9 +156,12 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   auto stage = [&](const std::string& what) {
     if (progress.stage) progress.stage(what);
   };
-  auto warn = [&](const std::string& w) {
-    if (progress.warning) progress.warning(w);
-    c.warnings.push_back(w);
+  auto report = [&](ConversionDiagnostic d) {
+    if (progress.diagnostic) progress.diagnostic(d);
+    c.diagnostics.push_back(std::move(d));
+  };
+  auto warn = [&](DiagnosticCode code, const std::string& message) {
+    report({Severity::Warning, code, message, -1, "", ""});
   };
   const int level = settings.level.value_or(0);
   bool any_surface = false;
@@ -205,8 +235,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       fr.null_vertices = r.null_vertices;
       fr.no_surface = static_cast<int>(r.no_surface.size());
       if (r.singular)
-        warn("subd2nurbs: warning: the interpolation system is singular near vertices " + index_list(r.null_vertices) +
-             ": the interpolating cage is not unique, the one nearest to the input was used");
+        warn(DiagnosticCode::InterpolationSingular,
+             "the interpolation system is singular near vertices " + index_list(r.null_vertices) +
+                 ": the interpolating cage is not unique, the one nearest to the input was used");
     }
     fr.polar_vertices = 0;
     for (const PolarStructure& s : polar) fr.polar_vertices += 1 + 2 * s.valence;
@@ -246,6 +277,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     measure_deviation_now();
     tr.first_max = c.deviation.max;
     std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
+    bool by_limits = false;  // the last cap came from the face and memory limits (a setting may lift it)
     for (int round = 0; round < kToleranceRounds; ++round) {
       const std::vector<int> before = extra;
       bool deeper = false;
@@ -257,7 +289,8 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
         const int use = std::min(want, kMaxFanExtraLevels);
         if (use > extra[fan.vertex] && !fits(use)) {  // the limits bound every fan alike
           tr.capped = true;
-          tr.cap_reason = "the face and memory limits, --max-faces / --max-memory";
+          tr.cap_reason = "the face and memory limits";
+          by_limits = true;
           continue;
         }
         if (use > extra[fan.vertex]) {
@@ -266,6 +299,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
         } else if (want > kMaxFanExtraLevels) {
           tr.capped = true;
           tr.cap_reason = "at most " + std::to_string(kMaxFanExtraLevels) + " extra levels per fan";
+          by_limits = false;
         }
       }
       if (!deeper) break;
@@ -285,13 +319,15 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     tr.used = *std::max_element(extra.begin(), extra.end());
     tr.fans_deepened = static_cast<int>(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; }));
     if (tr.capped)
-      warn("subd2nurbs: warning: the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
-           std::to_string(tr.used) + " (" + tr.cap_reason + ")");
+      report({Severity::Warning, DiagnosticCode::ToleranceCapped,
+              "the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
+                  std::to_string(tr.used) + " (" + tr.cap_reason + ")",
+              -1, by_limits ? "max_faces" : "", ""});
     tr.met = c.deviation.max <= tr.absolute;
     if (!tr.met)
-      warn("subd2nurbs: warning: tolerance NOT met: deviation " + short_number(c.deviation.max) +
-           " > tolerance " + short_number(tr.absolute) + " (model units) at level " +
-           std::to_string(c.build.info.level));
+      warn(DiagnosticCode::ToleranceNotMet, "tolerance NOT met: deviation " + short_number(c.deviation.max) +
+                                                " > tolerance " + short_number(tr.absolute) +
+                                                " (model units) at level " + std::to_string(c.build.info.level));
   }
   const PatchBuildInfo& info = c.build.info;
 
@@ -302,8 +338,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     stage("packing regular regions into faces");
     c.exported = pack_patches(c.build);
     if (c.exported.rejected_packs > 0)
-      warn("subd2nurbs: warning: " + std::to_string(c.exported.rejected_packs) +
-           " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
+      warn(DiagnosticCode::PacksRejected,
+           std::to_string(c.exported.rejected_packs) +
+               " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
   } else {
     c.exported = unpacked(c.build.set);
   }
@@ -322,13 +359,19 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   for (const RejectedPole& r : info.rejected_poles) {
     const bool separable = r.kind != RejectedPole::Kind::Structure && !settings.patch.separate_poles;
     if (settings.patch.polar && (r.valence >= kMinPolarValence || separable))
-      warn("subd2nurbs: note: vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
-           ") is not a polar structure, Catmull-Clark is used there: " + r.reason +
-           (separable ? " (--separate-poles may make it a polar cap)" : ""));
+      report({Severity::Note, DiagnosticCode::PoleNotPolar,
+              "vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
+                  ") is not a polar structure, Catmull-Clark is used there: " + r.reason,
+              r.vertex, separable ? "separate_poles" : "",
+              r.kind == RejectedPole::Kind::LowValence ? "valence below " + std::to_string(kMinPolarValence)
+              : r.kind == RejectedPole::Kind::TooClose ? "too close to another pole"
+                                                       : "their rings do not form one"});
   }
   if (!info.separated_poles.empty())
-    warn("subd2nurbs: note: separating first step at " + std::to_string(info.separated_poles.size()) +
-         " pole(s); the patches are built from that level-1 cage");
+    report({Severity::Note, DiagnosticCode::PolesSeparated,
+            "separating first step at " + std::to_string(info.separated_poles.size()) +
+                " pole(s); the patches are built from that level-1 cage",
+            -1, "", ""});
 
   if (settings.build_brep) {
     t = Clock::now();
@@ -358,7 +401,8 @@ std::string report_json(const ConversionResult& c) {
   line("  \"output_format\": " + optional_string(c.output.format) + ",");
   line("  \"step_schema\": " + optional_string(c.output.step_schema) + ",");
   std::string warnings = "  \"warnings\": [";
-  for (size_t i = 0; i < c.warnings.size(); ++i) warnings += (i ? ", " : "") + json_string(c.warnings[i]);
+  const std::vector<std::string> texts = warning_texts(c);
+  for (size_t i = 0; i < texts.size(); ++i) warnings += (i ? ", " : "") + json_string(texts[i]);
   line(warnings + "],");
   line("  \"model_size\": " + json_number(size) + ",");
   line("  \"coarse_level\": " + std::to_string(info.coarse_level) + ",");

@@ -86,14 +86,40 @@ struct ConversionSettings {
   ResourceLimits limits;
 };
 
+/// How much a diagnostic matters: a note says what the conversion did instead (Catmull-Clark at
+/// a pole), a warning that the result misses what was asked (a tolerance not met).
+enum class Severity { Note, Warning };
+const char* to_string(Severity severity);  ///< "note", "warning"
+
+/// What a diagnostic is about; to_string gives a stable name ("pole_not_polar").
+enum class DiagnosticCode { InterpolationSingular, ToleranceCapped, ToleranceNotMet, PacksRejected, PoleNotPolar,
+                            PolesSeparated };
+const char* to_string(DiagnosticCode code);
+
+/// Something the conversion reports besides its result, in its own words: no program name and
+/// no front end's option names (a front end words `remedy` its own way).
+struct ConversionDiagnostic {
+  Severity severity = Severity::Warning;
+  DiagnosticCode code = DiagnosticCode::ToleranceNotMet;
+  std::string message;   ///< one sentence
+  int element = -1;      ///< the cage vertex it is about, or -1
+  std::string remedy;    ///< a setting that may mend it, named as SettingsError names settings, or empty
+  std::string category;  ///< PoleNotPolar: the kind of reason ("valence below 6"), for summaries
+};
+
+/// A diagnostic as one line of subd2nurbs-report v1's "warnings" and the Python module's
+/// ConversionResult.warnings: "subd2nurbs: note: ..." with the command line's option as the
+/// remedy, as the command line has always printed it.
+std::string report_text(const ConversionDiagnostic& diagnostic);
+
 /// Progress reporting; every member may be empty.
 struct ConversionProgress {
   /// A stage starts: "building patches", "measuring continuity", "building the B-rep", ...
   std::function<void(const std::string& stage)> stage;
   /// Fraction (0..1] of the B-rep stage done, about every 1 %.
   std::function<void(double fraction)> brep_fraction;
-  /// A warning, as it is found (it is also kept in ConversionResult::warnings).
-  std::function<void(const std::string& warning)> warning;
+  /// A diagnostic, as it is found (it is also kept in ConversionResult::diagnostics).
+  std::function<void(const ConversionDiagnostic& diagnostic)> diagnostic;
 };
 
 struct Timings {
@@ -150,7 +176,8 @@ struct OutputInfo {
 struct ConversionResult {
   std::string input;  ///< the cage's name for the report (set by the caller)
   OutputInfo output;  ///< set by the caller
-  std::vector<std::string> warnings;  ///< the caller's load warnings first, then the pipeline's
+  std::vector<std::string> warnings;  ///< the caller's load warnings, as given
+  std::vector<ConversionDiagnostic> diagnostics;  ///< the pipeline's, in the order found
   PatchBuild build;     ///< the patches per coarse quad, with how they were built
   FaceMode faces = FaceMode::Packed;
   /// What is exported and measured for continuity: build.set packed (FaceMode::Packed) or as
@@ -193,6 +220,9 @@ void check_samples(const std::string& setting, int samples);
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const ConversionSettings& settings, const ConversionProgress& progress = {},
                          std::vector<std::string> warnings = {});
+
+/// The load warnings, then report_text of each diagnostic: the report's "warnings".
+std::vector<std::string> warning_texts(const ConversionResult& result);
 
 /// The quality report (subd2nurbs-report v1, docs/formats.md) as JSON text.
 std::string report_json(const ConversionResult& result);

@@ -435,7 +435,18 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   py::list patches;
   for (const NurbsPatch& p : c.exported.set.patches) patches.append(patch_dict(p));
   d["patches"] = patches;
-  d["warnings"] = c.warnings;
+  d["warnings"] = pipeline::warning_texts(c);
+  py::list diagnostics_list;
+  for (const pipeline::ConversionDiagnostic& x : c.diagnostics) {
+    py::dict e;
+    e["severity"] = pipeline::to_string(x.severity);
+    e["code"] = pipeline::to_string(x.code);
+    e["message"] = x.message;
+    e["element"] = x.element;
+    e["remedy"] = x.remedy.empty() ? py::object(py::none()) : py::object(py::str(x.remedy));
+    diagnostics_list.append(e);
+  }
+  d["diagnostics"] = diagnostics_list;
   d["cage_vertices"] = points_array(c.cage);
   d["model_size"] = c.build.set.model_size;
   d["closed"] = c.build.set.closed;

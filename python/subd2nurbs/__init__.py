@@ -336,7 +336,12 @@ class ConversionResult:
     curve_measures: per shared curve, numpy arrays: curve, claimed (0 boundary, 1 C0, 2 G1,
         3 C1, 4 C2), gap, normal_angle_deg, edge (1-based index into the shape's edges, i.e.
         FreeCAD's "EdgeN", 0 if none).
-    warnings: list of text.
+    warnings: list of text: the cage's warnings, then the conversion's, one line each as the
+        command line prints them ("subd2nurbs: note: vertex 5 (valence 4) is not a polar structure, ...").
+    diagnostics: the conversion's warnings and notes as dicts: severity ("note" or "warning"),
+        code (a stable name, e.g. "pole_not_polar", "tolerance_not_met"), message (no program or
+        option names), element (the cage vertex it is about, or -1), remedy (the keyword argument
+        that may mend it, e.g. "separate_poles", or None).
     """
 
     def __init__(self, d):
@@ -347,6 +352,7 @@ class ConversionResult:
         self.report = json.loads(d["report"])
         self.curve_measures = d["curve_measures"]
         self.warnings = d["warnings"]
+        self.diagnostics = d["diagnostics"]
         self.model_size = d["model_size"]
         self.closed = d["closed"]
         self.preview = d.get("preview")  # convert(preview=...): the coloured tessellation, else None
