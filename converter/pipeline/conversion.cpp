@@ -111,6 +111,23 @@ FaceMode face_mode(const std::string& name) {
   throw SettingsError("faces", "must be packed or per-quad");
 }
 
+void validate_fairing(double weight, const EnergyOptions& energy) {
+  if (!(weight > 0 && std::isfinite(weight))) throw SettingsError("weight", "must be a positive number");
+  if (energy.levels < 0 || energy.levels > 4) throw SettingsError("levels", "must be 0 .. 4");
+  if (!(energy.membrane >= 0 && std::isfinite(energy.membrane))) throw SettingsError("membrane", "must be a number >= 0");
+}
+
+KeepSet keep_set(const std::vector<std::string>& names) {
+  KeepSet keep;
+  for (const std::string& k : names) {
+    if (k == "boundary") keep.boundary = true;
+    else if (k == "creases") keep.creases = true;
+    else if (k == "tagged") keep.tagged = true;
+    else throw SettingsError("keep", "must be boundary, creases or tagged");
+  }
+  return keep;
+}
+
 PreviewColor preview_color(const std::string& name) {
   if (name == "deviation" || name == "curvature" || name == "zebra") return preview_color_from_string(name);
   throw SettingsError("preview", "must be deviation, curvature or zebra");

@@ -205,6 +205,12 @@ struct ConversionResult {
 /// \throw SettingsError naming the first setting that breaks its rule
 void validate(const ConversionSettings& settings);
 
+/// The rules of a fairing (subd2nurbs fair, Python fair()): weight > 0, energy levels 0 .. 4,
+/// membrane >= 0. \throw SettingsError ("weight", "levels", "membrane")
+void validate_fairing(double weight, const EnergyOptions& energy);
+/// The vertices a fairing keeps, by name: boundary, creases, tagged. \throw SettingsError ("keep")
+KeepSet keep_set(const std::vector<std::string>& names);
+
 /// The preview colouring: "deviation", "curvature" or "zebra". \throw SettingsError ("preview")
 PreviewColor preview_color(const std::string& name);
 /// Samples per patch side of a preview or a quality measure: 2 .. 64. \throw SettingsError (`setting`)

@@ -12,7 +12,6 @@
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 
-#include <cmath>
 #include <memory>
 #include <new>
 #include <optional>
@@ -502,23 +501,15 @@ py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, con
                    const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                    const py::dict& options, double weight, const std::vector<std::string>& keep, int levels,
                    double membrane) {
-  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
-  const SubdivLevel level = SubdivLevel::from_input(in);
-  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
-  KeepSet ks;
-  for (const std::string& k : keep) {
-    if (k == "boundary") ks.boundary = true;
-    else if (k == "creases") ks.creases = true;
-    else if (k == "tagged") ks.tagged = true;
-    else throw pipeline::SettingsError("keep", "must be boundary, creases or tagged, not '" + k + "'");
-  }
-  if (!(weight > 0 && std::isfinite(weight))) throw pipeline::SettingsError("weight", "must be a positive number");
-  if (!(membrane >= 0 && std::isfinite(membrane))) throw pipeline::SettingsError("membrane", "must be >= 0");
-  if (levels < 0 || levels > 4) throw pipeline::SettingsError("levels", "must be 0 .. 4");
   FairOptions fo;
   fo.weight = weight;
   fo.energy.levels = levels;
   fo.energy.membrane = membrane;
+  pipeline::validate_fairing(fo.weight, fo.energy);
+  const KeepSet ks = pipeline::keep_set(keep);
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  const SubdivLevel level = SubdivLevel::from_input(in);
+  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
   fo.keep = kept_vertices(level, ks);
   std::vector<Point3> targets;
   limit_rows(level).rows.apply(start, targets);

@@ -456,19 +456,14 @@ def fair(cage, weight=1.0, keep=(), levels=2, membrane=0.0):
     Returns (Cage with the same faces and tags, info dict: energy_before, energy_after,
     limit_moved_max, limit_moved_mean, cage_moved_max, kept, free)."""
     cage = _cage(cage)
-    if isinstance(weight, bool) or not isinstance(weight, numbers.Real) or not math.isfinite(weight) or weight <= 0:
-        raise SettingsError("weight must be a positive number, not %r" % (weight,))
+    weight = _checked("weight", weight, _is_number, "a number", float)
     if isinstance(keep, str):
         keep = (keep,)
     for k in keep:
-        if k not in ("boundary", "creases", "tagged"):
-            raise SettingsError("keep: expected 'boundary', 'creases' or 'tagged', not %r" % (k,))
-    if not _is_int(levels) or not 0 <= levels <= 4:
-        raise SettingsError("levels must be an integer 0 .. 4, not %r" % (levels,))
-    if isinstance(membrane, bool) or not isinstance(membrane, numbers.Real) or not math.isfinite(membrane) \
-            or membrane < 0:
-        raise SettingsError("membrane must be a number >= 0, not %r" % (membrane,))
-    d = _subd2nurbs.fair(*cage._args(), float(weight), list(keep), int(levels), float(membrane))
+        _checked("keep", k, lambda x: isinstance(x, str), "a string", str)
+    levels = _checked("levels", levels, _is_int, "an integer", int)
+    membrane = _checked("membrane", membrane, _is_number, "a number", float)
+    d = _subd2nurbs.fair(*cage._args(), weight, list(keep), levels, membrane)
     o = cage.options
     out = Cage(d.pop("vertices"), cage.faces, cage.creases, cage.corners, cage.holes, o["boundary"],
                o["crease_method"], o["triangles"], name="%s (faired)" % cage.name)

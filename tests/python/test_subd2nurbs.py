@@ -530,6 +530,20 @@ class Fitting(unittest.TestCase):
         self.assertEqual(faired.creases, cage.creases)
         with self.assertRaises(s2n.SettingsError):
             s2n.fair(cage, weight=0)
+        # The fairing's rules are the converter's: the CLI prints the same rule after its option.
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        for kwargs, option, rule in (({"weight": -1.0}, ["--weight=-1"], "must be a positive number"),
+                                     ({"levels": 5}, ["--levels", "5"], "must be 0 .. 4"),
+                                     ({"membrane": -1.0}, ["--membrane=-1"], "must be a number >= 0"),
+                                     ({"keep": "nothing"}, ["--keep", "nothing"], "must be boundary, creases or tagged")):
+            with self.assertRaises(s2n.SettingsError) as e:
+                s2n.fair(cage, **kwargs)
+            setting = next(iter(kwargs))
+            self.assertEqual((e.exception.setting, e.exception.rule), (setting, rule))
+            with tempfile.TemporaryDirectory() as d:
+                r = subprocess.run([CLI, "fair", corpus("catmark_cube"), "-o", os.path.join(d, "f.obj")] + option,
+                                   capture_output=True, text=True)
+            self.assertEqual((r.returncode, r.stderr), (1, "subd2nurbs: error: --%s %s\n" % (setting, rule)))
 
 
 if __name__ == "__main__":
