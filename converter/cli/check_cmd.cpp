@@ -51,7 +51,7 @@ void run_check(const CheckOptions& o, std::ostream& err) {
   const std::vector<Point3> positions = loaded.positions();
 
   pipeline::ConversionProgress progress;
-  if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
+  if (!o.quiet) progress.stage = [&](pipeline::Stage, const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
   DiagnosticPrinter diagnostics(err, o.quiet);
   progress.diagnostic = std::ref(diagnostics);
   const pipeline::ConversionResult c = pipeline::convert(base, positions, settings, progress, warnings);

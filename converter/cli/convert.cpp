@@ -238,9 +238,9 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   // Patches, measures and (unless the output is patch JSON) the B-rep.
   pipeline::ConversionProgress callbacks;
   std::function<void(double)> brep_percent;  // started with the B-rep stage (percent() times it)
-  callbacks.stage = [&](const std::string& what) {
+  callbacks.stage = [&](pipeline::Stage stage, const std::string& what) {
     progress.stage(what);
-    if (what == "building the B-rep") brep_percent = progress.percent(what);
+    if (stage == pipeline::Stage::Brep) brep_percent = progress.percent(what);
   };
   callbacks.brep_fraction = [&](double fraction) {
     if (brep_percent) brep_percent(fraction);

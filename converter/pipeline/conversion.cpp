@@ -72,6 +72,11 @@ const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed
 
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
+const char* to_string(Stage stage) {
+  static const char* const names[] = {"fit", "patches", "deviation", "packing", "continuity", "brep"};  // enum order
+  return names[static_cast<int>(stage)];
+}
+
 const char* to_string(Severity severity) { return severity == Severity::Note ? "note" : "warning"; }
 
 const char* to_string(DiagnosticCode code) {
@@ -170,8 +175,8 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   const bool tolerance_given = !settings.level;
   c.tolerance_given = tolerance_given;
   c.tolerance_absolute = settings.absolute;
-  auto stage = [&](const std::string& what) {
-    if (progress.stage) progress.stage(what);
+  auto stage = [&](Stage which, const std::string& text) {
+    if (progress.stage) progress.stage(which, text);
   };
   auto report = [&](ConversionDiagnostic d) {
     if (progress.diagnostic) progress.diagnostic(d);
@@ -230,7 +235,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     std::vector<PolarStructure> polar;
     if (settings.patch.polar) polar = detect_polar_structures(base).structures;
     if (settings.fit.fair_weight) {
-      stage("fitting the cage to its vertices (fairing weight " + short_number(fr.fair_weight) + ")");
+      stage(Stage::Fit, "fitting the cage to its vertices (fairing weight " + short_number(fr.fair_weight) + ")");
       FairOptions fo;
       fo.weight = fr.fair_weight;
       fo.energy = settings.fit.energy;
@@ -241,7 +246,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       fr.energy_before = r.energy_before;
       fr.energy_after = r.energy_after;
     } else {
-      stage("solving for the cage whose limit passes through its vertices");
+      stage(Stage::Fit, "solving for the cage whose limit passes through its vertices");
       InterpolationOptions io;
       io.polar = polar;
       const InterpolationResult r = interpolate(base, positions, io);
@@ -266,7 +271,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   // Patches, at the level asked for or at the minimum level first for a tolerance.
   auto build = [&](int extra) {
     const auto t0 = Clock::now();
-    stage(extra == 0 ? std::string("building patches")
+    stage(Stage::Patches, extra == 0 ? std::string("building patches")
                      : "building patches (" + std::to_string(extra) + " extra levels)");
     PatchOptions po = settings.patch;
     po.extra_levels = extra;
@@ -277,7 +282,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   // Measures every fan, or (with `remeasure`) only those, keeping the others' last values.
   auto measure_deviation_now = [&](const std::vector<char>* remeasure = nullptr) {
     const auto t0 = Clock::now();
-    stage("measuring the deviation from the limit surface");
+    stage(Stage::Deviation, "measuring the deviation from the limit surface");
     DeviationReport d = measure_deviation(c.build, kDeviationSampleLevels, remeasure ? &c.deviation : nullptr, remeasure);
     c.deviation = std::move(d);
     c.ms.deviation += ms_since(t0);
@@ -324,7 +329,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       po.vertex_extra_levels = extra;
       po.reuse = &c.build;  // only the quads at deepened vertices are rebuilt
       const auto t0 = Clock::now();
-      stage("building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
+      stage(Stage::Patches, "building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
             " vertices for the tolerance)");
       PatchBuild deeper_build = build_patches(base, c.cage, po);
       c.build = std::move(deeper_build);
@@ -352,7 +357,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   auto t = Clock::now();
   c.faces = settings.faces;
   if (settings.faces == FaceMode::Packed) {
-    stage("packing regular regions into faces");
+    stage(Stage::Packing, "packing regular regions into faces");
     c.exported = pack_patches(c.build);
     if (c.exported.rejected_packs > 0)
       warn(DiagnosticCode::PacksRejected,
@@ -365,7 +370,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
 
   // Measures.
   t = Clock::now();
-  stage("measuring continuity");
+  stage(Stage::Continuity, "measuring continuity");
   c.continuity = measure_continuity(c.exported.set, kContinuitySamples);
   c.ms.continuity = ms_since(t);
   if (!tolerance_given) measure_deviation_now();
@@ -392,7 +397,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
 
   if (settings.build_brep) {
     t = Clock::now();
-    stage("building the B-rep");
+    stage(Stage::Brep, "building the B-rep");
     c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
     c.has_brep = true;
     c.ms.brep = ms_since(t);

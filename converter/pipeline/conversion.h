@@ -112,10 +112,15 @@ struct ConversionDiagnostic {
 /// remedy, as the command line has always printed it.
 std::string report_text(const ConversionDiagnostic& diagnostic);
 
+/// The stages of a conversion, in order (Patches and Deviation repeat for a tolerance);
+/// to_string gives a stable name ("patches").
+enum class Stage { Fit, Patches, Deviation, Packing, Continuity, Brep };
+const char* to_string(Stage stage);
+
 /// Progress reporting; every member may be empty.
 struct ConversionProgress {
-  /// A stage starts: "building patches", "measuring continuity", "building the B-rep", ...
-  std::function<void(const std::string& stage)> stage;
+  /// A stage starts, with a line for people: "building patches (2 extra levels)", ...
+  std::function<void(Stage stage, const std::string& text)> stage;
   /// Fraction (0..1] of the B-rep stage done, about every 1 %.
   std::function<void(double fraction)> brep_fraction;
   /// A diagnostic, as it is found (it is also kept in ConversionResult::diagnostics).

@@ -193,9 +193,8 @@ class _Progress:
         self.done = 0
 
     def __call__(self, stage, fraction):
-        target = {"building patches": 10, "measuring the deviation from the limit surface": 20,
-                  "measuring continuity": 30}.get(stage, None)
-        if stage == "building the B-rep":
+        target = {"patches": 10, "deviation": 20, "continuity": 30}.get(stage.key, None)
+        if stage.key == "brep":
             target = 30 + int(70 * fraction)
         if target is not None:
             while self.done < min(target, self.STEPS):

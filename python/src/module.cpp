@@ -371,7 +371,8 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
                  bool build_brep, bool polar, int radial_steps, double polar_lambda, bool separate_poles,
                  const std::string& fit, std::optional<double> fair,
                  const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
-                 const std::function<void(const std::string&, double)>& progress, std::optional<double> max_faces,
+                 const std::function<void(const std::string&, double, const std::string&)>& progress,
+                 std::optional<double> max_faces,
                  const py::object& max_memory, const std::string& faces) {
   // The settings first, by the pipeline's rules (the package checked only their types).
   pipeline::ConversionSettings settings;
@@ -397,13 +398,14 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   const std::vector<Point3> points(in.positions.begin(), in.positions.end());
 
   pipeline::ConversionProgress callbacks;
-  std::string current;
+  std::string current, key;
   if (progress) {
-    callbacks.stage = [&](const std::string& s) {
+    callbacks.stage = [&](pipeline::Stage stage, const std::string& s) {
       current = s;
-      progress(s, 0.0);
+      key = pipeline::to_string(stage);
+      progress(s, 0.0, key);
     };
-    callbacks.brep_fraction = [&](double f) { progress(current, f); };
+    callbacks.brep_fraction = [&](double f) { progress(current, f, key); };
   }
   pipeline::ConversionResult c =
       pipeline::convert(base, points, settings, callbacks, load_warnings ? *load_warnings : diagnostics_text(diagnostics));

@@ -388,6 +388,15 @@ class ConversionResult:
                                                         "valid" if b["valid"] else "NOT valid"))
 
 
+class StageText(str):
+    """A progress line (str) of convert(), with the stage's stable name as ``key``."""
+
+    def __new__(cls, text, key):
+        self = super().__new__(cls, text)
+        self.key = key
+        return self
+
+
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
             progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
             preview=None, preview_samples=16, fit="approximate", fair=None, max_faces=None, max_memory=None,
@@ -416,7 +425,9 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         --preview-samples do; the result's `preview`
         is then a dict of numpy arrays (positions, normals, colors, values, triangles) and the
         colour map's value_min / value_max.
-    progress: a callable(stage: str, fraction: float) called as the stages run.
+    progress: a callable(stage: str, fraction: float) called as the stages run; `stage` is a
+        line for people ("building patches (2 extra levels)") whose `key` attribute names the
+        stage: "fit", "patches", "deviation", "packing", "continuity" or "brep".
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
     max_faces, max_memory: refuse (SettingsError, before any work) when the estimated polynomial
         pieces the patches are built from would be more, or the estimated memory larger,
@@ -439,9 +450,10 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
     face_limit, memory = _limits(max_faces, max_memory)
+    on_stage = None if progress is None else lambda text, fraction, key: progress(StageText(text, key), fraction)
     d = _subd2nurbs.convert(*cage._args(), level, tolerance, bool(absolute), bool(brep),
                             bool(polar), radial_steps, polar_lambda, bool(separate_poles),
-                            fit, fair, preview or "", preview_samples, cage.name, cage.warnings, progress,
+                            fit, fair, preview or "", preview_samples, cage.name, cage.warnings, on_stage,
                             face_limit, memory, faces)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:

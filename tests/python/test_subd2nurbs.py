@@ -275,6 +275,10 @@ class Conversion(unittest.TestCase):
         self.assertIn("building the B-rep", names)
         self.assertTrue(all(0 <= x <= 1 for _, x in stages))
         self.assertEqual(max(x for s, x in stages if s == "building the B-rep"), 1.0)
+        # Each line names its stage (the pipeline's Stage), whatever its wording.
+        self.assertEqual([s.key for s, _ in stages if s.startswith("building patches")][0], "patches")
+        self.assertEqual({s.key for s, _ in stages} - {"fit"},
+                         {"patches", "deviation", "packing", "continuity", "brep"})
 
     def test_worst_edges_are_edges_of_the_shape(self):
         r = s2n.convert(s2n.read_obj(corpus("catmark_cube")))
