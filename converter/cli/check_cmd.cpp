@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <functional>
 
 #include "converter/cli/commands.h"
 #include "converter/cli/quality_json.h"
@@ -21,22 +22,26 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
   c->add_option("--level", o.level,
                 "Pin the refinement levels beyond the minimum (as convert --level; default: the "
                 "levels convert's default tolerance chooses)")
-      ->check(CLI::Range(0, 12))
       ->each([&o](const std::string&) { o.level_given = true; });
   c->add_option("--faces", o.faces,
                 "The faces measured: packed (default, as convert exports them) or per-quad; every sample "
-                "of a coarse quad is taken on the face that holds it")
-      ->check(CLI::IsMember({"packed", "per-quad"}));
+                "of a coarse quad is taken on the face that holds it");
   c->add_option("--json", o.json, "Write the quality report as JSON");
-  c->add_option("--samples", o.samples, "Samples per patch side (default 9)")->check(CLI::Range(2, 64));
-  c->add_flag("-q,--quiet", o.quiet, "No progress and no summary (warnings are still printed)");
+  c->add_option("--samples", o.samples, "Samples per patch side (default 9)");
+  c->add_flag("-q,--quiet", o.quiet, "No progress, notes or summary (warnings are still printed)");
   add_limit_options(*c, o.limits, "the faces of the refined mesh the patches are built from (as convert)");
   return c;
 }
 
 void run_check(const CheckOptions& o, std::ostream& err) {
   using Clock = std::chrono::steady_clock;
-  const pipeline::ResourceLimits limits = resource_limits(o.limits);
+  pipeline::ConversionSettings settings;  // the same patches as convert without options
+  if (o.level_given) settings.level = o.level;
+  settings.build_brep = false;
+  settings.faces = pipeline::face_mode(o.faces);
+  settings.limits = resource_limits(o.limits);
+  pipeline::validate(settings);
+  pipeline::check_samples("samples", o.samples);
   check_outputs(o.mesh, {{"--json", o.json}});
   if (!o.quiet) err << "subd2nurbs: reading " << o.mesh << "\n";
   const LoadedInput loaded = load_input(o.mesh);
@@ -45,18 +50,12 @@ void run_check(const CheckOptions& o, std::ostream& err) {
   for (const std::string& w : warnings) err << w << "\n";
   const std::vector<Point3> positions = loaded.positions();
 
-  pipeline::ConversionSettings settings;
-  settings.level = o.level_given ? o.level : 0;
-  settings.tolerance_given = !o.level_given;  // the same patches as convert without options
-  settings.tolerance = pipeline::kDefaultTolerance;
-  settings.tolerance_is_default = !o.level_given;
-  settings.build_brep = false;
-  settings.faces = o.faces == "per-quad" ? pipeline::FaceMode::PerQuad : pipeline::FaceMode::Packed;
-  settings.limits = limits;
   pipeline::ConversionProgress progress;
-  if (!o.quiet) progress.stage = [&](const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
-  progress.warning = [&](const std::string& w) { err << w << "\n"; };
+  if (!o.quiet) progress.stage = [&](pipeline::Stage, const std::string& s) { err << "subd2nurbs: " << s << "...\n"; };
+  DiagnosticPrinter diagnostics(err, o.quiet);
+  progress.diagnostic = std::ref(diagnostics);
   const pipeline::ConversionResult c = pipeline::convert(base, positions, settings, progress, warnings);
+  diagnostics.finish();
 
   if (!o.quiet) err << "subd2nurbs: measuring against the exact limit surface...\n";
   const auto t = Clock::now();

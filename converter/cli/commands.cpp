@@ -4,10 +4,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <new>
 #include <vector>
 
@@ -37,8 +39,6 @@ namespace subd2nurbs::cli {
 
 namespace {
 
-/// Beyond the face limit for any cage; keeps 4^levels far from overflowing.
-constexpr int kMaxLevels = 20;
 /// Above this many output faces, refine reports what it is doing on stderr.
 constexpr double kProgressFaces = 100e3;
 
@@ -211,8 +211,9 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
 }
 
 void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning) {
-  command.add_option("--max-faces", values.max_faces, "Refuse when " + faces_meaning + " would exceed N")
-      ->check(CLI::PositiveNumber);
+  command.add_option_function<double>(
+      "--max-faces", [&values](const double& n) { values.max_faces = n; },
+      "Refuse when " + faces_meaning + " would exceed N");
   command.add_option("--max-memory", values.max_memory,
                      "Refuse when the estimated memory would exceed SIZE (bytes, or with K/M/G/T; default "
                      "3/4 of the memory available)");
@@ -220,12 +221,45 @@ void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::
 
 pipeline::ResourceLimits resource_limits(const LimitOptionValues& values) {
   pipeline::ResourceLimits limits;
-  if (values.max_faces < 0 || !std::isfinite(values.max_faces)) throw UsageError("--max-faces must be a positive number");
   limits.max_faces = values.max_faces;
-  if (!values.max_memory.empty() && !pipeline::parse_memory_size(values.max_memory, limits.max_memory))
-    throw UsageError("--max-memory '" + printable(values.max_memory, 40) +
-                     "' is not a size (bytes, or a number with K, M, G or T, e.g. 8G)");
+  if (!values.max_memory.empty()) limits.max_memory = pipeline::memory_size(values.max_memory);
+  pipeline::validate(limits);
   return limits;
+}
+
+void DiagnosticPrinter::operator()(const pipeline::ConversionDiagnostic& d) {
+  if (quiet_ && d.severity == pipeline::Severity::Note) return;
+  if (d.code == pipeline::DiagnosticCode::PoleNotPolar) poles_.push_back(d);
+  else err_ << pipeline::report_text(d) << "\n";
+}
+
+void DiagnosticPrinter::finish() {
+  if (poles_.size() <= kListedPoles) {
+    for (const pipeline::ConversionDiagnostic& d : poles_) err_ << pipeline::report_text(d) << "\n";
+  } else {
+    std::map<std::string, int> by_category;
+    int mendable = 0;
+    for (const pipeline::ConversionDiagnostic& d : poles_) {
+      ++by_category[d.category];
+      mendable += !d.remedy.empty();
+    }
+    std::string counts;
+    for (const auto& [category, count] : by_category)
+      counts += (counts.empty() ? "" : ", ") + std::to_string(count) + ": " + category;
+    err_ << "subd2nurbs: note: " << poles_.size() << " vertices are not polar structures, Catmull-Clark is used there ("
+         << counts << ")";
+    if (mendable > 0) err_ << "; " << option_name("separate_poles") << " may make " << mendable << " of them polar caps";
+    err_ << "; `subd2nurbs info --json` lists them all\n";
+  }
+  poles_.clear();
+}
+
+std::string option_name(const std::string& setting) {
+  if (setting == "polar_lambda") return "--lambda";
+  if (setting == "preview") return "--color";
+  std::string name = "--" + setting;
+  std::replace(name.begin(), name.end(), '_', '-');
+  return name;
 }
 
 // --- subcommands ---------------------------------------------------------------------------
@@ -240,7 +274,7 @@ void run_info(const InfoOptions& options, std::ostream& out) {
 }
 
 void run_refine(const RefineOptions& options, std::ostream& err) {
-  if (options.levels < 0) throw UsageError("the number of levels must be >= 0");
+  pipeline::check_refine_levels(options.levels);
   if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
   resource_limits(options.limits);  // a malformed --max-memory is refused before any work
   check_outputs(options.mesh, {{"-o", options.output}});
@@ -291,8 +325,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       app.add_subcommand("refine", "Refine a cage uniformly and write the result as OBJ");
   refine_command->add_option("MESH", refine.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
       ->required();
-  refine_command->add_option("-l,--levels", refine.levels, "Number of refinement levels (>= 0)")
-      ->check(CLI::Range(0, kMaxLevels))
+  refine_command->add_option("-l,--levels", refine.levels,
+                             "Number of refinement levels (0 .. " + std::to_string(pipeline::kMaxRefineLevels) + ")")
       ->capture_default_str();
   refine_command->add_option("-o,--output", refine.output, "Output OBJ file")->required();
   refine_command->add_option("--polar", refine.polar,
@@ -315,18 +349,14 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
           ->add_option("--level", convert.level,
                        "Pin the refinement levels beyond the minimum at every fan instead of "
                        "choosing them from the tolerance: each level shrinks the deviation near "
-                       "extraordinary vertices")
-          ->check(CLI::Range(0, 12));
+                       "extraordinary vertices");
   CLI::Option* tolerance_option =
       convert_command
           ->add_option("--tolerance", convert.tolerance,
                        "Deviation from the limit surface to reach, relative to the bounding-box "
                        "diagonal (see --absolute): each fan gets the levels it needs, at most " +
-                           std::to_string(kMaxFanExtraLevels) + " extra (default 1e-4 unless --level is given)")
-          ->check(CLI::PositiveNumber)
-          ->excludes(level_option);
-  convert_command->add_flag("--absolute", convert.absolute, "--tolerance is in model units")
-      ->needs(tolerance_option);
+                           std::to_string(kMaxFanExtraLevels) + " extra (default 1e-4 unless --level is given)");
+  convert_command->add_flag("--absolute", convert.absolute, "--tolerance is in model units");
   convert_command->add_option("--polar", convert.polar,
                               "Polar structures: on (one singular polar cap each, default) or off "
                               "(Catmull-Clark)");
@@ -339,8 +369,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                               "Scale of a polar cap's projected 1-link, > 0 (default 0.75)");
   convert_command->add_option("--faces", convert.faces,
                               "packed (default: each regular region of quads is one B-spline face) or "
-                              "per-quad (one face per coarse quad)")
-      ->check(CLI::IsMember({"packed", "per-quad"}));
+                              "per-quad (one face per coarse quad)");
   convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242")
       ->check(CLI::IsMember({"ap214", "ap242"}));
   convert_command->add_option("--report", convert.report,
@@ -348,15 +377,12 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   convert_command->add_option("--preview", convert.preview,
                               "Also write a GLB preview of the patches with per-vertex colours");
   convert_command->add_option("--color", convert.preview_color,
-                              "Preview colouring: deviation (from the exact limit), curvature (mean), zebra")
-      ->check(CLI::IsMember({"deviation", "curvature", "zebra"}));
+                              "Preview colouring: deviation (from the exact limit), curvature (mean), zebra");
   convert_command->add_option("--preview-samples", convert.preview_samples,
-                              "Preview vertices per patch side (default 12)")
-      ->check(CLI::Range(2, 64));
+                              "Preview vertices per patch side, 2 .. 64 (default 12)");
   convert_command->add_option("--fit", convert.fit,
                               "approximate (default: the cage's own limit surface, which misses its "
-                              "vertices) or interpolate (solve for the cage whose limit passes through them)")
-      ->check(CLI::IsMember({"approximate", "interpolate"}));
+                              "vertices) or interpolate (solve for the cage whose limit passes through them)");
   CLI::Option* fair_option = convert_command->add_option(
       "--fair", convert.fair,
       "With --fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
@@ -365,7 +391,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                     "the polynomial pieces the patches are built from, estimated (default " +
                         number(pipeline::kDefaultMaxConvertFaces) + ")");
   convert_command->add_flag("-q,--quiet", convert.quiet,
-                            "No progress and no summary on stderr (warnings are still printed)");
+                            "No progress, notes or summary on stderr (warnings are still printed)");
 
   LimitOptions limit;
   CLI::App* limit_command = add_limit_command(app, limit);
@@ -400,7 +426,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
     err << "subd2nurbs: error: " << e.what() << "\n";
     return kUsage;
   } catch (const pipeline::SettingsError& e) {
-    err << "subd2nurbs: error: " << e.what() << "\n";
+    err << "subd2nurbs: error: " << option_name(e.setting()) << " " << e.rule() << "\n";
     return kUsage;
   } catch (const pipeline::ResourceError& e) {
     err << "subd2nurbs: error: " << e.what() << "\n";

@@ -2,12 +2,14 @@
 // so that everything except process start-up can be reused and tested.
 #pragma once
 
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "converter/pipeline/conversion.h"
 #include "converter/pipeline/resources.h"
 #include "core/refine/refiner.h"
 #include "io/obj_reader.h"
@@ -51,13 +53,33 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
 
 /// The --max-faces / --max-memory options of a subcommand.
 struct LimitOptionValues {
-  double max_faces = 0;    ///< 0: the default
+  std::optional<double> max_faces;  ///< not given: the default
   std::string max_memory;  ///< empty: the default; else bytes with an optional K/M/G/T suffix
 };
 /// Registers --max-faces and --max-memory on `command`.
 void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning);
-/// \throw UsageError for a malformed --max-memory
+/// \throw pipeline::SettingsError (pipeline::validate's rules, a malformed --max-memory)
 pipeline::ResourceLimits resource_limits(const LimitOptionValues& values);
+
+/// Prints the pipeline's diagnostics on stderr in the command line's words: warnings as they
+/// come; notes (none with --quiet) too, except that poles which are not polar structures are
+/// kept for finish(): up to kListedPoles one line each, more in one line with counts by reason.
+class DiagnosticPrinter {
+ public:
+  static constexpr size_t kListedPoles = 3;
+  DiagnosticPrinter(std::ostream& err, bool quiet) : err_(err), quiet_(quiet) {}
+  void operator()(const pipeline::ConversionDiagnostic& d);
+  void finish();
+
+ private:
+  std::ostream& err_;
+  bool quiet_;
+  std::vector<pipeline::ConversionDiagnostic> poles_;
+};
+
+/// The command-line spelling of a pipeline setting (pipeline::SettingsError::setting):
+/// "radial_steps" -> "--radial-steps", "polar_lambda" -> "--lambda".
+std::string option_name(const std::string& setting);
 
 struct InfoOptions {
   std::string mesh;

@@ -180,34 +180,38 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
         << " vertices' fans deepened, by up to " << c.tolerance.used << " levels\n";
 }
 
+/// The settings of `options`, checked by the pipeline's rules before any work.
+pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, bool build_brep) {
+  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
+  pipeline::ConversionSettings settings;
+  if (options.level_given) settings.level = options.level;
+  if (options.tolerance_given) settings.tolerance = options.tolerance;
+  settings.absolute = options.absolute;
+  settings.build_brep = build_brep;
+  settings.faces = pipeline::face_mode(options.faces);
+  settings.limits = resource_limits(options.limits);
+  settings.patch.polar = options.polar == "on";
+  settings.patch.cap.radial_steps = options.radial_steps;
+  settings.patch.cap.lambda = options.lambda;
+  settings.patch.separate_poles = options.separate_poles;
+  settings.fit.mode = pipeline::fit_mode(options.fit);
+  if (options.fair_given) settings.fit.fair_weight = options.fair;
+  pipeline::validate(settings);
+  pipeline::preview_color(options.preview_color);
+  pipeline::check_samples("preview_samples", options.preview_samples);
+  return settings;
+}
+
 }  // namespace
 
 // --- the subcommand ------------------------------------------------------------------------
 
 void run_convert(const ConvertOptions& options, std::ostream& err) {
-  if (options.level_given && options.tolerance_given)
-    throw UsageError("--level and --tolerance exclude each other (--tolerance chooses the level)");
-  if (options.level < 0) throw UsageError("--level must be >= 0");
-  if (options.tolerance_given && !(options.tolerance > 0 && std::isfinite(options.tolerance)))
-    throw UsageError("--tolerance must be a positive number");
-  if (options.absolute && !options.tolerance_given) throw UsageError("--absolute needs --tolerance");
   if (options.schema != "ap214" && options.schema != "ap242")
     throw UsageError("--schema must be ap214 or ap242");
-  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
-  if (options.radial_steps != 1 && options.radial_steps != 2) throw UsageError("--radial-steps must be 1 or 2");
-  if (!(options.lambda > 0 && std::isfinite(options.lambda))) throw UsageError("--lambda must be a positive number");
-  if (options.fit != "approximate" && options.fit != "interpolate")
-    throw UsageError("--fit must be approximate or interpolate");
-  if (options.fair_given && options.fit != "interpolate") throw UsageError("--fair needs --fit interpolate");
-  if (options.fair_given && !(options.fair > 0 && std::isfinite(options.fair)))
-    throw UsageError("--fair must be a positive number (the weight of the fairing energy)");
-  if (options.fit == "interpolate" && options.separate_poles)
-    throw UsageError("--fit interpolate does not support --separate-poles (the separating step changes the "
-                     "subdivision rule the fit solves for)");
-
   const OutputKind kind = output_kind(options.output);
   const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
-  const pipeline::ResourceLimits limits = resource_limits(options.limits);
+  const pipeline::ConversionSettings settings = conversion_settings(options, kind != OutputKind::Json);
   check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
 
   Progress progress(err, options.quiet, options.progress_tty);
@@ -232,32 +236,17 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
         << " fan vertices)\n";
 
   // Patches, measures and (unless the output is patch JSON) the B-rep.
-  pipeline::ConversionSettings settings;
-  settings.level = options.level_given ? options.level : 0;
-  settings.tolerance_given = options.tolerance_given || !options.level_given;
-  settings.tolerance = options.tolerance_given ? options.tolerance : pipeline::kDefaultTolerance;
-  settings.tolerance_is_default = !options.tolerance_given && !options.level_given;
-  settings.absolute = options.absolute;
-  settings.build_brep = kind != OutputKind::Json;
-  settings.faces = options.faces == "per-quad" ? pipeline::FaceMode::PerQuad : pipeline::FaceMode::Packed;
-  settings.limits = limits;
-  settings.patch.polar = options.polar == "on";
-  settings.patch.cap.radial_steps = options.radial_steps;
-  settings.patch.cap.lambda = options.lambda;
-  settings.patch.separate_poles = options.separate_poles;
-  settings.fit.mode = options.fit == "interpolate" ? pipeline::FitMode::Interpolate : pipeline::FitMode::Approximate;
-  settings.fit.fair_weight = options.fair_given ? options.fair : 0.0;
-  if (options.separate_poles && options.polar == "off") throw UsageError("--separate-poles needs --polar on");
   pipeline::ConversionProgress callbacks;
   std::function<void(double)> brep_percent;  // started with the B-rep stage (percent() times it)
-  callbacks.stage = [&](const std::string& what) {
+  callbacks.stage = [&](pipeline::Stage stage, const std::string& what) {
     progress.stage(what);
-    if (what == "building the B-rep") brep_percent = progress.percent(what);
+    if (stage == pipeline::Stage::Brep) brep_percent = progress.percent(what);
   };
   callbacks.brep_fraction = [&](double fraction) {
     if (brep_percent) brep_percent(fraction);
   };
-  callbacks.warning = [&](const std::string& w) { err << w << "\n"; };
+  DiagnosticPrinter diagnostics(err, options.quiet);
+  callbacks.diagnostic = std::ref(diagnostics);
   ConversionResult c;
   try {
     c = pipeline::convert(base, positions, settings, callbacks, std::move(load_warnings));
@@ -266,6 +255,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     throw;
   }
   progress.done();
+  diagnostics.finish();
   c.input = options.mesh;
   c.output.path = options.output;
   c.output.format = output_kind_name(kind);

@@ -3,7 +3,6 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
-#include <cmath>
 
 #include "converter/cli/commands.h"
 #include "converter/pipeline/conversion.h"
@@ -23,10 +22,8 @@ CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& o) {
   c->add_option("-o,--output", o.output, "Output OBJ file (same topology and tags)")->required();
   c->add_option("--weight", o.weight, "Weight W > 0 of the energy against keeping the limit points (default 1)");
   c->add_option("--keep", o.keep, "Vertices kept fixed (repeatable): boundary, creases (ends of tagged crease "
-                                  "edges) or tagged (creases and corner tags)")
-      ->check(CLI::IsMember({"boundary", "creases", "tagged"}));
-  c->add_option("--levels", o.levels, "Refinement levels of the energy near extraordinary vertices (0..4, default 2)")
-      ->check(CLI::Range(0, 4));
+                                  "edges) or tagged (creases and corner tags)");
+  c->add_option("--levels", o.levels, "Refinement levels of the energy near extraordinary vertices (0..4, default 2)");
   c->add_option("--membrane", o.membrane, "Weight of the membrane term (>= 0, default 0; thin plate has 1)");
   c->add_option("--report", o.report, "Also write a JSON report (energies, displacement, kept vertices)");
   c->add_flag("-q,--quiet", o.quiet, "No summary on stderr (warnings are still printed)");
@@ -34,24 +31,18 @@ CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& o) {
 }
 
 void run_fair(const FairCommandOptions& o, std::ostream& err) {
-  if (!(o.weight > 0 && std::isfinite(o.weight))) throw UsageError("--weight must be a positive number");
-  if (!(o.membrane >= 0 && std::isfinite(o.membrane))) throw UsageError("--membrane must be a number >= 0");
+  FairOptions fo;
+  fo.weight = o.weight;
+  fo.energy.levels = o.levels;
+  fo.energy.membrane = o.membrane;
+  pipeline::validate_fairing(fo.weight, fo.energy);
+  const KeepSet keep = pipeline::keep_set(o.keep);
   check_outputs(o.mesh, {{"-o", o.output}, {"--report", o.report}});
   const LoadedInput loaded = load_input(o.mesh);
   for (const std::string& w : loaded.warnings) err << w << "\n";
   const SubdivLevel& level = loaded.level;
   const std::vector<Point3> start = loaded.positions();
 
-  KeepSet keep;
-  for (const std::string& k : o.keep) {
-    if (k == "boundary") keep.boundary = true;
-    if (k == "creases") keep.creases = true;
-    if (k == "tagged") keep.tagged = true;
-  }
-  FairOptions fo;
-  fo.weight = o.weight;
-  fo.energy.levels = o.levels;
-  fo.energy.membrane = o.membrane;
   fo.keep = kept_vertices(level, keep);
   // The data term keeps the limit points where they were.
   std::vector<Point3> targets;

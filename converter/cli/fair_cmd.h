@@ -28,7 +28,7 @@ struct FairCommandOptions {
 
 CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& options);
 
-/// \throw InputError, WriteError, UsageError, FitError
+/// \throw InputError, WriteError, UsageError, pipeline::SettingsError, FitError
 void run_fair(const FairCommandOptions& options, std::ostream& err);
 
 }  // namespace subd2nurbs::cli

@@ -72,41 +72,120 @@ const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed
 
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
-void check_settings(const ConversionSettings& settings) {
+const char* to_string(Stage stage) {
+  static const char* const names[] = {"fit", "patches", "deviation", "packing", "continuity", "brep"};  // enum order
+  return names[static_cast<int>(stage)];
+}
+
+const char* to_string(Severity severity) { return severity == Severity::Note ? "note" : "warning"; }
+
+const char* to_string(DiagnosticCode code) {
+  switch (code) {
+    case DiagnosticCode::InterpolationSingular: return "interpolation_singular";
+    case DiagnosticCode::ToleranceCapped: return "tolerance_capped";
+    case DiagnosticCode::ToleranceNotMet: return "tolerance_not_met";
+    case DiagnosticCode::PacksRejected: return "packs_rejected";
+    case DiagnosticCode::PoleNotPolar: return "pole_not_polar";
+    case DiagnosticCode::PolesSeparated: return "poles_separated";
+  }
+  return "?";
+}
+
+std::string report_text(const ConversionDiagnostic& d) {
+  std::string text = std::string("subd2nurbs: ") + to_string(d.severity) + ": " + d.message;
+  if (d.code == DiagnosticCode::PoleNotPolar && !d.remedy.empty()) text += " (--separate-poles may make it a polar cap)";
+  if (d.code == DiagnosticCode::ToleranceCapped && !d.remedy.empty()) text.insert(text.size() - 1, ", --max-faces / --max-memory");
+  return text;
+}
+
+std::vector<std::string> warning_texts(const ConversionResult& result) {
+  std::vector<std::string> texts = result.warnings;
+  for (const ConversionDiagnostic& d : result.diagnostics) texts.push_back(report_text(d));
+  return texts;
+}
+
+FitMode fit_mode(const std::string& name) {
+  if (name == "approximate") return FitMode::Approximate;
+  if (name == "interpolate") return FitMode::Interpolate;
+  throw SettingsError("fit", "must be approximate or interpolate");
+}
+
+FaceMode face_mode(const std::string& name) {
+  if (name == "packed") return FaceMode::Packed;
+  if (name == "per-quad") return FaceMode::PerQuad;
+  throw SettingsError("faces", "must be packed or per-quad");
+}
+
+void validate_fairing(double weight, const EnergyOptions& energy) {
+  if (!(weight > 0 && std::isfinite(weight))) throw SettingsError("weight", "must be a positive number");
+  if (energy.levels < 0 || energy.levels > 4) throw SettingsError("levels", "must be 0 .. 4");
+  if (!(energy.membrane >= 0 && std::isfinite(energy.membrane))) throw SettingsError("membrane", "must be a number >= 0");
+}
+
+KeepSet keep_set(const std::vector<std::string>& names) {
+  KeepSet keep;
+  for (const std::string& k : names) {
+    if (k == "boundary") keep.boundary = true;
+    else if (k == "creases") keep.creases = true;
+    else if (k == "tagged") keep.tagged = true;
+    else throw SettingsError("keep", "must be boundary, creases or tagged");
+  }
+  return keep;
+}
+
+PreviewColor preview_color(const std::string& name) {
+  if (name == "deviation" || name == "curvature" || name == "zebra") return preview_color_from_string(name);
+  throw SettingsError("preview", "must be deviation, curvature or zebra");
+}
+
+void check_samples(const std::string& setting, int samples) {
+  if (samples < 2 || samples > 64) throw SettingsError(setting, "must be 2 .. 64");
+}
+
+void validate(const ConversionSettings& settings) {
+  auto positive = [](std::optional<double> x) { return !x || (*x > 0 && std::isfinite(*x)); };
+  if (settings.level && (*settings.level < 0 || *settings.level > kMaxLevel))
+    throw SettingsError("level", "must be 0 .. " + std::to_string(kMaxLevel));
+  if (!positive(settings.tolerance)) throw SettingsError("tolerance", "must be a positive number");
+  if (settings.level && settings.tolerance)
+    throw SettingsError("tolerance", "excludes a level (the tolerance chooses the levels)");
+  if (settings.absolute && !settings.tolerance) throw SettingsError("absolute", "needs a tolerance");
+  const PolarCapOptions& cap = settings.patch.cap;
+  if (cap.radial_steps < 1 || cap.radial_steps > kMaxRadialSteps)
+    throw SettingsError("radial_steps", "must be 1 or " + std::to_string(kMaxRadialSteps));
+  if (!positive(cap.lambda)) throw SettingsError("polar_lambda", "must be a positive number");
+  if (settings.patch.separate_poles && !settings.patch.polar) throw SettingsError("separate_poles", "needs polar caps");
   const FitSettings& fit = settings.fit;
-  if (!(fit.fair_weight >= 0 && std::isfinite(fit.fair_weight)))
-    throw SettingsError("the fairing weight must be a positive number");
-  if (fit.fair_weight > 0 && fit.mode != FitMode::Interpolate)
-    throw SettingsError("a fairing weight needs the interpolating fit");
+  if (!positive(fit.fair_weight)) throw SettingsError("fair", "must be a positive number (the weight of the fairing energy)");
+  if (fit.fair_weight && fit.mode != FitMode::Interpolate) throw SettingsError("fair", "needs the interpolating fit");
   if (fit.mode == FitMode::Interpolate && settings.patch.separate_poles)
-    throw SettingsError("the interpolating fit does not support the separating first step (separate poles): "
-                        "it changes the subdivision rule the fit solves for");
-  if (fit.energy.levels < 0 || fit.energy.levels > 4) throw SettingsError("the fairing energy levels must be 0 .. 4");
-  if (settings.level < 0) throw SettingsError("the level must be >= 0");
-  if (settings.patch.cap.radial_steps < 1 || settings.patch.cap.radial_steps > 4)
-    throw SettingsError("the radial pre-steps of polar caps must be 1 .. 4");
-  if (!(settings.patch.cap.lambda > 0 && std::isfinite(settings.patch.cap.lambda)))
-    throw SettingsError("the polar cap's lambda must be a positive number");
-  if (settings.tolerance_given && !(settings.tolerance > 0 && std::isfinite(settings.tolerance)))
-    throw SettingsError("the tolerance must be a positive number");
+    throw SettingsError("separate_poles", "is not supported by the interpolating fit (the separating step changes "
+                                          "the subdivision rule the fit solves for)");
+  if (fit.energy.levels < 0 || fit.energy.levels > 4) throw SettingsError("fair_levels", "must be 0 .. 4");
+  validate(settings.limits);
 }
 
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const ConversionSettings& settings, const ConversionProgress& progress,
                          std::vector<std::string> warnings) {
-  check_settings(settings);
+  validate(settings);
   ConversionResult c;
   c.warnings = std::move(warnings);
-  c.tolerance_given = settings.tolerance_given;
+  // A level pins the levels; else a tolerance (the user's or the default) chooses them.
+  const bool tolerance_given = !settings.level;
+  c.tolerance_given = tolerance_given;
   c.tolerance_absolute = settings.absolute;
-  auto stage = [&](const std::string& what) {
-    if (progress.stage) progress.stage(what);
+  auto stage = [&](Stage which, const std::string& text) {
+    if (progress.stage) progress.stage(which, text);
   };
-  auto warn = [&](const std::string& w) {
-    if (progress.warning) progress.warning(w);
-    c.warnings.push_back(w);
+  auto report = [&](ConversionDiagnostic d) {
+    if (progress.diagnostic) progress.diagnostic(d);
+    c.diagnostics.push_back(std::move(d));
   };
-  const int level = settings.tolerance_given ? 0 : settings.level;
+  auto warn = [&](DiagnosticCode code, const std::string& message) {
+    report({Severity::Warning, code, message, -1, "", ""});
+  };
+  const int level = settings.level.value_or(0);
   bool any_surface = false;
   for (const char hole : base.face_hole) any_surface = any_surface || !hole;
   if (!any_surface)
@@ -152,13 +231,13 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     const auto t0 = Clock::now();
     FitReport& fr = c.fit;
     fr.mode = FitMode::Interpolate;
-    fr.fair_weight = settings.fit.fair_weight;
+    fr.fair_weight = settings.fit.fair_weight.value_or(0);
     std::vector<PolarStructure> polar;
     if (settings.patch.polar) polar = detect_polar_structures(base).structures;
-    if (settings.fit.fair_weight > 0) {
-      stage("fitting the cage to its vertices (fairing weight " + short_number(settings.fit.fair_weight) + ")");
+    if (settings.fit.fair_weight) {
+      stage(Stage::Fit, "fitting the cage to its vertices (fairing weight " + short_number(fr.fair_weight) + ")");
       FairOptions fo;
-      fo.weight = settings.fit.fair_weight;
+      fo.weight = fr.fair_weight;
       fo.energy = settings.fit.energy;
       fo.polar = polar;
       const FairResult r = fair(base, positions, positions, fo);
@@ -167,7 +246,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       fr.energy_before = r.energy_before;
       fr.energy_after = r.energy_after;
     } else {
-      stage("solving for the cage whose limit passes through its vertices");
+      stage(Stage::Fit, "solving for the cage whose limit passes through its vertices");
       InterpolationOptions io;
       io.polar = polar;
       const InterpolationResult r = interpolate(base, positions, io);
@@ -178,8 +257,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       fr.null_vertices = r.null_vertices;
       fr.no_surface = static_cast<int>(r.no_surface.size());
       if (r.singular)
-        warn("subd2nurbs: warning: the interpolation system is singular near vertices " + index_list(r.null_vertices) +
-             ": the interpolating cage is not unique, the one nearest to the input was used");
+        warn(DiagnosticCode::InterpolationSingular,
+             "the interpolation system is singular near vertices " + index_list(r.null_vertices) +
+                 ": the interpolating cage is not unique, the one nearest to the input was used");
     }
     fr.polar_vertices = 0;
     for (const PolarStructure& s : polar) fr.polar_vertices += 1 + 2 * s.valence;
@@ -191,7 +271,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   // Patches, at the level asked for or at the minimum level first for a tolerance.
   auto build = [&](int extra) {
     const auto t0 = Clock::now();
-    stage(extra == 0 ? std::string("building patches")
+    stage(Stage::Patches, extra == 0 ? std::string("building patches")
                      : "building patches (" + std::to_string(extra) + " extra levels)");
     PatchOptions po = settings.patch;
     po.extra_levels = extra;
@@ -202,23 +282,24 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   // Measures every fan, or (with `remeasure`) only those, keeping the others' last values.
   auto measure_deviation_now = [&](const std::vector<char>* remeasure = nullptr) {
     const auto t0 = Clock::now();
-    stage("measuring the deviation from the limit surface");
+    stage(Stage::Deviation, "measuring the deviation from the limit surface");
     DeviationReport d = measure_deviation(c.build, kDeviationSampleLevels, remeasure ? &c.deviation : nullptr, remeasure);
     c.deviation = std::move(d);
     c.ms.deviation += ms_since(t0);
   };
   build(level);
 
-  if (settings.tolerance_given) {
+  if (tolerance_given) {
     // Each fan gets the extra levels its own deviation needs (per-valence rates), so a
     // tolerance deepens only the fans that miss it; measured again after each rebuild.
     ToleranceResult& tr = c.tolerance;
-    tr.requested = settings.tolerance;
-    tr.is_default = settings.tolerance_is_default;
-    tr.absolute = settings.absolute ? settings.tolerance : settings.tolerance * c.build.set.model_size;
+    tr.requested = settings.tolerance.value_or(kDefaultTolerance);
+    tr.is_default = !settings.tolerance;
+    tr.absolute = settings.absolute ? tr.requested : tr.requested * c.build.set.model_size;
     measure_deviation_now();
     tr.first_max = c.deviation.max;
     std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
+    bool by_limits = false;  // the last cap came from the face and memory limits (a setting may lift it)
     for (int round = 0; round < kToleranceRounds; ++round) {
       const std::vector<int> before = extra;
       bool deeper = false;
@@ -230,7 +311,8 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
         const int use = std::min(want, kMaxFanExtraLevels);
         if (use > extra[fan.vertex] && !fits(use)) {  // the limits bound every fan alike
           tr.capped = true;
-          tr.cap_reason = "the face and memory limits, --max-faces / --max-memory";
+          tr.cap_reason = "the face and memory limits";
+          by_limits = true;
           continue;
         }
         if (use > extra[fan.vertex]) {
@@ -239,6 +321,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
         } else if (want > kMaxFanExtraLevels) {
           tr.capped = true;
           tr.cap_reason = "at most " + std::to_string(kMaxFanExtraLevels) + " extra levels per fan";
+          by_limits = false;
         }
       }
       if (!deeper) break;
@@ -246,7 +329,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
       po.vertex_extra_levels = extra;
       po.reuse = &c.build;  // only the quads at deepened vertices are rebuilt
       const auto t0 = Clock::now();
-      stage("building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
+      stage(Stage::Patches, "building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
             " vertices for the tolerance)");
       PatchBuild deeper_build = build_patches(base, c.cage, po);
       c.build = std::move(deeper_build);
@@ -258,13 +341,15 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     tr.used = *std::max_element(extra.begin(), extra.end());
     tr.fans_deepened = static_cast<int>(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; }));
     if (tr.capped)
-      warn("subd2nurbs: warning: the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
-           std::to_string(tr.used) + " (" + tr.cap_reason + ")");
+      report({Severity::Warning, DiagnosticCode::ToleranceCapped,
+              "the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
+                  std::to_string(tr.used) + " (" + tr.cap_reason + ")",
+              -1, by_limits ? "max_faces" : "", ""});
     tr.met = c.deviation.max <= tr.absolute;
     if (!tr.met)
-      warn("subd2nurbs: warning: tolerance NOT met: deviation " + short_number(c.deviation.max) +
-           " > tolerance " + short_number(tr.absolute) + " (model units) at level " +
-           std::to_string(c.build.info.level));
+      warn(DiagnosticCode::ToleranceNotMet, "tolerance NOT met: deviation " + short_number(c.deviation.max) +
+                                                " > tolerance " + short_number(tr.absolute) +
+                                                " (model units) at level " + std::to_string(c.build.info.level));
   }
   const PatchBuildInfo& info = c.build.info;
 
@@ -272,11 +357,12 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   auto t = Clock::now();
   c.faces = settings.faces;
   if (settings.faces == FaceMode::Packed) {
-    stage("packing regular regions into faces");
+    stage(Stage::Packing, "packing regular regions into faces");
     c.exported = pack_patches(c.build);
     if (c.exported.rejected_packs > 0)
-      warn("subd2nurbs: warning: " + std::to_string(c.exported.rejected_packs) +
-           " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
+      warn(DiagnosticCode::PacksRejected,
+           std::to_string(c.exported.rejected_packs) +
+               " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
   } else {
     c.exported = unpacked(c.build.set);
   }
@@ -284,10 +370,10 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
 
   // Measures.
   t = Clock::now();
-  stage("measuring continuity");
+  stage(Stage::Continuity, "measuring continuity");
   c.continuity = measure_continuity(c.exported.set, kContinuitySamples);
   c.ms.continuity = ms_since(t);
-  if (!settings.tolerance_given) measure_deviation_now();
+  if (!tolerance_given) measure_deviation_now();
   collect_fans(c);
   measure_caps(c);
   c.polar = settings.patch.polar;
@@ -295,17 +381,23 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   for (const RejectedPole& r : info.rejected_poles) {
     const bool separable = r.kind != RejectedPole::Kind::Structure && !settings.patch.separate_poles;
     if (settings.patch.polar && (r.valence >= kMinPolarValence || separable))
-      warn("subd2nurbs: note: vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
-           ") is not a polar structure, Catmull-Clark is used there: " + r.reason +
-           (separable ? " (--separate-poles may make it a polar cap)" : ""));
+      report({Severity::Note, DiagnosticCode::PoleNotPolar,
+              "vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
+                  ") is not a polar structure, Catmull-Clark is used there: " + r.reason,
+              r.vertex, separable ? "separate_poles" : "",
+              r.kind == RejectedPole::Kind::LowValence ? "valence below " + std::to_string(kMinPolarValence)
+              : r.kind == RejectedPole::Kind::TooClose ? "too close to another pole"
+                                                       : "their rings do not form one"});
   }
   if (!info.separated_poles.empty())
-    warn("subd2nurbs: note: separating first step at " + std::to_string(info.separated_poles.size()) +
-         " pole(s); the patches are built from that level-1 cage");
+    report({Severity::Note, DiagnosticCode::PolesSeparated,
+            "separating first step at " + std::to_string(info.separated_poles.size()) +
+                " pole(s); the patches are built from that level-1 cage",
+            -1, "", ""});
 
   if (settings.build_brep) {
     t = Clock::now();
-    stage("building the B-rep");
+    stage(Stage::Brep, "building the B-rep");
     c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
     c.has_brep = true;
     c.ms.brep = ms_since(t);
@@ -331,7 +423,8 @@ std::string report_json(const ConversionResult& c) {
   line("  \"output_format\": " + optional_string(c.output.format) + ",");
   line("  \"step_schema\": " + optional_string(c.output.step_schema) + ",");
   std::string warnings = "  \"warnings\": [";
-  for (size_t i = 0; i < c.warnings.size(); ++i) warnings += (i ? ", " : "") + json_string(c.warnings[i]);
+  const std::vector<std::string> texts = warning_texts(c);
+  for (size_t i = 0; i < texts.size(); ++i) warnings += (i ? ", " : "") + json_string(texts[i]);
   line(warnings + "],");
   line("  \"model_size\": " + json_number(size) + ",");
   line("  \"coarse_level\": " + std::to_string(info.coarse_level) + ",");

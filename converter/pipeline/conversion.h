@@ -7,15 +7,18 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "converter/occt/brep_builder.h"
 #include "converter/pipeline/resources.h"
+#include "converter/pipeline/settings_error.h"
 #include "converter/pipeline/text.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
+#include "core/eval/preview_mesh.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
 #include "core/patch/packing.h"
@@ -44,10 +47,12 @@ constexpr int kDeviationSampleLevels = 2;
 /// least squares with the thin-plate energy as regulariser).
 enum class FitMode { Approximate, Interpolate };
 const char* to_string(FitMode mode);
+/// "approximate" or "interpolate". \throw SettingsError (setting "fit")
+FitMode fit_mode(const std::string& name);
 
 struct FitSettings {
   FitMode mode = FitMode::Approximate;
-  double fair_weight = 0;  ///< > 0: the fair fit with this weight (Interpolate only); 0: exact
+  std::optional<double> fair_weight;  ///< given: the fair fit with this weight (> 0, Interpolate only); else exact
   EnergyOptions energy;    ///< the fairing energy of a fair fit
 };
 
@@ -55,16 +60,24 @@ struct FitSettings {
 /// (core/patch/packing.h), or one face per coarse quad.
 enum class FaceMode { Packed, PerQuad };
 const char* to_string(FaceMode mode);
+/// "packed" or "per-quad". \throw SettingsError (setting "faces")
+FaceMode face_mode(const std::string& name);
 
-/// What to convert with. `patch` is handed to build_patches untouched, except that its
-/// extra_levels is set from `level` or chosen by `tolerance`.
+/// Most extra levels a level setting pins (as many as a tolerance adds at one fan).
+constexpr int kMaxLevel = kMaxFanExtraLevels;
+/// The radial pre-steps of a polar cap the front ends offer: the joins and the B-rep are
+/// measured with 1 and 2 (docs/polar.md); the core takes any count >= 1.
+constexpr int kMaxRadialSteps = 2;
+
+/// What to convert with, as the user gave it; validate() checks it. `patch` is handed to
+/// build_patches untouched, except that its extra_levels is set from `level` or chosen by the
+/// tolerance.
 struct ConversionSettings {
   PatchOptions patch;
-  int level = 0;                ///< extra levels beyond the minimum, >= 0 (ignored with a tolerance)
-  bool tolerance_given = false;  ///< choose the level so that the deviation is <= tolerance
-  double tolerance = 0;         ///< > 0 when given
+  std::optional<int> level;         ///< pin the extra levels beyond the minimum at every fan
+  std::optional<double> tolerance;  ///< choose each fan's levels for this deviation; with
+                                    ///< neither, kDefaultTolerance
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
-  bool tolerance_is_default = false;  ///< the tolerance is kDefaultTolerance, not the user's
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
   FaceMode faces = FaceMode::Packed;
   FitSettings fit;
@@ -73,20 +86,45 @@ struct ConversionSettings {
   ResourceLimits limits;
 };
 
-/// A setting that cannot be used (negative level, bad tolerance, a level too deep for the cage).
-class SettingsError : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
+/// How much a diagnostic matters: a note says what the conversion did instead (Catmull-Clark at
+/// a pole), a warning that the result misses what was asked (a tolerance not met).
+enum class Severity { Note, Warning };
+const char* to_string(Severity severity);  ///< "note", "warning"
+
+/// What a diagnostic is about; to_string gives a stable name ("pole_not_polar").
+enum class DiagnosticCode { InterpolationSingular, ToleranceCapped, ToleranceNotMet, PacksRejected, PoleNotPolar,
+                            PolesSeparated };
+const char* to_string(DiagnosticCode code);
+
+/// Something the conversion reports besides its result, in its own words: no program name and
+/// no front end's option names (a front end words `remedy` its own way).
+struct ConversionDiagnostic {
+  Severity severity = Severity::Warning;
+  DiagnosticCode code = DiagnosticCode::ToleranceNotMet;
+  std::string message;   ///< one sentence
+  int element = -1;      ///< the cage vertex it is about, or -1
+  std::string remedy;    ///< a setting that may mend it, named as SettingsError names settings, or empty
+  std::string category;  ///< PoleNotPolar: the kind of reason ("valence below 6"), for summaries
 };
+
+/// A diagnostic as one line of subd2nurbs-report v1's "warnings" and the Python module's
+/// ConversionResult.warnings: "subd2nurbs: note: ..." with the command line's option as the
+/// remedy, as the command line has always printed it.
+std::string report_text(const ConversionDiagnostic& diagnostic);
+
+/// The stages of a conversion, in order (Patches and Deviation repeat for a tolerance);
+/// to_string gives a stable name ("patches").
+enum class Stage { Fit, Patches, Deviation, Packing, Continuity, Brep };
+const char* to_string(Stage stage);
 
 /// Progress reporting; every member may be empty.
 struct ConversionProgress {
-  /// A stage starts: "building patches", "measuring continuity", "building the B-rep", ...
-  std::function<void(const std::string& stage)> stage;
+  /// A stage starts, with a line for people: "building patches (2 extra levels)", ...
+  std::function<void(Stage stage, const std::string& text)> stage;
   /// Fraction (0..1] of the B-rep stage done, about every 1 %.
   std::function<void(double fraction)> brep_fraction;
-  /// A warning, as it is found (it is also kept in ConversionResult::warnings).
-  std::function<void(const std::string& warning)> warning;
+  /// A diagnostic, as it is found (it is also kept in ConversionResult::diagnostics).
+  std::function<void(const ConversionDiagnostic& diagnostic)> diagnostic;
 };
 
 struct Timings {
@@ -143,7 +181,8 @@ struct OutputInfo {
 struct ConversionResult {
   std::string input;  ///< the cage's name for the report (set by the caller)
   OutputInfo output;  ///< set by the caller
-  std::vector<std::string> warnings;  ///< the caller's load warnings first, then the pipeline's
+  std::vector<std::string> warnings;  ///< the caller's load warnings, as given
+  std::vector<ConversionDiagnostic> diagnostics;  ///< the pipeline's, in the order found
   PatchBuild build;     ///< the patches per coarse quad, with how they were built
   FaceMode faces = FaceMode::Packed;
   /// What is exported and measured for continuity: build.set packed (FaceMode::Packed) or as
@@ -167,13 +206,24 @@ struct ConversionResult {
   Timings ms;             ///< load and write are the caller's to fill
 };
 
-/// Checks `settings` on their own (level >= 0, a positive finite tolerance).
-/// \throw SettingsError
-void check_settings(const ConversionSettings& settings);
+/// Checks `settings` on their own: the one place of the rules of every conversion setting.
+/// \throw SettingsError naming the first setting that breaks its rule
+void validate(const ConversionSettings& settings);
+
+/// The rules of a fairing (subd2nurbs fair, Python fair()): weight > 0, energy levels 0 .. 4,
+/// membrane >= 0. \throw SettingsError ("weight", "levels", "membrane")
+void validate_fairing(double weight, const EnergyOptions& energy);
+/// The vertices a fairing keeps, by name: boundary, creases, tagged. \throw SettingsError ("keep")
+KeepSet keep_set(const std::vector<std::string>& names);
+
+/// The preview colouring: "deviation", "curvature" or "zebra". \throw SettingsError ("preview")
+PreviewColor preview_color(const std::string& name);
+/// Samples per patch side of a preview or a quality measure: 2 .. 64. \throw SettingsError (`setting`)
+void check_samples(const std::string& setting, int samples);
 
 /// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
 /// result's warning list.
-/// \throw SettingsError (see check_settings), ResourceError (the estimate exceeds
+/// \throw SettingsError (see validate), ResourceError (the estimate exceeds
 ///        settings.limits, resources.h), InvalidMeshError (every face is a hole: no surface),
 ///        FitError (FitMode::Interpolate: no cage interpolates the vertices; names them),
 ///        std::invalid_argument (topology the patch builder does not support),
@@ -181,6 +231,9 @@ void check_settings(const ConversionSettings& settings);
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const ConversionSettings& settings, const ConversionProgress& progress = {},
                          std::vector<std::string> warnings = {});
+
+/// The load warnings, then report_text of each diagnostic: the report's "warnings".
+std::vector<std::string> warning_texts(const ConversionResult& result);
 
 /// The quality report (subd2nurbs-report v1, docs/formats.md) as JSON text.
 std::string report_json(const ConversionResult& result);

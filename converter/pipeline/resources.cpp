@@ -8,8 +8,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <set>
+#include <utility>
 
 #include "converter/pipeline/text.h"
+#include "io/input_file.h"
 
 namespace subd2nurbs::pipeline {
 
@@ -103,18 +105,35 @@ ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels) {
   return e;
 }
 
+void validate(const ResourceLimits& limits) {
+  for (const auto& [setting, value] : {std::pair{"max_faces", limits.max_faces}, std::pair{"max_memory", limits.max_memory}})
+    if (value && !(*value > 0 && std::isfinite(*value))) throw SettingsError(setting, "must be a positive number");
+}
+
+void check_refine_levels(int levels) {
+  if (levels < 0 || levels > kMaxRefineLevels)
+    throw SettingsError("levels", "must be 0 .. " + std::to_string(kMaxRefineLevels));
+}
+
+double memory_size(const std::string& text) {
+  double bytes = 0;
+  if (!parse_memory_size(text, bytes))
+    throw SettingsError("max_memory", "'" + printable(text, 40) + "' is not a size (bytes, or a number with K, M, G or T, e.g. 8G)");
+  return bytes;
+}
+
 void check_resources(const ResourceEstimate& estimate, const ResourceLimits& limits, double default_max_faces,
                      const std::string& what, const std::string& advice) {
-  const double max_faces = limits.max_faces > 0 ? limits.max_faces : default_max_faces;
-  const double max_memory = limits.max_memory > 0 ? limits.max_memory : default_max_memory();
+  const double max_faces = limits.max_faces.value_or(default_max_faces);
+  const double max_memory = limits.max_memory ? *limits.max_memory : default_max_memory();
   if (estimate.faces > max_faces)
     throw ResourceError(what + " would make about " + short_number(estimate.faces) + " faces (limit " +
-                        short_number(max_faces) + (limits.max_faces > 0 ? "" : ", the default") + "); " + advice +
+                        short_number(max_faces) + (limits.max_faces ? "" : ", the default") + "); " + advice +
                         ", or raise the limit with --max-faces N (Python: max_faces=N)");
   if (estimate.bytes > max_memory)
     throw ResourceError(what + " would need about " + bytes_text(estimate.bytes) + " of memory (limit " +
                         bytes_text(max_memory) +
-                        (limits.max_memory > 0 ? "" : ", 3/4 of the memory available to this process") + "); " +
+                        (limits.max_memory ? "" : ", 3/4 of the memory available to this process") + "); " +
                         advice + ", or raise the limit with --max-memory SIZE (Python: max_memory=bytes)");
 }
 

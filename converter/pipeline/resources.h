@@ -4,9 +4,11 @@
 // Used by the CLI, the Python module and (through it) the FreeCAD workbench.
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "converter/pipeline/settings_error.h"
 #include "core/refine/refiner.h"
 
 namespace subd2nurbs::pipeline {
@@ -27,11 +29,22 @@ constexpr double kConvertBytesPerFaceNoBrep = 6000;
 constexpr double kConvertBytesPerPiece = 1200;
 constexpr double kRefineBytesPerFace = 450;
 
-/// What the user allows; 0 means "the default".
+/// Most levels a uniform refinement takes: beyond the face limit for any cage, and 4^levels
+/// stays far from overflowing.
+constexpr int kMaxRefineLevels = 20;
+
+/// What the user allows; not given: the default.
 struct ResourceLimits {
-  double max_faces = 0;   ///< 0: kDefaultMaxConvertFaces or kDefaultMaxRefineFaces
-  double max_memory = 0;  ///< bytes; 0: default_max_memory()
+  std::optional<double> max_faces;   ///< > 0; default kDefaultMaxConvertFaces or kDefaultMaxRefineFaces
+  std::optional<double> max_memory;  ///< bytes, > 0; default default_max_memory()
 };
+
+/// The rules of the limits (max_faces, max_memory: positive numbers) and of a refinement's
+/// levels (0 .. kMaxRefineLevels). \throw SettingsError
+void validate(const ResourceLimits& limits);
+void check_refine_levels(int levels);
+/// A memory size as parse_memory_size reads it. \throw SettingsError ("max_memory")
+double memory_size(const std::string& text);
 
 /// 3/4 of the physical memory, or of the address-space / data-size limit (ulimit -v / -d)
 /// when that is lower; at least 256 MiB.

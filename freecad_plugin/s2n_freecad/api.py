@@ -51,7 +51,7 @@ def _show_and_recompute(obj, view_provider, what, hide=None):
             hide.ViewObject.Visibility = False
     obj.Document.recompute()
     if not obj.isValid():
-        raise RuntimeError("the %s failed to recompute" % what)
+        raise RuntimeError("the %s failed to recompute: %s" % (what, obj.getStatusString()))
 
 
 def check_occt():
@@ -92,7 +92,7 @@ def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, 
     Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around
     high-valence vertices are kept; the object's RecoveredQuads says how many).
 
-    level: extra refinement levels (>= 0); tolerance > 0: choose the level for this deviation
+    level: extra refinement levels (0 .. 12); tolerance > 0: choose the level for this deviation
     (relative to the model size); polar: "Polar caps" (polar structures become singular polar
     caps, the default as in the CLI) or "Catmull-Clark"; shell: a shell instead of a solid; fit:
     "Approximate" (the cage's own limit surface) or "Interpolate" (the surface passes through the
@@ -174,8 +174,6 @@ def make_color_map(nurbs, coloring="Curvature", samples=12, doc=None, name="Colo
     coloring = coloring.capitalize()
     if coloring not in features.COLORINGS:
         raise ValueError("make_color_map: coloring must be one of %s" % ", ".join(features.COLORINGS))
-    if int(samples) < 2:
-        raise ValueError("make_color_map: samples must be >= 2")
     doc = _document(doc) if doc is not None else nurbs.Document
     with _Transaction(doc, "Subd2Nurbs color map"):
         obj = doc.addObject("App::FeaturePython", name)

@@ -193,9 +193,8 @@ class _Progress:
         self.done = 0
 
     def __call__(self, stage, fraction):
-        target = {"building patches": 10, "measuring the deviation from the limit surface": 20,
-                  "measuring continuity": 30}.get(stage, None)
-        if stage == "building the B-rep":
+        target = {"patches": 10, "deviation": 20, "continuity": 30}.get(stage.key, None)
+        if stage.key == "brep":
             target = 30 + int(70 * fraction)
         if target is not None:
             while self.done < min(target, self.STEPS):
@@ -209,19 +208,23 @@ class _Progress:
         self.indicator.stop()
 
 
+#: The property of each converter setting (subd2nurbs.SettingsError.setting) on a NURBS or
+#: ColorMap object: the converter's rules name it so.
+PROPERTY_OF_SETTING = {"level": "Level", "tolerance": "Tolerance", "fit": "Fit", "fair": "FairWeight",
+                       "faces": "Faces", "max_faces": "MaxFaces", "max_memory": "MaxMemoryMiB",
+                       "preview": "Coloring", "preview_samples": "Samples"}
+
+
 def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate", fair_weight=0.0, faces="Packed",
                  **options):
     """subd2nurbs.convert with the NURBS object's settings (and further convert options).
-    fit: "Approximate" or "Interpolate"; fair_weight > 0 (with "Interpolate"): a fair fit;
-    faces: "Packed" or "PerQuad"."""
+    fit: "Approximate" or "Interpolate"; fair_weight != 0 (> 0, with "Interpolate"): a fair fit;
+    faces: "Packed" or "PerQuad". The converter's rules check the values; a SettingsError names
+    the property (PROPERTY_OF_SETTING)."""
     if faces not in FACES:
         raise subd2nurbs.SettingsError("Faces must be one of %s" % ", ".join(FACES))
     if fit not in FIT:
         raise subd2nurbs.SettingsError("Fit must be one of %s" % ", ".join(FIT))
-    if fair_weight < 0:
-        raise subd2nurbs.SettingsError("FairWeight must be >= 0 (0: exact interpolation)")
-    if fair_weight > 0 and fit != "Interpolate":
-        raise subd2nurbs.SettingsError("FairWeight needs Fit = Interpolate")
     if polar not in POLAR:
         raise subd2nurbs.SettingsError("PolarHandling must be one of %s" % ", ".join(POLAR))
     if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
@@ -238,12 +241,17 @@ def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate"
     kwargs["polar"] = polar == "Polar caps"
     kwargs["fit"] = fit.lower()
     kwargs["faces"] = "packed" if faces == "Packed" else "per-quad"
-    if fair_weight > 0:
+    if fair_weight:
         kwargs["fair"] = float(fair_weight)
     kwargs.update(options)
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
         return subd2nurbs.convert(cage, progress=indicator, **kwargs)
+    except subd2nurbs.SettingsError as e:
+        if e.setting not in PROPERTY_OF_SETTING:
+            raise
+        raise subd2nurbs.SettingsError("%s %s" % (PROPERTY_OF_SETTING[e.setting], e.rule), setting=e.setting,
+                                       rule=e.rule) from None
     finally:
         if indicator:
             indicator.stop()
@@ -285,10 +293,10 @@ class NurbsFeature(_Stateless):
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
         lim = "Limits"
         _add(obj, "App::PropertyFloat", "MaxFaces", lim,
-             "Refuse a conversion estimated to make more polynomial pieces (0: the default, 4e6; "
+             "Refuse a conversion estimated to make more polynomial pieces (> 0; 0: the default, 4e6; "
              "as --max-faces)")
         _add(obj, "App::PropertyFloat", "MaxMemoryMiB", lim,
-             "Refuse a conversion estimated to need more memory, in MiB (0: the default, 3/4 of "
+             "Refuse a conversion estimated to need more memory, in MiB (> 0; 0: the default, 3/4 of "
              "the memory available; as --max-memory)")
         r = "Result"
         _add(obj, "App::PropertyInteger", "Patches", r, "NURBS patches (= faces)", read_only=True)
@@ -341,9 +349,9 @@ class NurbsFeature(_Stateless):
             result = prepared[1]
         else:
             limits = {}
-            if getattr(obj, "MaxFaces", 0) > 0:
+            if getattr(obj, "MaxFaces", 0) != 0:
                 limits["max_faces"] = obj.MaxFaces
-            if getattr(obj, "MaxMemoryMiB", 0) > 0:
+            if getattr(obj, "MaxMemoryMiB", 0) != 0:
                 limits["max_memory"] = obj.MaxMemoryMiB * 1024.0 * 1024.0
             result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress,
                                   fit=fit, fair_weight=fair_weight, faces=faces, **limits)
@@ -419,7 +427,7 @@ class ColorMapFeature(_Stateless):
         _add(obj, "App::PropertyEnumeration", "Coloring", g,
              "Mean curvature (blue negative, red positive), deviation from the exact limit surface "
              "(blue 0 .. red max) or zebra stripes of the normal", choices=COLORINGS)
-        _add(obj, "App::PropertyInteger", "Samples", g, "Grid points per patch side (>= 2)")
+        _add(obj, "App::PropertyInteger", "Samples", g, "Grid points per patch side (2 .. 64)")
         r = "Result"
         _add(obj, "App::PropertyVectorList", "Points", r, "Tessellation vertices", read_only=True, hidden=True)
         _add(obj, "App::PropertyIntegerList", "Triangles", r, "Vertex indices, three per triangle",
@@ -432,8 +440,6 @@ class ColorMapFeature(_Stateless):
         nurbs = obj.Nurbs
         if nurbs is None or not isinstance(getattr(nurbs, "Proxy", None), NurbsFeature):
             raise ValueError("%s: Nurbs must be a NURBS object made by the workbench" % obj.Label)
-        if obj.Samples < 2:
-            raise ValueError("%s: Samples must be >= 2" % obj.Label)
         cage = cage_of(nurbs.Source)
         fit, fair_weight = NurbsFeature.fit_settings(nurbs)
         result = convert_cage(cage, nurbs.Level, nurbs.Tolerance, nurbs.PolarHandling, progress=nurbs.ShowProgress,

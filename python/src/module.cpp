@@ -12,7 +12,6 @@
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 
-#include <cmath>
 #include <memory>
 #include <new>
 #include <optional>
@@ -86,7 +85,10 @@ void translate(std::exception_ptr p) {
     a["file"] = e.file();
     raise("WriteError", e.what(), a);
   } catch (const pipeline::SettingsError& e) {
-    raise("SettingsError", e.what());
+    py::dict a;
+    a["setting"] = e.setting();
+    a["rule"] = e.rule();
+    raise("SettingsError", e.what(), a);
   } catch (const FitError& e) {
     py::dict a;
     a["vertices"] = e.vertices();
@@ -114,7 +116,7 @@ BoundaryRule boundary_rule(const std::string& s) {
   if (s == "none") return BoundaryRule::None;
   if (s == "edge-only") return BoundaryRule::EdgeOnly;
   if (s == "edge-and-corner") return BoundaryRule::EdgeAndCorner;
-  throw pipeline::SettingsError("boundary must be none, edge-only or edge-and-corner, not '" + s + "'");
+  throw pipeline::SettingsError("boundary", "must be none, edge-only or edge-and-corner, not '" + s + "'");
 }
 
 /// A cage as the package passes it: (positions Nx3, face_sizes, face_indices,
@@ -124,7 +126,7 @@ MeshInput make_input(const DoubleArray& positions, const IntArray& face_sizes, c
                      const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                      const py::dict& options) {
   if (positions.ndim() != 2 || positions.shape(1) != 3)
-    throw pipeline::SettingsError("vertices must be an array of shape (n, 3)");
+    throw pipeline::SettingsError("vertices", "must be an array of shape (n, 3)");
   MeshInput in;
   const double* p = positions.data();
   in.positions.resize(static_cast<size_t>(positions.shape(0)));
@@ -277,15 +279,27 @@ py::dict info(const DoubleArray& positions, const IntArray& face_sizes, const In
   return d;
 }
 
+/// The limits as the package passes them (None: the default; max_memory a number of bytes or a
+/// size string), checked by the pipeline's rules.
+pipeline::ResourceLimits resource_limits(std::optional<double> max_faces, const py::object& max_memory) {
+  pipeline::ResourceLimits limits;
+  limits.max_faces = max_faces;
+  if (py::isinstance<py::str>(max_memory))
+    limits.max_memory = pipeline::memory_size(max_memory.cast<std::string>());
+  else if (!max_memory.is_none())
+    limits.max_memory = max_memory.cast<double>();
+  pipeline::validate(limits);
+  return limits;
+}
+
 py::tuple refine(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
                  const std::vector<std::tuple<int, int, double>>& creases,
                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
-                 const py::dict& options, int levels, double max_faces, double max_memory) {
+                 const py::dict& options, int levels, std::optional<double> max_faces, const py::object& max_memory) {
+  pipeline::check_refine_levels(levels);
+  const pipeline::ResourceLimits limits = resource_limits(max_faces, max_memory);
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   const SubdivLevel base = SubdivLevel::from_input(in);
-  pipeline::ResourceLimits limits;
-  limits.max_faces = max_faces;
-  limits.max_memory = max_memory;
   pipeline::check_resources(pipeline::estimate_refinement(base, levels), limits, pipeline::kDefaultMaxRefineFaces,
                             "refining " + std::to_string(base.mesh.num_faces()) + " faces to level " +
                                 std::to_string(levels),
@@ -353,20 +367,16 @@ py::dict patch_dict(const NurbsPatch& p) {
 py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
                  const std::vector<std::tuple<int, int, double>>& creases,
                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
-                 const py::dict& options, int level, double tolerance, bool absolute, bool build_brep,
-                 bool polar, int radial_steps, double polar_lambda, bool separate_poles,
-                 const std::string& fit, double fair_weight,
+                 const py::dict& options, std::optional<int> level, std::optional<double> tolerance, bool absolute,
+                 bool build_brep, bool polar, int radial_steps, double polar_lambda, bool separate_poles,
+                 const std::string& fit, std::optional<double> fair,
                  const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
-                 const std::function<void(const std::string&, double)>& progress, double max_faces,
-                 double max_memory, const std::string& faces) {
-  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
-  Diagnostics diagnostics;
-  const SubdivLevel base = SubdivLevel::from_input(in, &diagnostics);
-  const std::vector<Point3> points(in.positions.begin(), in.positions.end());
-
+                 const std::function<void(const std::string&, double, const std::string&)>& progress,
+                 std::optional<double> max_faces,
+                 const py::object& max_memory, const std::string& faces) {
+  // The settings first, by the pipeline's rules (the package checked only their types).
   pipeline::ConversionSettings settings;
   settings.level = level;
-  settings.tolerance_given = tolerance != 0.0;  // 0: none (the package passes None as 0)
   settings.tolerance = tolerance;
   settings.absolute = absolute;
   settings.build_brep = build_brep;
@@ -374,23 +384,28 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   settings.patch.cap.radial_steps = radial_steps;
   settings.patch.cap.lambda = polar_lambda;
   settings.patch.separate_poles = separate_poles;
-  if (fit != "approximate" && fit != "interpolate")
-    throw pipeline::SettingsError("fit must be 'approximate' or 'interpolate', not '" + fit + "'");
-  settings.fit.mode = fit == "interpolate" ? pipeline::FitMode::Interpolate : pipeline::FitMode::Approximate;
-  settings.fit.fair_weight = fair_weight;
-  settings.limits.max_faces = max_faces;
-  settings.limits.max_memory = max_memory;
-  if (faces != "packed" && faces != "per-quad")
-    throw pipeline::SettingsError("faces must be 'packed' or 'per-quad', not '" + faces + "'");
-  settings.faces = faces == "packed" ? pipeline::FaceMode::Packed : pipeline::FaceMode::PerQuad;
+  settings.fit.mode = pipeline::fit_mode(fit);
+  settings.fit.fair_weight = fair;
+  settings.faces = pipeline::face_mode(faces);
+  settings.limits = resource_limits(max_faces, max_memory);
+  pipeline::validate(settings);
+  if (!preview_color.empty()) pipeline::preview_color(preview_color);
+  pipeline::check_samples("preview_samples", preview_samples);
+
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  Diagnostics diagnostics;
+  const SubdivLevel base = SubdivLevel::from_input(in, &diagnostics);
+  const std::vector<Point3> points(in.positions.begin(), in.positions.end());
+
   pipeline::ConversionProgress callbacks;
-  std::string current;
+  std::string current, key;
   if (progress) {
-    callbacks.stage = [&](const std::string& s) {
+    callbacks.stage = [&](pipeline::Stage stage, const std::string& s) {
       current = s;
-      progress(s, 0.0);
+      key = pipeline::to_string(stage);
+      progress(s, 0.0, key);
     };
-    callbacks.brep_fraction = [&](double f) { progress(current, f); };
+    callbacks.brep_fraction = [&](double f) { progress(current, f, key); };
   }
   pipeline::ConversionResult c =
       pipeline::convert(base, points, settings, callbacks, load_warnings ? *load_warnings : diagnostics_text(diagnostics));
@@ -400,7 +415,7 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   py::dict d;
   d["report"] = pipeline::report_json(c);
   if (!preview_color.empty()) {  // the patches tessellated and coloured as convert --preview does
-    const PreviewColor color = preview_color_from_string(preview_color);
+    const PreviewColor color = pipeline::preview_color(preview_color);
     std::unique_ptr<LimitEvaluator> limit;
     if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, c.cage);
     const PreviewMesh mesh = build_preview(c.build, limit.get(), color, preview_samples);
@@ -421,7 +436,18 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
   py::list patches;
   for (const NurbsPatch& p : c.exported.set.patches) patches.append(patch_dict(p));
   d["patches"] = patches;
-  d["warnings"] = c.warnings;
+  d["warnings"] = pipeline::warning_texts(c);
+  py::list diagnostics_list;
+  for (const pipeline::ConversionDiagnostic& x : c.diagnostics) {
+    py::dict e;
+    e["severity"] = pipeline::to_string(x.severity);
+    e["code"] = pipeline::to_string(x.code);
+    e["message"] = x.message;
+    e["element"] = x.element;
+    e["remedy"] = x.remedy.empty() ? py::object(py::none()) : py::object(py::str(x.remedy));
+    diagnostics_list.append(e);
+  }
+  d["diagnostics"] = diagnostics_list;
   d["cage_vertices"] = points_array(c.cage);
   d["model_size"] = c.build.set.model_size;
   d["closed"] = c.build.set.closed;
@@ -477,23 +503,15 @@ py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, con
                    const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                    const py::dict& options, double weight, const std::vector<std::string>& keep, int levels,
                    double membrane) {
-  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
-  const SubdivLevel level = SubdivLevel::from_input(in);
-  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
-  KeepSet ks;
-  for (const std::string& k : keep) {
-    if (k == "boundary") ks.boundary = true;
-    else if (k == "creases") ks.creases = true;
-    else if (k == "tagged") ks.tagged = true;
-    else throw pipeline::SettingsError("keep: expected boundary, creases or tagged, not '" + k + "'");
-  }
-  if (!(weight > 0 && std::isfinite(weight))) throw pipeline::SettingsError("weight must be a positive number");
-  if (!(membrane >= 0 && std::isfinite(membrane))) throw pipeline::SettingsError("membrane must be >= 0");
-  if (levels < 0 || levels > 4) throw pipeline::SettingsError("levels must be 0 .. 4");
   FairOptions fo;
   fo.weight = weight;
   fo.energy.levels = levels;
   fo.energy.membrane = membrane;
+  pipeline::validate_fairing(fo.weight, fo.energy);
+  const KeepSet ks = pipeline::keep_set(keep);
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  const SubdivLevel level = SubdivLevel::from_input(in);
+  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
   fo.keep = kept_vertices(level, ks);
   std::vector<Point3> targets;
   limit_rows(level).rows.apply(start, targets);
@@ -530,12 +548,12 @@ py::dict brep_summary(const std::string& text) {
 
 /// Writes BREP text as STEP / IGES / BREP (by extension), atomically, as the CLI does.
 void write_shape_file(const std::string& text, const std::string& path, const std::string& schema) {
-  if (schema != "ap214" && schema != "ap242") throw pipeline::SettingsError("schema must be ap214 or ap242");
+  if (schema != "ap214" && schema != "ap242") throw pipeline::SettingsError("schema", "must be ap214 or ap242");
   occt::Format format;
   try {
     format = occt::format_from_path(path);
   } catch (const std::invalid_argument&) {
-    throw pipeline::SettingsError("cannot tell the output format from '" + path + "': use .step, .stp, .iges, .igs or .brep");
+    throw pipeline::SettingsError("path", "must end in .step, .stp, .iges, .igs or .brep: '" + path + "'");
   }
   occt::write_shape(occt::read_brep_text(text), path, format,
                     schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214);
@@ -563,8 +581,4 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.def("brep_summary", &brep_summary, py::arg("text"));
   m.def("write_shape", &write_shape_file);
   m.def("file_summary", &file_summary, py::arg("path"));
-  m.def("parse_memory_size", [](const std::string& text) {
-    double bytes = 0;
-    return pipeline::parse_memory_size(text, bytes) ? bytes : 0.0;
-  });
 }

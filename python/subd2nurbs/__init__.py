@@ -15,9 +15,11 @@ The same code as the ``subd2nurbs`` command line, from Python::
     through = subd2nurbs.convert(cage, fit="interpolate")  # the limit passes through the vertices
     smooth, info = subd2nurbs.fair(cage, weight=0.1, keep="boundary")  # a faired cage
 
-Arguments are checked here, in Python, before the compiled part (``_subd2nurbs``) sees them;
-errors are :class:`CageError` / :class:`SettingsError` (both ``ValueError``) and
-:class:`ConversionError` (a ``RuntimeError``), naming the element at fault.
+Arguments' types are checked here, in Python, before the compiled part (``_subd2nurbs``) sees
+them; the rules of the settings' values (ranges, what excludes what) are the converter's own, the
+same as the command line's and the FreeCAD workbench's. Errors are :class:`CageError` /
+:class:`SettingsError` (both ``ValueError``) and :class:`ConversionError` (a ``RuntimeError``),
+naming the element or the setting at fault.
 """
 
 import json
@@ -58,6 +60,26 @@ _TRIANGLES = ("catmark", "smooth")
 
 def _is_int(x):
     return isinstance(x, numbers.Integral) and not isinstance(x, bool)
+
+
+def _is_number(x):
+    return isinstance(x, numbers.Real) and not isinstance(x, bool)
+
+
+def _type_error(setting, kind, value):
+    return SettingsError("%s must be %s, not %r" % (setting, kind, value), setting=setting, rule="must be " + kind)
+
+
+def _checked(setting, value, check, kind, convert):
+    """`value` converted when `check` accepts its type; else SettingsError."""
+    if not check(value):
+        raise _type_error(setting, kind, value)
+    return convert(value)
+
+
+def _optional(setting, value, check, kind, convert):
+    """None, or _checked(...)."""
+    return None if value is None else _checked(setting, value, check, kind, convert)
 
 
 def _sharpness(value, element, index):
@@ -272,30 +294,12 @@ def info(cage):
 
 
 def _limits(max_faces, max_memory):
-    """(max_faces, max_memory in bytes) for the C++ side; 0 means the default
-    (docs/hardening.md): max_faces a positive number, max_memory a positive number of bytes
-    or a string such as "8G" / "512MiB"."""
-    if max_faces is None:
-        faces = 0.0
-    elif isinstance(max_faces, bool) or not isinstance(max_faces, numbers.Real) \
-            or not math.isfinite(max_faces) or max_faces <= 0:
-        raise SettingsError("max_faces must be a positive number, not %r" % (max_faces,))
-    else:
-        faces = float(max_faces)
-    if max_memory is None:
-        memory = 0.0
-    elif isinstance(max_memory, str):
-        memory = _subd2nurbs.parse_memory_size(max_memory)
-        if memory <= 0:
-            raise SettingsError("max_memory %r is not a size (bytes, or a number with K, M, G or T, e.g. '8G')"
-                                % (max_memory,))
-    elif isinstance(max_memory, bool) or not isinstance(max_memory, numbers.Real) \
-            or not math.isfinite(max_memory) or max_memory <= 0:
-        raise SettingsError("max_memory must be a positive number of bytes or a size string, not %r"
-                            % (max_memory,))
-    else:
-        memory = float(max_memory)
-    return faces, memory
+    """(max_faces, max_memory) for the C++ side, which checks their values: None (the default),
+    max_faces a number, max_memory a number of bytes or a string such as "8G" / "512MiB"."""
+    faces = _optional("max_faces", max_faces, _is_number, "a number", float)
+    if max_memory is None or isinstance(max_memory, str):
+        return faces, max_memory
+    return faces, _optional("max_memory", max_memory, _is_number, "a number of bytes or a size string", float)
 
 
 def refine(cage, levels=1, max_faces=None, max_memory=None):
@@ -307,8 +311,7 @@ def refine(cage, levels=1, max_faces=None, max_memory=None):
     estimated memory exceed them, as refine --max-faces / --max-memory (defaults 2e7 faces,
     3/4 of the memory available)."""
     cage = _cage(cage)
-    if not _is_int(levels) or levels < 0:
-        raise SettingsError("levels must be an integer >= 0, not %r" % (levels,))
+    levels = _checked("levels", levels, _is_int, "an integer", int)
     faces, memory = _limits(max_faces, max_memory)
     vertices, sizes, indices = _subd2nurbs.refine(*cage._args(), levels, faces, memory)
     offsets = np.concatenate([[0], np.cumsum(sizes)])
@@ -333,7 +336,12 @@ class ConversionResult:
     curve_measures: per shared curve, numpy arrays: curve, claimed (0 boundary, 1 C0, 2 G1,
         3 C1, 4 C2), gap, normal_angle_deg, edge (1-based index into the shape's edges, i.e.
         FreeCAD's "EdgeN", 0 if none).
-    warnings: list of text.
+    warnings: list of text: the cage's warnings, then the conversion's, one line each as the
+        command line prints them ("subd2nurbs: note: vertex 5 (valence 4) is not a polar structure, ...").
+    diagnostics: the conversion's warnings and notes as dicts: severity ("note" or "warning"),
+        code (a stable name, e.g. "pole_not_polar", "tolerance_not_met"), message (no program or
+        option names), element (the cage vertex it is about, or -1), remedy (the keyword argument
+        that may mend it, e.g. "separate_poles", or None).
     """
 
     def __init__(self, d):
@@ -344,6 +352,7 @@ class ConversionResult:
         self.report = json.loads(d["report"])
         self.curve_measures = d["curve_measures"]
         self.warnings = d["warnings"]
+        self.diagnostics = d["diagnostics"]
         self.model_size = d["model_size"]
         self.closed = d["closed"]
         self.preview = d.get("preview")  # convert(preview=...): the coloured tessellation, else None
@@ -379,13 +388,22 @@ class ConversionResult:
                                                         "valid" if b["valid"] else "NOT valid"))
 
 
+class StageText(str):
+    """A progress line (str) of convert(), with the stage's stable name as ``key``."""
+
+    def __new__(cls, text, key):
+        self = super().__new__(cls, text)
+        self.key = key
+        return self
+
+
 def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
             progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
             preview=None, preview_samples=16, fit="approximate", fair=None, max_faces=None, max_memory=None,
             faces="packed"):
     """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
 
-    level: pin the extra refinement levels beyond the minimum at every fan (>= 0), as --level.
+    level: pin the extra refinement levels beyond the minimum at every fan (0 .. 12), as --level.
     tolerance: the deviation from the limit surface to reach (relative to the bounding-box
         diagonal, or in model units with absolute=True); each fan gets the levels it needs, as
         --tolerance / --absolute. Excludes level. With neither: DEFAULT_TOLERANCE (1e-4), as the
@@ -403,10 +421,13 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     fair: with fit="interpolate", a weight W > 0: least squares with the thin-plate energy as
         regulariser instead of exact interpolation (as --fair W): noisy points, smooth surface.
     preview: "deviation", "curvature" or "zebra": also tessellate the patches with per-vertex
-        colours, as convert --preview / --color / --preview-samples do; the result's `preview`
+        colours (preview_samples 2 .. 64 per patch side), as convert --preview / --color /
+        --preview-samples do; the result's `preview`
         is then a dict of numpy arrays (positions, normals, colors, values, triangles) and the
         colour map's value_min / value_max.
-    progress: a callable(stage: str, fraction: float) called as the stages run.
+    progress: a callable(stage: str, fraction: float) called as the stages run; `stage` is a
+        line for people ("building patches (2 extra levels)") whose `key` attribute names the
+        stage: "fit", "patches", "deviation", "packing", "continuity" or "brep".
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
     max_faces, max_memory: refuse (SettingsError, before any work) when the estimated polynomial
         pieces the patches are built from would be more, or the estimated memory larger,
@@ -417,52 +438,22 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         a packed one lists its quads in its "cells" (base_face, coarse_face, u, v, rotation).
     """
     cage = _cage(cage)
-    if level is not None and tolerance is not None:
-        raise SettingsError("level and tolerance exclude each other (tolerance chooses the level)")
-    if absolute and tolerance is None:
-        raise SettingsError("absolute needs a tolerance")
-    if level is None and tolerance is None:
-        tolerance = DEFAULT_TOLERANCE
-    if level is None:
-        level = 0
-    if not _is_int(level) or level < 0:
-        raise SettingsError("level must be an integer >= 0, not %r" % (level,))
-    if tolerance is not None:
-        if isinstance(tolerance, bool) or not isinstance(tolerance, numbers.Real) \
-                or not math.isfinite(tolerance) or tolerance <= 0:
-            raise SettingsError("tolerance must be a positive number, not %r" % (tolerance,))
-    elif absolute:
-        raise SettingsError("absolute needs a tolerance")
-    if radial_steps not in (1, 2) or isinstance(radial_steps, bool):
-        raise SettingsError("radial_steps must be 1 or 2, not %r" % (radial_steps,))
-    if isinstance(polar_lambda, bool) or not isinstance(polar_lambda, numbers.Real) \
-            or not math.isfinite(polar_lambda) or polar_lambda <= 0:
-        raise SettingsError("polar_lambda must be a positive number, not %r" % (polar_lambda,))
-    if separate_poles and not polar:
-        raise SettingsError("separate_poles needs polar")
-    if fit not in ("approximate", "interpolate"):
-        raise SettingsError("fit must be 'approximate' or 'interpolate', not %r" % (fit,))
-    if fair is not None:
-        if fit != "interpolate":
-            raise SettingsError("fair needs fit='interpolate'")
-        if isinstance(fair, bool) or not isinstance(fair, numbers.Real) or not math.isfinite(fair) or fair <= 0:
-            raise SettingsError("fair must be a positive number (the weight of the fairing energy), not %r" % (fair,))
-        if separate_poles:
-            raise SettingsError("fit='interpolate' does not support separate_poles")
-    if fit == "interpolate" and separate_poles:
-        raise SettingsError("fit='interpolate' does not support separate_poles")
-    if preview not in (None, "deviation", "curvature", "zebra"):
-        raise SettingsError("preview must be None, 'deviation', 'curvature' or 'zebra', not %r" % (preview,))
-    if not _is_int(preview_samples) or preview_samples < 2:
-        raise SettingsError("preview_samples must be an integer >= 2, not %r" % (preview_samples,))
+    level = _optional("level", level, _is_int, "an integer", int)
+    tolerance = _optional("tolerance", tolerance, _is_number, "a number", float)
+    radial_steps = _checked("radial_steps", radial_steps, _is_int, "an integer", int)
+    polar_lambda = _checked("polar_lambda", polar_lambda, _is_number, "a number", float)
+    fair = _optional("fair", fair, _is_number, "a number", float)
+    preview_samples = _checked("preview_samples", preview_samples, _is_int, "an integer", int)
+    for setting, value in (("fit", fit), ("faces", faces)):
+        _checked(setting, value, lambda x: isinstance(x, str), "a string", str)
+    _optional("preview", preview, lambda x: isinstance(x, str), "None or a string", str)
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
-    if faces not in ("packed", "per-quad"):
-        raise SettingsError("faces must be 'packed' or 'per-quad', not %r" % (faces,))
     face_limit, memory = _limits(max_faces, max_memory)
-    d = _subd2nurbs.convert(*cage._args(), int(level), float(tolerance or 0.0), bool(absolute), bool(brep),
-                            bool(polar), int(radial_steps), float(polar_lambda), bool(separate_poles),
-                            fit, float(fair or 0.0), preview or "", int(preview_samples), cage.name, cage.warnings, progress,
+    on_stage = None if progress is None else lambda text, fraction, key: progress(StageText(text, key), fraction)
+    d = _subd2nurbs.convert(*cage._args(), level, tolerance, bool(absolute), bool(brep),
+                            bool(polar), radial_steps, polar_lambda, bool(separate_poles),
+                            fit, fair, preview or "", preview_samples, cage.name, cage.warnings, on_stage,
                             face_limit, memory, faces)
     result = ConversionResult(d)
     if brep and not allow_invalid and not result.brep["valid"]:
@@ -477,19 +468,14 @@ def fair(cage, weight=1.0, keep=(), levels=2, membrane=0.0):
     Returns (Cage with the same faces and tags, info dict: energy_before, energy_after,
     limit_moved_max, limit_moved_mean, cage_moved_max, kept, free)."""
     cage = _cage(cage)
-    if isinstance(weight, bool) or not isinstance(weight, numbers.Real) or not math.isfinite(weight) or weight <= 0:
-        raise SettingsError("weight must be a positive number, not %r" % (weight,))
+    weight = _checked("weight", weight, _is_number, "a number", float)
     if isinstance(keep, str):
         keep = (keep,)
     for k in keep:
-        if k not in ("boundary", "creases", "tagged"):
-            raise SettingsError("keep: expected 'boundary', 'creases' or 'tagged', not %r" % (k,))
-    if not _is_int(levels) or not 0 <= levels <= 4:
-        raise SettingsError("levels must be an integer 0 .. 4, not %r" % (levels,))
-    if isinstance(membrane, bool) or not isinstance(membrane, numbers.Real) or not math.isfinite(membrane) \
-            or membrane < 0:
-        raise SettingsError("membrane must be a number >= 0, not %r" % (membrane,))
-    d = _subd2nurbs.fair(*cage._args(), float(weight), list(keep), int(levels), float(membrane))
+        _checked("keep", k, lambda x: isinstance(x, str), "a string", str)
+    levels = _checked("levels", levels, _is_int, "an integer", int)
+    membrane = _checked("membrane", membrane, _is_number, "a number", float)
+    d = _subd2nurbs.fair(*cage._args(), weight, list(keep), levels, membrane)
     o = cage.options
     out = Cage(d.pop("vertices"), cage.faces, cage.creases, cage.corners, cage.holes, o["boundary"],
                o["crease_method"], o["triangles"], name="%s (faired)" % cage.name)

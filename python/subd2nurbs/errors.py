@@ -29,7 +29,14 @@ class CageError(Subd2NurbsError, ValueError):
 
 class SettingsError(Subd2NurbsError, ValueError):
     """A conversion setting that cannot be used (negative level, bad tolerance, a level too
-    deep for the cage, unknown boundary rule)."""
+    deep for the cage, unknown boundary rule). ``setting`` names it as the keyword argument
+    spells it ("radial_steps") and ``rule`` says what it must be ("must be 1 or 2"), in the
+    words the command line and the FreeCAD workbench use too; a refusal by the resource limits
+    has ``code`` "resource-limit" instead."""
+
+    setting = None
+    rule = None
+    code = None
 
 
 class FitError(Subd2NurbsError, ValueError):

@@ -59,6 +59,7 @@ TEST(FitPipeline, BrepPassesThroughTheInputVertices) {
     const std::vector<Point3> pts(cage.input.positions.begin(), cage.input.positions.end());
     const double diag = diagonal(pts);
     pipeline::ConversionSettings settings;
+    settings.level = 0;
     const pipeline::ConversionResult approx = pipeline::convert(level, pts, settings);
     settings.fit.mode = pipeline::FitMode::Interpolate;
     const pipeline::ConversionResult interp = pipeline::convert(level, pts, settings);
@@ -87,6 +88,7 @@ TEST(FitPipeline, PolarCapsPassThroughThePoles) {
   const std::vector<Point3> pts(cage.input.positions.begin(), cage.input.positions.end());
   const double diag = diagonal(pts);
   pipeline::ConversionSettings settings;
+  settings.level = 0;
   settings.fit.mode = pipeline::FitMode::Interpolate;
   const pipeline::ConversionResult c = pipeline::convert(level, pts, settings);
   ASSERT_FALSE(c.caps.empty());

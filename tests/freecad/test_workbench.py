@@ -179,6 +179,84 @@ class Workbench(unittest.TestCase):
         self.doc.recompute()
         self.assertTrue(nurbs.isValid())
 
+    def test_settings_rules_are_the_converters_in_every_front_end(self):
+        """Each setting's rule lives in the converter (issue #15): the CLI (exit 1), the Python
+        module (SettingsError.setting / .rule) and the workbench show the same rule text, each
+        after its own name for the setting."""
+        path = corpus("catmark_cube")
+        cage = subd2nurbs.read_cage(path)
+        glb = os.path.join(self.tmp, "p.glb")
+        fair_rule = "must be a positive number (the weight of the fairing energy)"
+        # (Python keyword arguments, CLI options, the workbench's properties or None, setting, rule)
+        cases = [
+            ({"level": -1}, ["--level=-1"], {"Level": -1}, "level", "must be 0 .. 12"),
+            ({"level": 13}, ["--level", "13"], {"Level": 13}, "level", "must be 0 .. 12"),
+            ({"tolerance": 0.0}, ["--tolerance", "0"], None, "tolerance", "must be a positive number"),
+            ({"level": 1, "tolerance": 0.1}, ["--level", "1", "--tolerance", "0.1"], None, "tolerance",
+             "excludes a level (the tolerance chooses the levels)"),
+            ({"absolute": True}, ["--absolute"], None, "absolute", "needs a tolerance"),
+            ({"radial_steps": 3}, ["--radial-steps", "3"], None, "radial_steps", "must be 1 or 2"),
+            ({"radial_steps": 0}, ["--radial-steps", "0"], None, "radial_steps", "must be 1 or 2"),
+            ({"polar_lambda": 0}, ["--lambda", "0"], None, "polar_lambda", "must be a positive number"),
+            ({"polar": False, "separate_poles": True}, ["--polar", "off", "--separate-poles"], None,
+             "separate_poles", "needs polar caps"),
+            ({"fit": "interpolate", "separate_poles": True}, ["--fit", "interpolate", "--separate-poles"], None,
+             "separate_poles", "is not supported by the interpolating fit (the separating step changes the "
+             "subdivision rule the fit solves for)"),
+            ({"fair": 1.0}, ["--fair", "1"], {"FairWeight": 1.0}, "fair", "needs the interpolating fit"),
+            ({"fit": "interpolate", "fair": -2.0}, ["--fit", "interpolate", "--fair=-2"],
+             {"Fit": "Interpolate", "FairWeight": -2.0}, "fair", fair_rule),
+            ({"fit": "exact"}, ["--fit", "exact"], None, "fit", "must be approximate or interpolate"),
+            ({"faces": "all"}, ["--faces", "all"], None, "faces", "must be packed or per-quad"),
+            ({"max_faces": 0}, ["--max-faces", "0"], {"MaxFaces": -1.0}, "max_faces", "must be a positive number"),
+            ({"max_memory": -1}, None, {"MaxMemoryMiB": -1.0}, "max_memory", "must be a positive number"),
+            ({"max_memory": "12Q"}, ["--max-memory", "12Q"], None, "max_memory",
+             "'12Q' is not a size (bytes, or a number with K, M, G or T, e.g. 8G)"),
+            ({"preview": "curvature", "preview_samples": 1}, ["--preview", glb, "--preview-samples", "1"],
+             {"Samples": 1}, "preview_samples", "must be 2 .. 64"),
+            ({"preview": "rainbow"}, ["--preview", glb, "--color", "rainbow"], None, "preview",
+             "must be deviation, curvature or zebra"),
+        ]
+        cli_name = {"polar_lambda": "--lambda", "preview": "--color"}
+        nurbs = s2n.make_nurbs(s2n.make_cage(path, doc=self.doc), progress=False)
+        color_map = s2n.make_color_map(nurbs, samples=3)
+        for kwargs, options, properties, setting, rule in cases:
+            with self.subTest(setting=setting, kwargs=kwargs):
+                with self.assertRaises(subd2nurbs.SettingsError) as e:
+                    subd2nurbs.convert(cage, brep=False, **kwargs)
+                self.assertEqual((e.exception.setting, e.exception.rule), (setting, rule))
+                self.assertEqual(str(e.exception), "%s %s" % (setting, rule))
+                if options is not None:
+                    r = subprocess.run([CLI, "convert", path, "-o", os.path.join(self.tmp, "o.step")] + options,
+                                       capture_output=True, text=True)
+                    self.assertEqual(r.returncode, 1, r.stderr)
+                    flag = cli_name.get(setting, "--" + setting.replace("_", "-"))
+                    self.assertEqual(r.stderr, "subd2nurbs: error: %s %s\n" % (flag, rule))
+                if properties is not None:
+                    obj = color_map if "Samples" in properties else nurbs
+                    saved = {name: getattr(obj, name) for name in properties}
+                    for name, value in properties.items():
+                        setattr(obj, name, value)
+                    self.doc.recompute()
+                    self.assertFalse(obj.isValid())
+                    shown = features.PROPERTY_OF_SETTING[setting]
+                    self.assertIn("%s %s" % (shown, rule), obj.getStatusString())
+                    for name, value in saved.items():
+                        setattr(obj, name, value)
+                    self.doc.recompute()
+                    self.assertTrue(obj.isValid())
+        with self.assertRaises(subd2nurbs.SettingsError) as e:  # before the document is touched
+            s2n.make_nurbs(nurbs.Source, level=13, progress=False)
+        self.assertEqual(str(e.exception), "Level must be 0 .. 12")
+        with self.assertRaises(RuntimeError) as e:  # converted on recompute: the message says why
+            s2n.make_color_map(nurbs, samples=65)
+        self.assertIn("Samples must be 2 .. 64", str(e.exception))
+        # The Python module's own type checks keep their SettingsError, naming the setting.
+        for kwargs in ({"level": 1.5}, {"radial_steps": True}, {"tolerance": "small"}):
+            with self.assertRaises(subd2nurbs.SettingsError) as e:
+                subd2nurbs.convert(cage, brep=False, **kwargs)
+            self.assertEqual(e.exception.setting, next(iter(kwargs)))
+
     def test_packed_faces_are_the_same_solid(self):
         """Faces = Packed (the default) merges regular regions into one face each: fewer faces,
         the same solid as PerQuad (FreeCAD's own area and volume)."""

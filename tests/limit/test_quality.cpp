@@ -37,7 +37,9 @@ Converted convert_shape(const std::string& name) {
   const LoadedCage cage = read_obj(limit_corpus_path(name));
   c.base = SubdivLevel::from_input(cage.input);
   c.pos = positions_of(cage.input);
-  c.result = pipeline::convert(c.base, c.pos, pipeline::ConversionSettings{});
+  pipeline::ConversionSettings settings;
+  settings.level = 0;
+  c.result = pipeline::convert(c.base, c.pos, settings);
   return c;
 }
 

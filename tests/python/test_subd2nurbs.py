@@ -275,6 +275,10 @@ class Conversion(unittest.TestCase):
         self.assertIn("building the B-rep", names)
         self.assertTrue(all(0 <= x <= 1 for _, x in stages))
         self.assertEqual(max(x for s, x in stages if s == "building the B-rep"), 1.0)
+        # Each line names its stage (the pipeline's Stage), whatever its wording.
+        self.assertEqual([s.key for s, _ in stages if s.startswith("building patches")][0], "patches")
+        self.assertEqual({s.key for s, _ in stages} - {"fit"},
+                         {"patches", "deviation", "packing", "continuity", "brep"})
 
     def test_worst_edges_are_edges_of_the_shape(self):
         r = s2n.convert(s2n.read_obj(corpus("catmark_cube")))
@@ -382,6 +386,50 @@ class Triangles(unittest.TestCase):
         self.assertEqual(cage.num_faces, n)
 
 
+class Diagnostics(unittest.TestCase):
+    def test_many_poles_that_are_not_polar_give_one_note(self):
+        """A triangulated torus: every vertex is an all-triangle vertex of valence 6 and none
+        is a polar structure. The CLI says so in one summary line (none with --quiet); the
+        report, the Python warnings and diagnostics still name each vertex (issue #15)."""
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        n, m = 12, 8
+        v = [[(3 + math.cos(2 * math.pi * j / m)) * math.cos(2 * math.pi * i / n),
+              (3 + math.cos(2 * math.pi * j / m)) * math.sin(2 * math.pi * i / n), math.sin(2 * math.pi * j / m)]
+             for i in range(n) for j in range(m)]
+        k = lambda i, j: (i % n) * m + j % m
+        triangles = []
+        for i in range(n):
+            for j in range(m):
+                triangles += [[k(i, j), k(i + 1, j), k(i + 1, j + 1)], [k(i, j), k(i + 1, j + 1), k(i, j + 1)]]
+        with tempfile.TemporaryDirectory() as d:
+            obj = os.path.join(d, "torus.obj")
+            with open(obj, "w") as out:
+                out.writelines("v %r %r %r\n" % tuple(p) for p in v)
+                out.writelines("f %d %d %d\n" % tuple(x + 1 for x in t) for t in triangles)
+            report = os.path.join(d, "r.json")
+            r = subprocess.run([CLI, "convert", obj, "-o", os.path.join(d, "t.json"), "--level", "0", "--report", report],
+                               capture_output=True, text=True)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            notes = [line for line in r.stderr.splitlines() if "polar structure" in line]
+            self.assertEqual(notes, ["subd2nurbs: note: %d vertices are not polar structures, Catmull-Clark is used "
+                                     "there (%d: their rings do not form one); `subd2nurbs info --json` lists them all"
+                                     % (n * m, n * m)], r.stderr)
+            with open(report) as f:
+                listed = json.load(f)
+            self.assertEqual(len(listed["polar"]["not_polar"]), n * m)
+            self.assertEqual(sum("is not a polar structure" in w for w in listed["warnings"]), n * m)
+            info = subprocess.run([CLI, "info", obj, "--json"], capture_output=True, text=True, check=True)
+            self.assertEqual(len(json.loads(info.stdout)["not_polar"]), n * m)
+            quiet = subprocess.run([CLI, "convert", obj, "-o", os.path.join(d, "t.json"), "--level", "0", "-q"],
+                                   capture_output=True, text=True)
+            self.assertEqual((quiet.returncode, quiet.stderr), (0, ""))
+            result = s2n.convert(s2n.read_cage(obj), level=0, brep=False)
+        self.assertEqual(result.warnings, listed["warnings"])
+        poles = [x for x in result.diagnostics if x["code"] == "pole_not_polar"]
+        self.assertEqual(sorted(x["element"] for x in poles), list(range(n * m)))
+        self.assertTrue(all(x["severity"] == "note" and not x["message"].startswith("subd2nurbs") for x in poles))
+
+
 class Preview(unittest.TestCase):
     def test_preview_colours_match_the_cli_glb(self):
         self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
@@ -486,6 +534,20 @@ class Fitting(unittest.TestCase):
         self.assertEqual(faired.creases, cage.creases)
         with self.assertRaises(s2n.SettingsError):
             s2n.fair(cage, weight=0)
+        # The fairing's rules are the converter's: the CLI prints the same rule after its option.
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        for kwargs, option, rule in (({"weight": -1.0}, ["--weight=-1"], "must be a positive number"),
+                                     ({"levels": 5}, ["--levels", "5"], "must be 0 .. 4"),
+                                     ({"membrane": -1.0}, ["--membrane=-1"], "must be a number >= 0"),
+                                     ({"keep": "nothing"}, ["--keep", "nothing"], "must be boundary, creases or tagged")):
+            with self.assertRaises(s2n.SettingsError) as e:
+                s2n.fair(cage, **kwargs)
+            setting = next(iter(kwargs))
+            self.assertEqual((e.exception.setting, e.exception.rule), (setting, rule))
+            with tempfile.TemporaryDirectory() as d:
+                r = subprocess.run([CLI, "fair", corpus("catmark_cube"), "-o", os.path.join(d, "f.obj")] + option,
+                                   capture_output=True, text=True)
+            self.assertEqual((r.returncode, r.stderr), (1, "subd2nurbs: error: --%s %s\n" % (setting, rule)))
 
 
 if __name__ == "__main__":
