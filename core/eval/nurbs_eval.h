@@ -26,7 +26,6 @@ class PatchEvaluator {
   SurfaceDerivs derivs(double u, double v, int order = 2) const;
   /// The position alone.
   Point3 point(double u, double v) const { return derivs(u, v, 0).p; }
-  const NurbsPatch& patch() const { return *patch_; }
 
  private:
   const NurbsPatch* patch_;

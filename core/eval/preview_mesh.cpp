@@ -61,10 +61,11 @@ PreviewMesh build_preview(const PatchBuild& b, const LimitEvaluator* limit, Prev
   m.values.reserve(nv);
   for (size_t pi = 0; pi < ps.patches.size(); ++pi) {
     const uint32_t base = static_cast<uint32_t>(m.values.size());
+    const PatchEvaluator eval(ps.patches[pi]);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         const double s = static_cast<double>(i) / (n - 1), t = static_cast<double>(j) / (n - 1);
-        const SurfaceDerivs d = evaluate(ps.patches[pi], s, t);
+        const SurfaceDerivs d = eval.derivs(s, t);
         Point3 nn = unit_normal(d);
         for (int k = 0; k < 3; ++k) {
           m.positions.push_back(static_cast<float>(d.p[k]));

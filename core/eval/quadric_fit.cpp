@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/patch/local_mesh.h"
 #include "core/util/eigen_point.h"
 #include "core/util/parallel.h"
 
@@ -82,21 +83,6 @@ struct VertexFitError {
   double exact_H = 0, cage_error = 0, limit_error = 0;
 };
 
-/// The distinct vertices of the faces around each of `centers`.
-std::vector<int> face_neighbours(const PolyMesh& m, const std::vector<int>& centers) {
-  std::vector<int> out;
-  for (int x : centers) {
-    const int* cs = m.vertex_corners(x);
-    for (int i = 0; i < m.vertex_face_count(x); ++i) {
-      const int f = m.corner_face(cs[i]);
-      for (int h = m.face_begin(f); h < m.face_end(f); ++h) out.push_back(m.corner_vertex(h));
-    }
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
-}
-
 VertexFitError vertex_fit_error(const LimitEvaluator& limit, int v) {
   VertexFitError r;
   const SubdivLevel& L = limit.base();
@@ -110,7 +96,7 @@ VertexFitError vertex_fit_error(const LimitEvaluator& limit, int v) {
     if (m.face_size(f) != 4 || L.face_hole[f] || L.edge_sharpness[m.corner_edge(c[i])] != 0.0f) return r;
   }
   // 2-ring: every vertex of every face touching a vertex of v's faces.
-  std::vector<int> ring2 = face_neighbours(m, face_neighbours(m, {v}));
+  std::vector<int> ring2 = vertices_of(m, face_rings(m, {v}, 2));
   ring2.erase(std::find(ring2.begin(), ring2.end(), v));
   // Exact: the limit at v (any face corner at v).
   const int h0 = c[0];
