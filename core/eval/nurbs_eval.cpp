@@ -114,6 +114,31 @@ SurfaceDerivs PatchEvaluator::derivs(double u, double v, int order) const {
   return out;
 }
 
+void PatchEvaluator::grid(const double* us, int nu, const double* vs, int nv, Point3* out) const {
+  if (nu < 0 || nu > 8 || nv < 0 || nv > 8) throw std::invalid_argument("PatchEvaluator::grid: at most 8 x 8 points");
+  const NurbsPatch& patch = *patch_;
+  double Nu[8][3][4], Nv[8][3][4];
+  int su[8], sv[8];
+  for (int a = 0; a < nu; ++a) su[a] = basis_derivatives(U_, 3, us[a], 0, Nu[a]);
+  for (int b = 0; b < nv; ++b) sv[b] = basis_derivatives(V_, 3, vs[b], 0, Nv[b]);
+  const bool rational = !patch.weights.empty();
+  for (int a = 0; a < nu; ++a)
+    for (int b = 0; b < nv; ++b) {
+      double S[3] = {0, 0, 0}, W = 0;
+      for (int i = 0; i <= 3; ++i)
+        for (int j = 0; j <= 3; ++j) {
+          const int pi = su[a] - 3 + i, pj = sv[b] - 3 + j;
+          const double w = rational ? patch.weights[static_cast<size_t>(pi) * patch.num_poles_v + pj] : 1.0;
+          const double bw = Nu[a][0][i] * Nv[b][0][j] * w;
+          const Point3& P = patch.pole(pi, pj);
+          for (int c = 0; c < 3; ++c) S[c] += bw * P[c];
+          W += bw;
+        }
+      Point3& p = out[a * nv + b];
+      for (int c = 0; c < 3; ++c) p[c] = rational ? S[c] / W : S[c];
+    }
+}
+
 Point3 unit_normal(const SurfaceDerivs& d) {
   const Point3& a = d.du;
   const Point3& b = d.dv;

@@ -273,13 +273,35 @@ void fill_poles(const std::vector<PatchLeaf>& leaves, const LeafIndex& index, co
 // Largest distance between the patch and a piece at 4 x 4 parameters inside the piece: two
 // bicubics that agree there are the same polynomial.
 double leaf_error_with(const PatchLeaf& leaf, const PatchEvaluator& eval) {
+  // The piece at the nodes: B net B^T with B the Bernstein values at the nodes.
+  static const struct NodeBasis {
+    double b[4][4];
+    NodeBasis() {
+      for (int a = 0; a < 4; ++a) bernstein(kNodes[a], b[a]);
+    }
+  } B;
+  Point3 rows[4][4];  // rows[a][j] = sum_i B[a][i] net[i][j]
+  for (int a = 0; a < 4; ++a)
+    for (int j = 0; j < 4; ++j) {
+      rows[a][j] = {0, 0, 0};
+      for (int i = 0; i < 4; ++i)
+        for (int d = 0; d < 3; ++d) rows[a][j][d] += B.b[a][i] * leaf.net[i * 4 + j][d];
+    }
+  double us[4], vs[4];
+  for (int a = 0; a < 4; ++a) {
+    us[a] = leaf.u0 + kNodes[a] * leaf.size;
+    vs[a] = leaf.v0 + kNodes[a] * leaf.size;
+  }
+  Point3 p[16];
+  eval.grid(us, 4, vs, 4, p);
   double worst = 0;
-  for (double s : kNodes)
-    for (double t : kNodes) {
-      const double u = leaf.u0 + s * leaf.size, v = leaf.v0 + t * leaf.size;
-      const Point3 q = eval_leaf(leaf, u, v);
-      const Point3 p = eval.point(u, v);
-      worst = std::max(worst, std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2])));
+  for (int a = 0; a < 4; ++a)
+    for (int c = 0; c < 4; ++c) {
+      Point3 q{0, 0, 0};
+      for (int j = 0; j < 4; ++j)
+        for (int d = 0; d < 3; ++d) q[d] += B.b[c][j] * rows[a][j][d];
+      const Point3& r = p[a * 4 + c];
+      worst = std::max(worst, std::sqrt((r[0] - q[0]) * (r[0] - q[0]) + (r[1] - q[1]) * (r[1] - q[1]) + (r[2] - q[2]) * (r[2] - q[2])));
     }
   return worst;
 }

@@ -2,33 +2,74 @@
 
 #include <algorithm>
 #include <stdexcept>
-#include <unordered_map>
+#include <utility>
 
 namespace subd2nurbs {
 
-std::vector<int> face_rings(const PolyMesh& m, const std::vector<int>& seed_vertices, int rings) {
-  std::vector<int> vertices = seed_vertices, faces;
-  std::sort(vertices.begin(), vertices.end());
-  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
-  for (int r = 0; r < rings; ++r) {
-    faces.clear();
-    for (int v : vertices) {
-      const int* c = m.vertex_corners(v);
-      for (int i = 0; i < m.vertex_face_count(v); ++i) faces.push_back(m.corner_face(c[i]));
-    }
-    std::sort(faces.begin(), faces.end());
-    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
-    if (r + 1 < rings) vertices = vertices_of(m, faces);
+namespace {
+
+/// Per-thread marks over the elements (faces or vertices) of whatever mesh a call works on,
+/// so that a call costs O(what it touches) however large the mesh: marks set by one use are
+/// reset when it ends. Each function keeps its own store; none of them recurses.
+class Marks {
+ public:
+  Marks(std::vector<int>& store, int size) : mark_(store) {
+    if (static_cast<int>(mark_.size()) < size) mark_.resize(size, -1);
   }
+  Marks(const Marks&) = delete;
+  Marks& operator=(const Marks&) = delete;
+  ~Marks() {
+    for (int i : touched_) mark_[i] = -1;
+  }
+  int get(int i) const { return mark_[i]; }
+  /// Sets i's mark; false if it was set already (then it is left as it was).
+  bool set(int i, int value) {
+    if (mark_[i] >= 0) return false;
+    mark_[i] = value;
+    touched_.push_back(i);
+    return true;
+  }
+
+ private:
+  std::vector<int>& mark_;
+  std::vector<int> touched_;
+};
+
+}  // namespace
+
+std::vector<int> face_rings(const PolyMesh& m, const std::vector<int>& seed_vertices, int rings) {
+  thread_local std::vector<int> face_store, vertex_store;
+  Marks face_seen(face_store, m.num_faces()), vertex_seen(vertex_store, m.num_vertices());
+  std::vector<int> vertices, faces;
+  for (int v : seed_vertices)
+    if (vertex_seen.set(v, 1)) vertices.push_back(v);
+  size_t ring_start = 0;  // the vertices whose faces are still to be collected
+  for (int r = 0; r < rings; ++r) {
+    const size_t first_new_face = faces.size();
+    for (size_t k = ring_start; k < vertices.size(); ++k) {
+      const int v = vertices[k];
+      const int* c = m.vertex_corners(v);
+      for (int i = 0; i < m.vertex_face_count(v); ++i)
+        if (face_seen.set(m.corner_face(c[i]), 1)) faces.push_back(m.corner_face(c[i]));
+    }
+    if (r + 1 == rings) break;
+    ring_start = vertices.size();
+    for (size_t k = first_new_face; k < faces.size(); ++k)
+      for (int h = m.face_begin(faces[k]); h < m.face_end(faces[k]); ++h)
+        if (vertex_seen.set(m.corner_vertex(h), 1)) vertices.push_back(m.corner_vertex(h));
+  }
+  std::sort(faces.begin(), faces.end());
   return faces;
 }
 
 std::vector<int> vertices_of(const PolyMesh& m, const std::vector<int>& faces) {
+  thread_local std::vector<int> store;
+  Marks seen(store, m.num_vertices());
   std::vector<int> out;
   for (int f : faces)
-    for (int h = m.face_begin(f); h < m.face_end(f); ++h) out.push_back(m.corner_vertex(h));
+    for (int h = m.face_begin(f); h < m.face_end(f); ++h)
+      if (seen.set(m.corner_vertex(h), 1)) out.push_back(m.corner_vertex(h));
   std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
@@ -41,54 +82,68 @@ constexpr float kInf = static_cast<float>(kInfiniteSharpness);
 LocalMesh cut_out(const SubdivLevel& level, const std::vector<Point3>& x, const std::vector<int>& faces,
                   const std::vector<int>& origin_face, const std::vector<int>& origin_vertex) {
   const PolyMesh& m = level.mesh;
-  std::unordered_map<int, int> local_face;
-  local_face.reserve(faces.size() * 2);
-  for (size_t i = 0; i < faces.size(); ++i) local_face.emplace(faces[i], static_cast<int>(i));
-  auto inside = [&](int f) { return local_face.count(f) != 0; };
+  const int nf = static_cast<int>(faces.size());
+  // Where each chosen face sits in `faces` (a face listed twice keeps its first place).
+  thread_local std::vector<int> store;
+  Marks position(store, m.num_faces());
+  for (int i = 0; i < nf; ++i) position.set(faces[i], i);
+  auto local_face = [&](int f) { return position.get(f); };
+  // The piece's corners: those of face i start at first_corner[i].
+  std::vector<int> first_corner(nf + 1, 0);
+  for (int i = 0; i < nf; ++i) first_corner[i + 1] = first_corner[i] + m.face_size(faces[i]);
+  auto local_corner = [&](int h) {  // -1 when h's face is not chosen
+    const int f = m.corner_face(h), i = local_face(f);
+    return i < 0 ? -1 : first_corner[i] + (h - m.face_begin(f));
+  };
 
   // One local vertex per run of consecutive chosen faces around each source vertex.
-  std::unordered_map<int, int> vertex_of_corner;  // source corner -> local vertex
-  vertex_of_corner.reserve(faces.size() * 8);
+  std::vector<int> vertex_of_corner(first_corner[nf], -1);  // piece corner -> local vertex
   LocalMesh out;
+  out.x.reserve(first_corner[nf]);
+  out.origin_vertex.reserve(first_corner[nf]);
+  out.level.vertex_sharpness.reserve(first_corner[nf]);
   auto new_vertex = [&](int v) {
     out.x.push_back(x[v]);
     out.origin_vertex.push_back(origin_vertex.empty() ? v : origin_vertex[v]);
     out.level.vertex_sharpness.push_back(level.vertex_sharpness[v]);
     return static_cast<int>(out.x.size()) - 1;
   };
-  for (int f : faces)
-    for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
-      if (vertex_of_corner.count(h)) continue;
-      const int v = m.corner_vertex(h);
+  std::vector<int> around;  // piece corner of each corner around v, -1 outside the piece
+  for (int i = 0; i < nf; ++i)
+    for (int k = first_corner[i]; k < first_corner[i + 1]; ++k) {
+      if (vertex_of_corner[k] >= 0) continue;
+      const int v = m.corner_vertex(m.face_begin(faces[i]) + (k - first_corner[i]));
       const int* c = m.vertex_corners(v);
       const int n = m.vertex_face_count(v);
+      around.resize(n);
+      for (int j = 0; j < n; ++j) around[j] = local_corner(c[j]);
       // Start after a corner outside the piece (or at the fan's start for a boundary vertex
       // or a vertex whose faces are all inside).
       int start = 0;
       if (!m.is_boundary_vertex(v))
-        for (int i = 0; i < n; ++i)
-          if (!inside(m.corner_face(c[i]))) { start = (i + 1) % n; break; }
+        for (int j = 0; j < n; ++j)
+          if (around[j] < 0) { start = (j + 1) % n; break; }
       int current = -1;
-      for (int i = 0; i < n; ++i) {
-        const int ci = c[(start + i) % n];
-        if (!inside(m.corner_face(ci))) { current = -1; continue; }
+      for (int j = 0; j < n; ++j) {
+        const int lc = around[(start + j) % n];
+        if (lc < 0) { current = -1; continue; }
         if (current < 0) current = new_vertex(v);
-        vertex_of_corner.emplace(ci, current);
+        vertex_of_corner[lc] = current;
       }
     }
 
-  std::vector<int> sizes, indices;
-  sizes.reserve(faces.size());
-  for (int f : faces) {
-    sizes.push_back(m.face_size(f));
-    for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
-      indices.push_back(vertex_of_corner.at(h));
-      out.source_corner.push_back(h);
-    }
-    out.origin_face.push_back(origin_face.empty() ? f : origin_face[f]);
-    out.level.face_hole.push_back(level.face_hole[f]);
+  std::vector<int> sizes(nf);
+  out.source_corner.resize(first_corner[nf]);
+  out.origin_face.resize(nf);
+  out.level.face_hole.resize(nf);
+  for (int i = 0; i < nf; ++i) {
+    const int f = faces[i];
+    sizes[i] = m.face_size(f);
+    for (int k = first_corner[i]; k < first_corner[i + 1]; ++k) out.source_corner[k] = m.face_begin(f) + (k - first_corner[i]);
+    out.origin_face[i] = origin_face.empty() ? f : origin_face[f];
+    out.level.face_hole[i] = level.face_hole[f];
   }
-  out.level.mesh = PolyMesh::build(static_cast<int>(out.x.size()), sizes, indices);
+  out.level.mesh = PolyMesh::build(static_cast<int>(out.x.size()), sizes, vertex_of_corner);
   out.level.options = level.options;
   const PolyMesh& lm = out.level.mesh;
   out.level.edge_sharpness.assign(lm.num_edges(), 0.0f);

@@ -539,6 +539,11 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     fpatch.patch.kind = pccm ? PatchKind::Pccm : PatchKind::RegularBSpline;
     fpatch.removed_knots = assemble_patch(fpatch.leaves, du, dv, knot_tolerance, same_surface, fpatch.patch).removed_knots;
   });
+  ps.patches.reserve(ma.num_faces() + info.caps.size());
+  ps.curves.reserve(ma.num_edges() + info.caps.size());
+  ps.corners.reserve(ma.num_vertices() + info.caps.size());
+  for (auto* v : {&out.coarse_face, &out.patch_deepest, &out.patch_removed_knots}) v->reserve(ma.num_faces());
+  out.leaves.reserve(ma.num_faces());
   for (int F = 0; F < ma.num_faces(); ++F) {
     if (la.face_hole[F] || capped_a[F]) continue;
     FacePatch& fpatch = face_patches[F];
@@ -578,6 +583,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
         bc.corner0 = patch.corners[side];
         bc.corner1 = patch.corners[(side + 1) % 4];
         const int nu = patch.num_poles_u, nv = patch.num_poles_v;
+        bc.poles.reserve(side % 2 == 0 ? nu : nv);
         switch (side) {
           case 0: bc.knots = patch.knots_u; for (int i = 0; i < nu; ++i) bc.poles.push_back(patch.pole(i, 0)); break;
           case 1: bc.knots = patch.knots_v; for (int j = 0; j < nv; ++j) bc.poles.push_back(patch.pole(nu - 1, j)); break;
