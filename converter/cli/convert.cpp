@@ -1,5 +1,5 @@
 #include "converter/cli/convert.h"
-#include "converter/cli/quality_json.h"
+#include "converter/cli/quality_text.h"
 
 #include <algorithm>
 #include <chrono>
@@ -14,6 +14,7 @@
 #include "converter/occt/export_error.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/report.h"
 #include "io/atomic_file.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
@@ -196,9 +197,12 @@ pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, 
   settings.patch.separate_poles = options.separate_poles;
   settings.fit.mode = pipeline::fit_mode(options.fit);
   if (options.fair_given) settings.fit.fair_weight = options.fair;
+  // The optional stages: the quality section of the report, the preview.
+  if (!options.report.empty()) settings.quality_samples = pipeline::kReportQualitySamples;
   pipeline::validate(settings);
-  pipeline::preview_color(options.preview_color);
+  const PreviewColor color = pipeline::preview_color(options.preview_color);
   pipeline::check_samples("preview_samples", options.preview_samples);
+  if (!options.preview.empty()) settings.preview = pipeline::PreviewSettings{color, options.preview_samples};
   return settings;
 }
 
@@ -288,11 +292,12 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   }
 
   if (!options.report.empty()) {
-    const std::string text = report_with_quality(pipeline::report_json(c), base, c.cage, c, err, options.quiet);
+    if (!options.quiet) print_quality_summary(err, *c.quality, c.build.set.model_size);
+    const std::string text = pipeline::report_json(c);
     staged.emplace_back(options.report);
     staged.back().write([&](std::ostream& out) { out << text; });
   }
-  if (!options.preview.empty()) staged.push_back(stage_preview(options, base, c.cage, c, err));
+  if (!options.preview.empty()) staged.push_back(stage_preview(options, c, err));
   for (StagedFile& file : staged) file.commit();
   if (!options.quiet) print_summary(err, c, kind, schema);
 }

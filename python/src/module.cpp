@@ -24,6 +24,7 @@
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/report.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/eval/preview_mesh.h"
 #include "core/fit/fairing.h"
