@@ -183,15 +183,14 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
 
 /// The settings of `options`, checked by the pipeline's rules before any work.
 pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, bool build_brep) {
-  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
   pipeline::ConversionSettings settings;
+  settings.patch.polar = pipeline::polar_mode(options.polar);
   if (options.level_given) settings.level = options.level;
   if (options.tolerance_given) settings.tolerance = options.tolerance;
   settings.absolute = options.absolute;
   settings.build_brep = build_brep;
   settings.faces = pipeline::face_mode(options.faces);
   settings.limits = resource_limits(options.limits);
-  settings.patch.polar = options.polar == "on";
   settings.patch.cap.radial_steps = options.radial_steps;
   settings.patch.cap.lambda = options.lambda;
   settings.patch.separate_poles = options.separate_poles;
@@ -211,10 +210,8 @@ pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, 
 // --- the subcommand ------------------------------------------------------------------------
 
 void run_convert(const ConvertOptions& options, std::ostream& err) {
-  if (options.schema != "ap214" && options.schema != "ap242")
-    throw UsageError("--schema must be ap214 or ap242");
+  const occt::StepSchema schema = pipeline::step_schema(options.schema);
   const OutputKind kind = output_kind(options.output);
-  const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
   const pipeline::ConversionSettings settings = conversion_settings(options, kind != OutputKind::Json);
   check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
 

@@ -130,6 +130,17 @@ KeepSet keep_set(const std::vector<std::string>& names) {
   return keep;
 }
 
+bool polar_mode(const std::string& name) {
+  if (name == "on" || name == "off") return name == "on";
+  throw SettingsError("polar", "must be on or off");
+}
+
+occt::StepSchema step_schema(const std::string& name) {
+  if (name == "ap214") return occt::StepSchema::AP214;
+  if (name == "ap242") return occt::StepSchema::AP242;
+  throw SettingsError("schema", "must be ap214 or ap242");
+}
+
 PreviewColor preview_color(const std::string& name) {
   if (name == "deviation" || name == "curvature" || name == "zebra") return preview_color_from_string(name);
   throw SettingsError("preview", "must be deviation, curvature or zebra");

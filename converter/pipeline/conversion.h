@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "converter/occt/brep_builder.h"
+#include "converter/occt/writers.h"
 #include "converter/pipeline/resources.h"
 #include "converter/pipeline/settings_error.h"
 #include "converter/pipeline/text.h"
@@ -236,6 +237,12 @@ void validate(const ConversionSettings& settings);
 void validate_fairing(double weight, const EnergyOptions& energy);
 /// The vertices a fairing keeps, by name: boundary, creases, tagged. \throw SettingsError ("keep")
 KeepSet keep_set(const std::vector<std::string>& names);
+
+/// Polar structures as the command line's --polar names them: "on" (polar caps, true) or "off"
+/// (Catmull-Clark). \throw SettingsError ("polar")
+bool polar_mode(const std::string& name);
+/// The STEP schema of a written file: "ap214" or "ap242". \throw SettingsError ("schema")
+occt::StepSchema step_schema(const std::string& name);
 
 /// The preview colouring: "deviation", "curvature" or "zebra". \throw SettingsError ("preview")
 PreviewColor preview_color(const std::string& name);

@@ -515,15 +515,14 @@ struct Conversion {
 
   /// Writes the shape as STEP / IGES / BREP (by extension), atomically, as the CLI does.
   void write(const std::string& path, const std::string& schema) const {
-    if (schema != "ap214" && schema != "ap242") throw pipeline::SettingsError("schema", "must be ap214 or ap242");
+    const occt::StepSchema step = pipeline::step_schema(schema);
     occt::Format format;
     try {
       format = occt::format_from_path(path);
     } catch (const std::invalid_argument&) {
       throw pipeline::SettingsError("path", "must end in .step, .stp, .iges, .igs or .brep: '" + path + "'");
     }
-    occt::write_shape(result.brep.shape, path, format,
-                      schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214);
+    occt::write_shape(result.brep.shape, path, format, step);
   }
 };
 

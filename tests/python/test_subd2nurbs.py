@@ -512,6 +512,18 @@ class BoundTypes(unittest.TestCase):
         with self.assertRaises(s2n.ConversionError):
             no_brep.write(os.path.join(tempfile.gettempdir(), "never.step"))
 
+    def test_schema_rule_is_the_converters(self):
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        r = s2n.convert(s2n.read_cage(corpus("catmark_cube")))
+        with tempfile.TemporaryDirectory() as d:
+            with self.assertRaises(s2n.SettingsError) as e:
+                r.write(os.path.join(d, "a.step"), schema="ap999")
+            self.assertEqual((e.exception.setting, e.exception.rule), ("schema", "must be ap214 or ap242"))
+            cli = subprocess.run([CLI, "convert", corpus("catmark_cube"), "-o", os.path.join(d, "b.step"),
+                                  "--schema", "ap999"], capture_output=True, text=True)
+            self.assertEqual(cli.stderr, "subd2nurbs: error: --%s %s\n" % (e.exception.setting, e.exception.rule))
+            self.assertEqual(os.listdir(d), [])
+
     def test_make_preview_is_the_preview_stage_without_a_second_conversion(self):
         cage = s2n.read_cage(corpus("catmark_cube_creases0"))
         r = s2n.convert(cage, level=1)
