@@ -275,7 +275,7 @@ void run_info(const InfoOptions& options, std::ostream& out) {
 
 void run_refine(const RefineOptions& options, std::ostream& err) {
   pipeline::check_refine_levels(options.levels);
-  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
+  const bool polar = pipeline::polar_mode(options.polar);
   resource_limits(options.limits);  // a malformed --max-memory is refused before any work
   check_outputs(options.mesh, {{"-o", options.output}});
   const LoadedInput loaded = load_input(options.mesh);
@@ -294,8 +294,7 @@ void run_refine(const RefineOptions& options, std::ostream& err) {
     err << "subd2nurbs: refining " << options.mesh << " to level " << options.levels
         << " (" << number(faces) << " faces)\n";
   std::vector<PolarStructure> structures;
-  if (options.polar == "on") structures = detect_polar_structures(loaded.level).structures;
-  else if (options.polar != "off") throw UsageError("--polar must be on or off");
+  if (polar) structures = detect_polar_structures(loaded.level).structures;
   const PolarRefinement refined =
       refine_with_polar(loaded.level, loaded.positions(), options.levels, structures);
   if (refined.structures > 0 && report)
@@ -370,8 +369,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   convert_command->add_option("--faces", convert.faces,
                               "packed (default: each regular region of quads is one B-spline face) or "
                               "per-quad (one face per coarse quad)");
-  convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242")
-      ->check(CLI::IsMember({"ap214", "ap242"}));
+  // The schema's rule is the converter's (pipeline::step_schema), checked by run_convert.
+  convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242");
   convert_command->add_option("--report", convert.report,
                               "Also write a JSON report (counts, continuity, deviation, timings)");
   convert_command->add_option("--preview", convert.preview,

@@ -1,5 +1,5 @@
 #include "converter/cli/convert.h"
-#include "converter/cli/quality_json.h"
+#include "converter/cli/quality_text.h"
 
 #include <algorithm>
 #include <chrono>
@@ -14,6 +14,7 @@
 #include "converter/occt/export_error.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/report.h"
 #include "io/atomic_file.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
@@ -182,23 +183,25 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
 
 /// The settings of `options`, checked by the pipeline's rules before any work.
 pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, bool build_brep) {
-  if (options.polar != "on" && options.polar != "off") throw UsageError("--polar must be on or off");
   pipeline::ConversionSettings settings;
+  settings.patch.polar = pipeline::polar_mode(options.polar);
   if (options.level_given) settings.level = options.level;
   if (options.tolerance_given) settings.tolerance = options.tolerance;
   settings.absolute = options.absolute;
   settings.build_brep = build_brep;
   settings.faces = pipeline::face_mode(options.faces);
   settings.limits = resource_limits(options.limits);
-  settings.patch.polar = options.polar == "on";
   settings.patch.cap.radial_steps = options.radial_steps;
   settings.patch.cap.lambda = options.lambda;
   settings.patch.separate_poles = options.separate_poles;
   settings.fit.mode = pipeline::fit_mode(options.fit);
   if (options.fair_given) settings.fit.fair_weight = options.fair;
+  // The optional stages: the quality section of the report, the preview.
+  if (!options.report.empty()) settings.quality_samples = pipeline::kReportQualitySamples;
   pipeline::validate(settings);
-  pipeline::preview_color(options.preview_color);
+  const PreviewColor color = pipeline::preview_color(options.preview_color);
   pipeline::check_samples("preview_samples", options.preview_samples);
+  if (!options.preview.empty()) settings.preview = pipeline::PreviewSettings{color, options.preview_samples};
   return settings;
 }
 
@@ -207,10 +210,8 @@ pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, 
 // --- the subcommand ------------------------------------------------------------------------
 
 void run_convert(const ConvertOptions& options, std::ostream& err) {
-  if (options.schema != "ap214" && options.schema != "ap242")
-    throw UsageError("--schema must be ap214 or ap242");
+  const occt::StepSchema schema = pipeline::step_schema(options.schema);
   const OutputKind kind = output_kind(options.output);
-  const occt::StepSchema schema = options.schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214;
   const pipeline::ConversionSettings settings = conversion_settings(options, kind != OutputKind::Json);
   check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
 
@@ -288,11 +289,12 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   }
 
   if (!options.report.empty()) {
-    const std::string text = report_with_quality(pipeline::report_json(c), base, c.cage, c, err, options.quiet);
+    if (!options.quiet) print_quality_summary(err, *c.quality, c.build.set.model_size);
+    const std::string text = pipeline::report_json(c);
     staged.emplace_back(options.report);
     staged.back().write([&](std::ostream& out) { out << text; });
   }
-  if (!options.preview.empty()) staged.push_back(stage_preview(options, base, c.cage, c, err));
+  if (!options.preview.empty()) staged.push_back(stage_preview(options, c, err));
   for (StagedFile& file : staged) file.commit();
   if (!options.quiet) print_summary(err, c, kind, schema);
 }

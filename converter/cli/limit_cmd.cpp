@@ -21,7 +21,7 @@ CLI::App* add_limit_command(CLI::App& app, LimitOptions& options) {
       "limit",
       "Evaluate the exact limit surface: reads query lines \"f u v\" (quad f) or \"f s u v\" "
       "(sub-face s of n-gon f) and prints \"Px Py Pz Nx Ny Nz Dux Duy Duz Dvx Dvy Dvz\" per query");
-  c->add_option("MESH", options.mesh, "OBJ cage (with OpenSubdiv 't' tags)")->required();
+  c->add_option("MESH", options.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
   c->add_option("QUERIES", options.queries, "File of query lines (default: standard input)");
   return c;
 }

@@ -16,10 +16,6 @@ double ms_since(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
 }
 
-std::string json_bool(bool b) { return b ? "true" : "false"; }
-
-std::string optional_string(const std::string& s) { return s.empty() ? std::string("null") : json_string(s); }
-
 void collect_fans(ConversionResult& c) {
   const PatchBuildInfo& info = c.build.info;
   std::vector<int> measure_of_curve(c.exported.set.curves.size(), -1);
@@ -73,7 +69,8 @@ const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
 const char* to_string(Stage stage) {
-  static const char* const names[] = {"fit", "patches", "deviation", "packing", "continuity", "brep"};  // enum order
+  static const char* const names[] = {"fit",        "patches", "deviation", "packing",
+                                      "continuity", "brep",    "quality",   "preview"};  // enum order
   return names[static_cast<int>(stage)];
 }
 
@@ -133,9 +130,24 @@ KeepSet keep_set(const std::vector<std::string>& names) {
   return keep;
 }
 
+bool polar_mode(const std::string& name) {
+  if (name == "on" || name == "off") return name == "on";
+  throw SettingsError("polar", "must be on or off");
+}
+
+occt::StepSchema step_schema(const std::string& name) {
+  if (name == "ap214") return occt::StepSchema::AP214;
+  if (name == "ap242") return occt::StepSchema::AP242;
+  throw SettingsError("schema", "must be ap214 or ap242");
+}
+
 PreviewColor preview_color(const std::string& name) {
   if (name == "deviation" || name == "curvature" || name == "zebra") return preview_color_from_string(name);
   throw SettingsError("preview", "must be deviation, curvature or zebra");
+}
+
+const char* to_string(PreviewColor color) {
+  return color == PreviewColor::Deviation ? "deviation" : color == PreviewColor::Curvature ? "curvature" : "zebra";
 }
 
 void check_samples(const std::string& setting, int samples) {
@@ -163,6 +175,21 @@ void validate(const ConversionSettings& settings) {
                                           "the subdivision rule the fit solves for)");
   if (fit.energy.levels < 0 || fit.energy.levels > 4) throw SettingsError("fair_levels", "must be 0 .. 4");
   validate(settings.limits);
+  if (settings.quality_samples) check_samples("samples", *settings.quality_samples);
+  if (settings.preview) check_samples("preview_samples", settings.preview->samples);
+}
+
+QualityReport measure_quality(const SubdivLevel& base, const ConversionResult& c, int samples) {
+  check_samples("samples", samples);
+  const LimitEvaluator limit(base, c.cage);
+  return measure_quality(c.build, limit, c.continuity, samples, &c.exported);
+}
+
+PreviewMesh build_preview(const SubdivLevel& base, const ConversionResult& c, const PreviewSettings& preview) {
+  check_samples("preview_samples", preview.samples);
+  std::optional<LimitEvaluator> limit;  // the deviation colouring measures against the exact limit
+  if (preview.color == PreviewColor::Deviation) limit.emplace(base, c.cage);
+  return subd2nurbs::build_preview(c.build, limit ? &*limit : nullptr, preview.color, preview.samples);
 }
 
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -402,166 +429,22 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     c.has_brep = true;
     c.ms.brep = ms_since(t);
   }
+
+  // The optional stages: their results are data in the result.
+  if (settings.quality_samples) {
+    t = Clock::now();
+    stage(Stage::Quality, "measuring against the exact limit surface");
+    c.quality = measure_quality(base, c, *settings.quality_samples);
+    c.ms.quality = ms_since(t);
+  }
+  if (settings.preview) {
+    t = Clock::now();
+    stage(Stage::Preview, std::string("tessellating the preview (") + to_string(settings.preview->color) + ")");
+    c.preview_settings = *settings.preview;
+    c.preview = build_preview(base, c, *settings.preview);
+    c.ms.preview = ms_since(t);
+  }
   return c;
-}
-
-// --- the report ------------------------------------------------------------------------------
-
-std::string report_json(const ConversionResult& c) {
-  const PatchBuildInfo& info = c.build.info;
-  const PatchSet& ps = c.build.set;
-  const double size = ps.model_size;
-  auto relative = [size](double x) { return size > 0 ? json_number(x / size) : std::string("null"); };
-  std::string j;
-  auto line = [&j](const std::string& s) { j += s + "\n"; };
-
-  line("{");
-  line("  \"format\": \"subd2nurbs-report\",");
-  line("  \"version\": 1,");
-  line("  \"input\": " + json_string(c.input) + ",");
-  line("  \"output\": " + optional_string(c.output.path) + ",");
-  line("  \"output_format\": " + optional_string(c.output.format) + ",");
-  line("  \"step_schema\": " + optional_string(c.output.step_schema) + ",");
-  std::string warnings = "  \"warnings\": [";
-  const std::vector<std::string> texts = warning_texts(c);
-  for (size_t i = 0; i < texts.size(); ++i) warnings += (i ? ", " : "") + json_string(texts[i]);
-  line(warnings + "],");
-  line("  \"model_size\": " + json_number(size) + ",");
-  line("  \"coarse_level\": " + std::to_string(info.coarse_level) + ",");
-  line("  \"level\": " + std::to_string(info.level) + ",");
-  line("  \"extra_levels\": " + std::to_string(c.extra_levels) + ",");
-  line("  \"patches\": {\"total\": " + std::to_string(ps.patches.size()) + ", \"regular\": " +
-       std::to_string(info.regular_patches) + ", \"pccm\": " + std::to_string(info.pccm_patches) +
-       ", \"polar_caps\": " + std::to_string(info.caps.size()) + ", \"poles\": " + std::to_string(info.total_poles) +
-       ", \"pieces\": " + std::to_string(info.leaves) + ", \"removed_knots\": " + std::to_string(info.removed_knots) + "},");
-  const auto& cc = c.curves_by_continuity;
-  const PackedSet& out = c.exported;
-  line("  \"faces\": {\"mode\": " + json_string(to_string(c.faces)) + ", \"total\": " +
-       std::to_string(out.set.patches.size()) + ", \"packed\": " + std::to_string(out.packs) +
-       ", \"packed_quads\": " + std::to_string(out.packed_quads) + ", \"poles\": " + std::to_string(out.total_poles) +
-       ", \"removed_knot_lines\": " + std::to_string(out.removed_knots) + "},");
-  line("  \"curves\": {\"total\": " + std::to_string(out.set.curves.size()) + ", \"boundary\": " +
-       std::to_string(cc[0]) + ", \"c0\": " + std::to_string(cc[1]) + ", \"g1\": " +
-       std::to_string(cc[2]) + ", \"c1\": " + std::to_string(cc[3]) + ", \"c2\": " + std::to_string(cc[4]) + "},");
-  const auto& fm = c.fans_by_mode;
-  line("  \"fans\": {\"smooth\": " + std::to_string(fm[0]) + ", \"dart\": " + std::to_string(fm[1]) +
-       ", \"crease\": " + std::to_string(fm[2]) + ", \"corner\": " + std::to_string(fm[3]) +
-       ", \"approximate\": " + std::to_string(fm[4]) + ",");
-  std::string approx = "    \"approximate_fans\": [";
-  for (size_t i = 0; i < c.approximate.size(); ++i) {
-    const ApproximateFan& a = c.approximate[i];
-    approx += std::string(i ? ",\n      " : "\n      ") + "{\"base_vertex\": " + std::to_string(a.base_vertex) +
-              ", \"valence\": " + std::to_string(a.valence) + ", \"sectors\": " + std::to_string(a.sectors) +
-              ", \"rays\": " + std::to_string(a.rays) + ", \"normal_angle_deg\": " +
-              (a.normal_angle_deg < 0 ? std::string("null") : json_number(a.normal_angle_deg)) + "}";
-  }
-  line(approx + (c.approximate.empty() ? "]" : "\n    ]") + "},");
-  std::string polar = "  \"polar\": {\"enabled\": " + json_bool(c.polar) + ", \"radial_steps\": " +
-                      std::to_string(c.cap_options.radial_steps) + ", \"lambda\": " +
-                      json_number(c.cap_options.lambda) + ",\n    \"caps\": [";
-  for (size_t i = 0; i < c.caps.size(); ++i) {
-    const CapMeasure& m = c.caps[i];
-    polar += std::string(i ? ",\n      " : "\n      ") + "{\"pole\": " + std::to_string(m.pole_vertex) +
-             ", \"valence\": " + std::to_string(m.valence) + ", \"bp_distance\": " + json_number(m.bp_distance) +
-             ", \"bp_distance_relative\": " + relative(m.bp_distance) +
-             ", \"pole_normal_angle_deg\": " + json_number(m.pole.normal_angle_deg[1]) +
-             ", \"pole_curvature\": {\"distance\": [" + json_number(m.pole.distance[0]) + ", " +
-             json_number(m.pole.distance[1]) + "], \"max_abs_k\": [" + json_number(m.pole.max_abs_k[0]) + ", " +
-             json_number(m.pole.max_abs_k[1]) + "], \"normal_angle_deg\": [" + json_number(m.pole.normal_angle_deg[0]) +
-             ", " + json_number(m.pole.normal_angle_deg[1]) + "]}}";  }
-  polar += std::string(c.caps.empty() ? "]" : "\n    ]") + ",\n    \"separated_poles\": [";
-  for (size_t i = 0; i < info.separated_poles.size(); ++i)
-    polar += (i ? ", " : "") + std::to_string(info.separated_poles[i]);
-  polar += "],\n    \"not_polar\": [";
-  for (size_t i = 0; i < info.rejected_poles.size(); ++i) {
-    const RejectedPole& r = info.rejected_poles[i];
-    polar += std::string(i ? ",\n      " : "\n      ") + "{\"vertex\": " + std::to_string(r.vertex) +
-             ", \"valence\": " + std::to_string(r.valence) + ", \"reason\": " + json_string(r.reason) + "}";
-  }
-  line(polar + (info.rejected_poles.empty() ? "]" : "\n    ]") + "},");
-  {
-    const FitReport& f = c.fit;
-    const bool on = f.mode == FitMode::Interpolate;
-    auto stats = [&](const FieldStats& st) {
-      if (!on) return std::string("null");
-      return "{\"max\": " + json_number(st.max) + ", \"mean\": " + json_number(st.mean) + ", \"where\": " +
-             (st.where >= 0 ? std::to_string(st.where) : std::string("null")) + ", \"max_relative\": " +
-             relative(st.max) + "}";
-    };
-    auto optional_number = [&](bool given, double x) { return given ? json_number(x) : std::string("null"); };
-    std::string nulls;
-    for (size_t i = 0; i < f.null_vertices.size(); ++i) nulls += (i ? ", " : "") + std::to_string(f.null_vertices[i]);
-    line("  \"fit\": {\"mode\": " + json_string(to_string(f.mode)) + ", \"fair_weight\": " +
-         optional_number(on && f.fair_weight > 0, f.fair_weight) + ",");
-    line("    \"residual\": " + stats(f.residual) + ",");
-    line("    \"displacement\": " + stats(f.displacement) + ",");
-    line("    \"condition\": " + optional_number(on && f.fair_weight == 0, f.condition) + ", \"singular\": " +
-         json_bool(f.singular) + ", \"null_vertices\": [" + nulls + "], \"polar_vertices\": " +
-         std::to_string(f.polar_vertices) + ", \"no_surface\": " + std::to_string(f.no_surface) + ",");
-    line("    \"energy_before\": " + optional_number(f.energy_before >= 0, f.energy_before) +
-         ", \"energy_after\": " + optional_number(f.energy_after >= 0, f.energy_after) + "},");
-  }
-  line("  \"sharpened_edges\": " + std::to_string(info.sharpened_edges) + ",");
-  line("  \"sharpened_vertices\": " + std::to_string(info.sharpened_vertices) + ",");
-  if (c.has_brep) {
-    const occt::BrepResult& b = c.brep;
-    line("  \"brep\": {\"faces\": " + std::to_string(b.num_faces) + ", \"edges\": " + std::to_string(b.num_edges) +
-         ", \"vertices\": " + std::to_string(b.num_vertices) + ", \"type\": " +
-         json_string(b.is_solid ? "solid" : "shell") + ", \"solids\": " + std::to_string(b.num_solids) +
-         ", \"shells\": " + std::to_string(b.num_shells) + ", \"valid\": " + json_bool(b.valid) +
-         ", \"tolerance\": " + json_number(b.tolerance) + "},");
-  } else {
-    line("  \"brep\": null,");
-  }
-  const ContinuityReport& k = c.continuity;
-  line("  \"continuity\": {\"samples_per_curve\": " + std::to_string(kContinuitySamples) +
-       ", \"shared_curves\": " + std::to_string(k.curves.size()) + ",");
-  line("    \"max_gap\": " + json_number(k.max_gap) + ", \"max_gap_relative\": " + relative(k.max_gap) + ",");
-  line("    \"max_normal_angle_deg\": " + json_number(k.max_normal_angle_deg) +
-       ", \"max_coplanarity\": " + json_number(k.max_coplanarity) + ",");
-  line("    \"max_c1_jump\": " + json_number(k.max_c1_jump) + ", \"max_c2_jump\": " + json_number(k.max_c2_jump) +
-       ", \"max_crease_normal_angle_deg\": " + json_number(k.max_crease_normal_angle_deg) + "},");
-  const DeviationReport& d = c.deviation;
-  line("  \"deviation\": {\"max\": " + json_number(d.max) + ", \"mean\": " + json_number(d.mean) +
-       ", \"relative\": " + relative(d.max) + ",");
-  std::string worst = "null";
-  if (d.worst_fan >= 0 && d.worst_fan < static_cast<int>(info.fans.size())) {
-    const IrregularFan& f = info.fans[d.worst_fan];
-    worst = "{\"base_vertex\": " + std::to_string(f.base_vertex) + ", \"valence\": " + std::to_string(f.valence) +
-            ", \"mode\": " + json_string(to_string(f.mode)) + "}";
-  }
-  line("    \"where\": " + (d.samples > 0 ? json_point(d.where) : std::string("null")) + ", \"worst_fan\": " + worst + ",");
-  line("    \"samples\": " + std::to_string(d.samples) + ", \"sample_levels\": " + std::to_string(d.sample_levels) + ",");
-  std::string per_fan = "    \"fans\": [";
-  for (size_t i = 0; i < d.fans.size(); ++i) {
-    const FanDeviation& fd = d.fans[i];
-    const IrregularFan& f = info.fans[fd.fan];
-    per_fan += std::string(i ? ",\n      " : "\n      ") + "{\"base_vertex\": " + std::to_string(f.base_vertex) +
-               ", \"valence\": " + std::to_string(f.valence) + ", \"mode\": " + json_string(to_string(f.mode)) +
-               ", \"level\": " + std::to_string(f.level) + ", \"max\": " + json_number(fd.max) + "}";
-  }
-  line(per_fan + (d.fans.empty() ? "]," : "\n    ],"));
-  if (c.tolerance_given) {
-    const ToleranceResult& t = c.tolerance;
-    line("    \"tolerance\": {\"requested\": " + json_number(t.requested) + ", \"default\": " +
-         json_bool(t.is_default) + ", \"units\": " +
-         json_string(c.tolerance_absolute ? "model" : "relative") + ", \"requested_model_units\": " +
-         json_number(t.absolute) + ",");
-    line("      \"initial_max\": " + json_number(t.first_max) + ", \"extra_levels_needed\": " +
-         std::to_string(t.needed) + ", \"extra_levels_used\": " + std::to_string(t.used) +
-         ", \"fans_deepened\": " + std::to_string(t.fans_deepened) +
-         ", \"capped\": " + json_bool(t.capped) + ",");
-    line("      \"achieved\": " + json_number(d.max) + ", \"achieved_relative\": " + relative(d.max) +
-         ", \"met\": " + json_bool(t.met) + "}},");
-  } else {
-    line("    \"tolerance\": null},");
-  }
-  const Timings& ms = c.ms;
-  line("  \"timings_ms\": {\"load\": " + json_number(ms.load) + ", \"fit\": " + json_number(ms.fit) + ", \"patches\": " + json_number(ms.patches) +
-       ", \"continuity\": " + json_number(ms.continuity) + ", \"deviation\": " + json_number(ms.deviation) +
-       ", \"packing\": " + json_number(ms.packing) + ", \"brep\": " + json_number(ms.brep) + ", \"write\": " + json_number(ms.write) + "}");
-  line("}");
-  return j;
 }
 
 }  // namespace subd2nurbs::pipeline

@@ -1,7 +1,8 @@
 // The conversion pipeline shared by the CLI (`subd2nurbs convert`), the Python module and the
 // FreeCAD workbench: validated cage -> patches -> continuity and deviation measured -> B-rep
-// checked by OCCT, with the quality report (subd2nurbs-report v1, docs/formats.md) as JSON.
-// No files are read or written here and nothing is printed: progress and warnings go to
+// checked by OCCT -> (optional stages) the patches measured against the exact limit (quality)
+// and tessellated with colours (preview), with the quality report (subd2nurbs-report v1,
+// docs/formats.md) as JSON (report.h). No files are read or written here and nothing is printed: progress and warnings go to
 // callbacks, everything else comes back in a ConversionResult.
 #pragma once
 
@@ -13,12 +14,14 @@
 #include <vector>
 
 #include "converter/occt/brep_builder.h"
+#include "converter/occt/writers.h"
 #include "converter/pipeline/resources.h"
 #include "converter/pipeline/settings_error.h"
 #include "converter/pipeline/text.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
 #include "core/eval/preview_mesh.h"
+#include "core/eval/quality.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
 #include "core/patch/packing.h"
@@ -69,6 +72,15 @@ constexpr int kMaxLevel = kMaxFanExtraLevels;
 /// measured with 1 and 2 (docs/polar.md); the core takes any count >= 1.
 constexpr int kMaxRadialSteps = 2;
 
+/// The quality stage's samples per patch side when `convert --report` asks for it.
+constexpr int kReportQualitySamples = 9;
+
+/// The preview stage: the patches tessellated with per-vertex colours (core/eval/preview_mesh.h).
+struct PreviewSettings {
+  PreviewColor color = PreviewColor::Curvature;
+  int samples = 12;  ///< per patch side, 2 .. 64
+};
+
 /// What to convert with, as the user gave it; validate() checks it. `patch` is handed to
 /// build_patches untouched, except that its extra_levels is set from `level` or chosen by the
 /// tolerance.
@@ -84,6 +96,12 @@ struct ConversionSettings {
   /// Refused before any work when estimate_conversion exceeds them (resources.h); with a
   /// tolerance, the extra levels are capped to stay within them.
   ResourceLimits limits;
+  /// Optional stages after the B-rep, their results data in ConversionResult: given, the
+  /// patches measured against the exact limit with this many samples per patch side (2 .. 64;
+  /// ConversionResult::quality, the report's "quality" member)...
+  std::optional<int> quality_samples;
+  /// ... and the coloured tessellation (ConversionResult::preview).
+  std::optional<PreviewSettings> preview;
 };
 
 /// How much a diagnostic matters: a note says what the conversion did instead (Catmull-Clark at
@@ -112,9 +130,9 @@ struct ConversionDiagnostic {
 /// remedy, as the command line has always printed it.
 std::string report_text(const ConversionDiagnostic& diagnostic);
 
-/// The stages of a conversion, in order (Patches and Deviation repeat for a tolerance);
-/// to_string gives a stable name ("patches").
-enum class Stage { Fit, Patches, Deviation, Packing, Continuity, Brep };
+/// The stages of a conversion, in order (Patches and Deviation repeat for a tolerance; Quality
+/// and Preview run only when the settings ask for them); to_string gives a stable name ("patches").
+enum class Stage { Fit, Patches, Deviation, Packing, Continuity, Brep, Quality, Preview };
 const char* to_string(Stage stage);
 
 /// Progress reporting; every member may be empty.
@@ -129,6 +147,7 @@ struct ConversionProgress {
 
 struct Timings {
   double load = 0, fit = 0, patches = 0, packing = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
+  double quality = 0, preview = 0;  ///< the optional stages (the report gives quality as "quality_ms")
 };
 
 /// What the fit did (FitMode::Interpolate), in model units.
@@ -203,6 +222,9 @@ struct ConversionResult {
   occt::BrepResult brep;  ///< check brep.valid: an invalid B-rep is returned, not thrown
   FitReport fit;
   std::vector<Point3> cage;  ///< the cage converted: the input's positions, or the fitted cage
+  std::optional<QualityReport> quality;  ///< ConversionSettings::quality_samples given
+  std::optional<PreviewMesh> preview;    ///< ConversionSettings::preview given
+  PreviewSettings preview_settings;      ///< what `preview` was made with
   Timings ms;             ///< load and write are the caller's to fill
 };
 
@@ -216,10 +238,24 @@ void validate_fairing(double weight, const EnergyOptions& energy);
 /// The vertices a fairing keeps, by name: boundary, creases, tagged. \throw SettingsError ("keep")
 KeepSet keep_set(const std::vector<std::string>& names);
 
+/// Polar structures as the command line's --polar names them: "on" (polar caps, true) or "off"
+/// (Catmull-Clark). \throw SettingsError ("polar")
+bool polar_mode(const std::string& name);
+/// The STEP schema of a written file: "ap214" or "ap242". \throw SettingsError ("schema")
+occt::StepSchema step_schema(const std::string& name);
+
 /// The preview colouring: "deviation", "curvature" or "zebra". \throw SettingsError ("preview")
 PreviewColor preview_color(const std::string& name);
+const char* to_string(PreviewColor color);  ///< "deviation", "curvature", "zebra"
 /// Samples per patch side of a preview or a quality measure: 2 .. 64. \throw SettingsError (`setting`)
 void check_samples(const std::string& setting, int samples);
+
+/// The quality stage on its own: `result`'s patches (build, continuity, exported faces)
+/// against the exact limit of the cage it converted (`base` with result.cage).
+QualityReport measure_quality(const SubdivLevel& base, const ConversionResult& result, int samples_per_side);
+/// The preview stage on its own, e.g. for a result converted without it (the FreeCAD colour map
+/// of a NURBS object's last conversion). \throw SettingsError ("preview_samples")
+PreviewMesh build_preview(const SubdivLevel& base, const ConversionResult& result, const PreviewSettings& preview);
 
 /// Converts a validated cage. `warnings` (e.g. from reading and validating it) start the
 /// result's warning list.
@@ -234,8 +270,5 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
 
 /// The load warnings, then report_text of each diagnostic: the report's "warnings".
 std::vector<std::string> warning_texts(const ConversionResult& result);
-
-/// The quality report (subd2nurbs-report v1, docs/formats.md) as JSON text.
-std::string report_json(const ConversionResult& result);
 
 }  // namespace subd2nurbs::pipeline

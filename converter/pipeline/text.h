@@ -7,9 +7,10 @@
 
 namespace subd2nurbs::pipeline {
 
-/// A quoted, escaped JSON string.
+/// A quoted, escaped JSON string (JsonWriter::quoted, io/json_writer.h).
 std::string json_string(const std::string& s);
-/// A JSON number with "%.17g" (exact as an IEEE double), or null when not finite.
+/// A JSON number with "%.17g" (exact as an IEEE double), or null when not finite (as a report's
+/// JsonWriter writes it).
 std::string json_number(double x);
 /// [x, y, z] with json_number.
 std::string json_point(const Point3& p);

@@ -3,6 +3,7 @@ B-rep converted from a Cage or a Mesh::Feature), as Part::FeaturePython proxies,
 view providers. The conversion is subd2nurbs's (the same code as the command line); the
 B-rep reaches FreeCAD as BREP text (Part.Shape.importBrepFromString)."""
 
+import contextlib
 import os
 
 import FreeCAD as App
@@ -246,15 +247,25 @@ def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate"
     kwargs.update(options)
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
-        return subd2nurbs.convert(cage, progress=indicator, **kwargs)
+        with settings_named_by_property():
+            return subd2nurbs.convert(cage, progress=indicator, **kwargs)
+    finally:
+        if indicator:
+            indicator.stop()
+
+
+@contextlib.contextmanager
+def settings_named_by_property():
+    """A context in which a subd2nurbs.SettingsError about a setting a NURBS or ColorMap object
+    has a property for is raised again naming the property (PROPERTY_OF_SETTING), with the
+    converter's rule text."""
+    try:
+        yield
     except subd2nurbs.SettingsError as e:
         if e.setting not in PROPERTY_OF_SETTING:
             raise
         raise subd2nurbs.SettingsError("%s %s" % (PROPERTY_OF_SETTING[e.setting], e.rule), setting=e.setting,
                                        rule=e.rule) from None
-    finally:
-        if indicator:
-            indicator.stop()
 
 
 class NurbsFeature(_Stateless):
@@ -264,7 +275,7 @@ class NurbsFeature(_Stateless):
 
     def __init__(self, obj):
         obj.Proxy = self
-        self._result = None
+        self._cache = None
         self.setup(obj)
 
     @staticmethod
@@ -316,11 +327,12 @@ class NurbsFeature(_Stateless):
         _add(obj, "App::PropertyStringList", "Warnings", r, "Conversion warnings", read_only=True)
 
     @staticmethod
-    def signature(cage, level, tolerance, polar, fit="Approximate", fair_weight=0.0, faces="Packed"):
+    def signature(cage, level, tolerance, polar, fit="Approximate", fair_weight=0.0, faces="Packed", limits=None):
         """What a conversion depends on: a result can be reused while this is unchanged."""
         return (cage.vertices.tobytes(), cage.face_sizes.tobytes(), cage.face_indices.tobytes(),
                 tuple(cage.creases), tuple(cage.corners), tuple(cage.holes), tuple(sorted(cage.options.items())),
-                int(level), float(tolerance), polar, fit, float(fair_weight), faces)
+                int(level), float(tolerance), polar, fit, float(fair_weight), faces,
+                tuple(sorted((limits or {}).items())))
 
     @staticmethod
     def fit_settings(obj):
@@ -332,29 +344,44 @@ class NurbsFeature(_Stateless):
         """Faces of a NURBS object (documents saved before the property existed: Packed)."""
         return getattr(obj, "Faces", "Packed")
 
+    @staticmethod
+    def limits(obj):
+        """convert's max_faces / max_memory of a NURBS object's MaxFaces / MaxMemoryMiB (0: the default)."""
+        limits = {}
+        if getattr(obj, "MaxFaces", 0) != 0:
+            limits["max_faces"] = obj.MaxFaces
+        if getattr(obj, "MaxMemoryMiB", 0) != 0:
+            limits["max_memory"] = obj.MaxMemoryMiB * 1024.0 * 1024.0
+        return limits
+
     def prepare(self, signature, result):
         """A result computed before the object existed (make_nurbs), used by the first recompute."""
-        self._prepared = (signature, result)
+        self._cache = (signature, result)
 
-    def execute(self, obj):
-        import Part
+    def conversion(self, obj):
+        """(cage, subd2nurbs.ConversionResult) of the object's Source and settings as they are now.
+        The last result is kept, keyed by everything it depends on (signature()), and reused while
+        that is unchanged: the solid, check_quality and the colour maps share one conversion. A
+        failed conversion raises and keeps the last result (which no longer matches)."""
         if obj.Source is None:
             raise ValueError("%s: no Source" % obj.Label)
         cage = cage_of(obj.Source)
-        prepared, self._prepared = getattr(self, "_prepared", None), None
         fit, fair_weight = self.fit_settings(obj)
         faces = self.faces_setting(obj)
-        if prepared and prepared[0] == self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling, fit,
-                                                      fair_weight, faces):
-            result = prepared[1]
-        else:
-            limits = {}
-            if getattr(obj, "MaxFaces", 0) != 0:
-                limits["max_faces"] = obj.MaxFaces
-            if getattr(obj, "MaxMemoryMiB", 0) != 0:
-                limits["max_memory"] = obj.MaxMemoryMiB * 1024.0 * 1024.0
+        limits = self.limits(obj)
+        key = self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling, fit, fair_weight, faces, limits)
+        cache = getattr(self, "_cache", None)
+        if cache is None or cache[0] != key:
             result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress,
                                   fit=fit, fair_weight=fair_weight, faces=faces, **limits)
+            cache = self._cache = (key, result)
+        return cage, cache[1]
+
+    def execute(self, obj):
+        import Part
+        # Nothing is assigned before the conversion and the shape succeed: a failure leaves the
+        # last valid shape and results, and FreeCAD marks the object with the error's message.
+        cage, result = self.conversion(obj)
         shape = Part.Shape()
         shape.importBrepFromString(result.brep_text)
         if obj.OutputType == "Shell" and shape.Solids:
@@ -375,7 +402,6 @@ class NurbsFeature(_Stateless):
         obj.MaxResidual = (f.get("residual") or {}).get("max") or 0.0
         obj.MaxCageMove = (f.get("displacement") or {}).get("max") or 0.0
         obj.Warnings = [str(w) for w in result.warnings]
-        self._result = result
         if q:
             App.Console.PrintMessage("Subd2Nurbs: %s: %d quads recovered from %d triangles, %d triangles kept "
                                      "(%d fan vertices)\n" % (obj.Label, q["quads"], q["source_triangles"],
@@ -384,21 +410,17 @@ class NurbsFeature(_Stateless):
             App.Console.PrintWarning("Subd2Nurbs: %s: %s\n" % (obj.Label, w))
 
     def result(self, obj):
-        """The last subd2nurbs.ConversionResult (converted again after a reload)."""
-        if getattr(self, "_result", None) is None:
-            fit, fair_weight = self.fit_settings(obj)
-            self._result = convert_cage(cage_of(obj.Source), obj.Level, obj.Tolerance, obj.PolarHandling,
-                                        progress=obj.ShowProgress, fit=fit, fair_weight=fair_weight,
-                                        faces=self.faces_setting(obj))
-        return self._result
+        """The subd2nurbs.ConversionResult of the object as it is now (the kept one while its
+        inputs are unchanged; converted again after a reload or a change)."""
+        return self.conversion(obj)[1]
 
     def onDocumentRestored(self, obj):
         obj.Proxy = self
-        self._result = None
+        self._cache = None
         self.setup(obj)
 
     def restored_state(self):
-        self._result = None
+        self._cache = None
 
 
 COLORINGS = ["Curvature", "Deviation", "Zebra"]
@@ -407,7 +429,8 @@ COLORINGS = ["Curvature", "Deviation", "Zebra"]
 class ColorMapFeature(_Stateless):
     """Proxy of a ColorMap object: the NURBS object's patches tessellated with per-vertex
     colours, exactly as `subd2nurbs convert --preview P.glb --color ...` makes them (mean
-    curvature, deviation from the exact limit surface, or zebra stripes)."""
+    curvature, deviation from the exact limit surface, or zebra stripes), from the NURBS
+    object's last conversion (NurbsFeature.conversion)."""
 
     TYPE = "Subd2Nurbs::ColorMap"
 
@@ -440,12 +463,10 @@ class ColorMapFeature(_Stateless):
         nurbs = obj.Nurbs
         if nurbs is None or not isinstance(getattr(nurbs, "Proxy", None), NurbsFeature):
             raise ValueError("%s: Nurbs must be a NURBS object made by the workbench" % obj.Label)
-        cage = cage_of(nurbs.Source)
-        fit, fair_weight = NurbsFeature.fit_settings(nurbs)
-        result = convert_cage(cage, nurbs.Level, nurbs.Tolerance, nurbs.PolarHandling, progress=nurbs.ShowProgress,
-                              fit=fit, fair_weight=fair_weight, brep=False, preview=obj.Coloring.lower(),
-                              preview_samples=obj.Samples)
-        p = result.preview
+        # The NURBS object's own conversion (kept by its proxy), coloured: no second conversion.
+        result = nurbs.Proxy.result(nurbs)
+        with settings_named_by_property():
+            p = result.make_preview(obj.Coloring.lower(), obj.Samples)
         obj.Points = [App.Vector(*map(float, q)) for q in p["positions"]]
         obj.Triangles = [int(i) for i in p["triangles"].reshape(-1)]
         obj.Colors = [tuple(float(c) for c in q) for q in p["colors"]]

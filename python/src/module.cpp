@@ -1,6 +1,8 @@
 // _subd2nurbs: the compiled part of the Python package `subd2nurbs` (python/subd2nurbs/).
 // Thin: it turns plain arrays into a MeshInput, runs the same code as the CLI (io/obj_reader,
-// core, converter/pipeline) and hands back plain Python data (dicts, lists, numpy arrays).
+// core, converter/pipeline) and hands back plain Python data (dicts, lists, numpy arrays), or,
+// for a conversion, bound objects: Settings (the keyword arguments as ConversionSettings) and
+// Conversion (the result, with the B-rep kept as the OCCT shape).
 // The package validates arguments before calling in here; errors raised here are the
 // package's exception classes (subd2nurbs.errors), created by the translator below.
 #include <pybind11/functional.h>
@@ -24,6 +26,7 @@
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/report.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/eval/preview_mesh.h"
 #include "core/fit/fairing.h"
@@ -364,37 +367,175 @@ py::dict patch_dict(const NurbsPatch& p) {
   return d;
 }
 
-py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
-                 const std::vector<std::tuple<int, int, double>>& creases,
-                 const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
-                 const py::dict& options, std::optional<int> level, std::optional<double> tolerance, bool absolute,
-                 bool build_brep, bool polar, int radial_steps, double polar_lambda, bool separate_poles,
-                 const std::string& fit, std::optional<double> fair,
-                 const std::string& preview_color, int preview_samples, const std::string& input_name, const std::optional<std::vector<std::string>>& load_warnings,
-                 const std::function<void(const std::string&, double, const std::string&)>& progress,
-                 std::optional<double> max_faces,
-                 const py::object& max_memory, const std::string& faces) {
-  // The settings first, by the pipeline's rules (the package checked only their types).
+/// The settings of a conversion: the keyword arguments of subd2nurbs.convert mapped onto
+/// pipeline::ConversionSettings in this one place and checked by the pipeline's rules when the
+/// object is made (the package checked only their types).
+struct Settings {
   pipeline::ConversionSettings settings;
-  settings.level = level;
-  settings.tolerance = tolerance;
-  settings.absolute = absolute;
-  settings.build_brep = build_brep;
-  settings.patch.polar = polar;
-  settings.patch.cap.radial_steps = radial_steps;
-  settings.patch.cap.lambda = polar_lambda;
-  settings.patch.separate_poles = separate_poles;
-  settings.fit.mode = pipeline::fit_mode(fit);
-  settings.fit.fair_weight = fair;
-  settings.faces = pipeline::face_mode(faces);
-  settings.limits = resource_limits(max_faces, max_memory);
-  pipeline::validate(settings);
-  if (!preview_color.empty()) pipeline::preview_color(preview_color);
-  pipeline::check_samples("preview_samples", preview_samples);
+  std::string preview;      ///< "" for none
+  int preview_samples = 16;
+  py::object max_memory = py::none();
+};
 
+Settings make_settings(const py::kwargs& kwargs) {
+  Settings s;
+  pipeline::ConversionSettings& c = s.settings;
+  std::optional<double> max_faces;
+  for (const auto& item : kwargs) {
+    const std::string name = py::str(item.first);
+    const py::handle v = item.second;
+    if (name == "level") c.level = v.cast<std::optional<int>>();
+    else if (name == "tolerance") c.tolerance = v.cast<std::optional<double>>();
+    else if (name == "absolute") c.absolute = v.cast<bool>();
+    else if (name == "brep") c.build_brep = v.cast<bool>();
+    else if (name == "polar") c.patch.polar = v.cast<bool>();
+    else if (name == "radial_steps") c.patch.cap.radial_steps = v.cast<int>();
+    else if (name == "polar_lambda") c.patch.cap.lambda = v.cast<double>();
+    else if (name == "separate_poles") c.patch.separate_poles = v.cast<bool>();
+    else if (name == "fit") c.fit.mode = pipeline::fit_mode(v.cast<std::string>());
+    else if (name == "fair") c.fit.fair_weight = v.cast<std::optional<double>>();
+    else if (name == "faces") c.faces = pipeline::face_mode(v.cast<std::string>());
+    else if (name == "max_faces") max_faces = v.cast<std::optional<double>>();
+    else if (name == "max_memory") s.max_memory = py::reinterpret_borrow<py::object>(v);
+    else if (name == "preview") s.preview = v.is_none() ? std::string() : v.cast<std::string>();
+    else if (name == "preview_samples") s.preview_samples = v.cast<int>();
+    else throw py::type_error("Settings: unknown setting '" + name + "'");
+  }
+  // In the order the rules have always been checked: limits, conversion, preview.
+  c.limits = resource_limits(max_faces, s.max_memory);
+  pipeline::validate(c);
+  if (!s.preview.empty()) pipeline::preview_color(s.preview);
+  pipeline::check_samples("preview_samples", s.preview_samples);
+  if (!s.preview.empty()) c.preview = pipeline::PreviewSettings{pipeline::preview_color(s.preview), s.preview_samples};
+  return s;
+}
+
+py::dict preview_dict(const PreviewMesh& mesh, const std::string& color) {
+  const auto n = static_cast<py::ssize_t>(mesh.values.size());
+  auto rows = [&](const std::vector<float>& v) { return py::array_t<float>({n, static_cast<py::ssize_t>(3)}, v.data()); };
+  py::dict pv;
+  pv["positions"] = rows(mesh.positions);
+  pv["normals"] = rows(mesh.normals);
+  pv["colors"] = rows(mesh.colors);
+  pv["values"] = py::array_t<float>(n, mesh.values.data());
+  pv["triangles"] = py::array_t<std::uint32_t>({static_cast<py::ssize_t>(mesh.indices.size() / 3), static_cast<py::ssize_t>(3)},
+                                              mesh.indices.data());
+  pv["value_min"] = mesh.value_min;
+  pv["value_max"] = mesh.value_max;
+  pv["color"] = color;
+  return pv;
+}
+
+/// A conversion as the package keeps it: the pipeline's result with the cage it came from (for
+/// previews made later) and the B-rep as the OCCT shape; its parts become Python data when asked.
+struct Conversion {
+  std::shared_ptr<const SubdivLevel> base;
+  pipeline::ConversionResult result;
+  std::optional<std::string> brep_text;  ///< made on first use
+
+  py::object text() {
+    if (!result.has_brep) return py::none();
+    if (!brep_text) brep_text = occt::brep_text(result.brep.shape);
+    return py::str(*brep_text);
+  }
+
+  py::list patches() const {
+    py::list list;
+    for (const NurbsPatch& p : result.exported.set.patches) list.append(patch_dict(p));
+    return list;
+  }
+
+  py::list diagnostics() const {
+    py::list list;
+    for (const pipeline::ConversionDiagnostic& x : result.diagnostics) {
+      py::dict e;
+      e["severity"] = pipeline::to_string(x.severity);
+      e["code"] = pipeline::to_string(x.code);
+      e["message"] = x.message;
+      e["element"] = x.element;
+      e["remedy"] = x.remedy.empty() ? py::object(py::none()) : py::object(py::str(x.remedy));
+      list.append(e);
+    }
+    return list;
+  }
+
+  /// Per shared curve: its measures, and the B-rep edge it became (1-based index in
+  /// TopExp::MapShapes order, which is FreeCAD's Shape.Edges order; 0 when none).
+  py::dict curve_measures() const {
+    const pipeline::ConversionResult& c = result;
+    const auto& curves = c.continuity.curves;
+    std::vector<int> curve(curves.size()), claimed(curves.size()), edge(curves.size(), 0);
+    std::vector<double> gap(curves.size()), angle(curves.size());
+    TopTools_IndexedMapOfShape edge_map;
+    if (c.has_brep && !c.brep.shape.IsNull()) TopExp::MapShapes(c.brep.shape, TopAbs_EDGE, edge_map);
+    for (size_t i = 0; i < curves.size(); ++i) {
+      curve[i] = curves[i].curve;
+      claimed[i] = static_cast<int>(curves[i].claimed);
+      gap[i] = curves[i].gap;
+      angle[i] = curves[i].normal_angle_deg;
+      if (c.has_brep && curve[i] >= 0 && static_cast<size_t>(curve[i]) < c.brep.curve_edges.size() &&
+          !c.brep.curve_edges[curve[i]].IsNull())
+        edge[i] = edge_map.FindIndex(c.brep.curve_edges[curve[i]]);
+    }
+    py::dict m;
+    m["curve"] = int_array(curve);
+    m["claimed"] = int_array(claimed);
+    m["gap"] = py::array_t<double>(static_cast<py::ssize_t>(gap.size()), gap.data());
+    m["normal_angle_deg"] = py::array_t<double>(static_cast<py::ssize_t>(angle.size()), angle.data());
+    m["edge"] = int_array(edge);
+    return m;
+  }
+
+  py::object brep() const {
+    if (!result.has_brep) return py::none();
+    const occt::BrepResult& r = result.brep;
+    py::dict b;
+    b["valid"] = r.valid;
+    b["is_solid"] = r.is_solid;
+    b["faces"] = r.num_faces;
+    b["edges"] = r.num_edges;
+    b["vertices"] = r.num_vertices;
+    b["solids"] = r.num_solids;
+    b["shells"] = r.num_shells;
+    b["check_message"] = r.check_message;
+    b["tolerance"] = r.tolerance;
+    return std::move(b);
+  }
+
+  py::object preview() const {
+    if (!result.preview) return py::none();
+    return preview_dict(*result.preview, pipeline::to_string(result.preview_settings.color));
+  }
+
+  /// The preview stage on this result's patches (as convert(preview=...) makes it).
+  py::dict make_preview(const std::string& color, int samples) const {
+    const pipeline::PreviewSettings settings{pipeline::preview_color(color), samples};
+    return preview_dict(pipeline::build_preview(*base, result, settings), color);
+  }
+
+  /// Writes the shape as STEP / IGES / BREP (by extension), atomically, as the CLI does.
+  void write(const std::string& path, const std::string& schema) const {
+    const occt::StepSchema step = pipeline::step_schema(schema);
+    occt::Format format;
+    try {
+      format = occt::format_from_path(path);
+    } catch (const std::invalid_argument&) {
+      throw pipeline::SettingsError("path", "must end in .step, .stp, .iges, .igs or .brep: '" + path + "'");
+    }
+    occt::write_shape(result.brep.shape, path, format, step);
+  }
+};
+
+std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                                    const std::vector<std::tuple<int, int, double>>& creases,
+                                    const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                                    const py::dict& options, const Settings& settings, const std::string& input_name,
+                                    const std::optional<std::vector<std::string>>& load_warnings,
+                                    const std::function<void(const std::string&, double, const std::string&)>& progress) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
-  const SubdivLevel base = SubdivLevel::from_input(in, &diagnostics);
+  auto conversion = std::make_shared<Conversion>();
+  conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
   const std::vector<Point3> points(in.positions.begin(), in.positions.end());
 
   pipeline::ConversionProgress callbacks;
@@ -407,93 +548,12 @@ py::dict convert(const DoubleArray& positions, const IntArray& face_sizes, const
     };
     callbacks.brep_fraction = [&](double f) { progress(current, f, key); };
   }
-  pipeline::ConversionResult c =
-      pipeline::convert(base, points, settings, callbacks, load_warnings ? *load_warnings : diagnostics_text(diagnostics));
+  pipeline::ConversionResult& c = conversion->result;
+  c = pipeline::convert(*conversion->base, points, settings.settings, callbacks,
+                        load_warnings ? *load_warnings : diagnostics_text(diagnostics));
   c.input = input_name;
   if (c.has_brep) c.output.format = "BREP";
-
-  py::dict d;
-  d["report"] = pipeline::report_json(c);
-  if (!preview_color.empty()) {  // the patches tessellated and coloured as convert --preview does
-    const PreviewColor color = pipeline::preview_color(preview_color);
-    std::unique_ptr<LimitEvaluator> limit;
-    if (color == PreviewColor::Deviation) limit = std::make_unique<LimitEvaluator>(base, c.cage);
-    const PreviewMesh mesh = build_preview(c.build, limit.get(), color, preview_samples);
-    const auto n = static_cast<py::ssize_t>(mesh.values.size());
-    auto rows = [&](const std::vector<float>& v) { return py::array_t<float>({n, static_cast<py::ssize_t>(3)}, v.data()); };
-    py::dict pv;
-    pv["positions"] = rows(mesh.positions);
-    pv["normals"] = rows(mesh.normals);
-    pv["colors"] = rows(mesh.colors);
-    pv["values"] = py::array_t<float>(n, mesh.values.data());
-    pv["triangles"] = py::array_t<std::uint32_t>({static_cast<py::ssize_t>(mesh.indices.size() / 3), static_cast<py::ssize_t>(3)},
-                                                mesh.indices.data());
-    pv["value_min"] = mesh.value_min;
-    pv["value_max"] = mesh.value_max;
-    pv["color"] = preview_color;
-    d["preview"] = pv;
-  }
-  py::list patches;
-  for (const NurbsPatch& p : c.exported.set.patches) patches.append(patch_dict(p));
-  d["patches"] = patches;
-  d["warnings"] = pipeline::warning_texts(c);
-  py::list diagnostics_list;
-  for (const pipeline::ConversionDiagnostic& x : c.diagnostics) {
-    py::dict e;
-    e["severity"] = pipeline::to_string(x.severity);
-    e["code"] = pipeline::to_string(x.code);
-    e["message"] = x.message;
-    e["element"] = x.element;
-    e["remedy"] = x.remedy.empty() ? py::object(py::none()) : py::object(py::str(x.remedy));
-    diagnostics_list.append(e);
-  }
-  d["diagnostics"] = diagnostics_list;
-  d["cage_vertices"] = points_array(c.cage);
-  d["model_size"] = c.build.set.model_size;
-  d["closed"] = c.build.set.closed;
-
-  // Per shared curve: its measures, and the B-rep edge it became (1-based index in
-  // TopExp::MapShapes order, which is FreeCAD's Shape.Edges order; 0 when none).
-  const auto& curves = c.continuity.curves;
-  std::vector<int> curve(curves.size()), claimed(curves.size()), edge(curves.size(), 0);
-  std::vector<double> gap(curves.size()), angle(curves.size());
-  TopTools_IndexedMapOfShape edge_map;
-  if (c.has_brep && !c.brep.shape.IsNull()) TopExp::MapShapes(c.brep.shape, TopAbs_EDGE, edge_map);
-  for (size_t i = 0; i < curves.size(); ++i) {
-    curve[i] = curves[i].curve;
-    claimed[i] = static_cast<int>(curves[i].claimed);
-    gap[i] = curves[i].gap;
-    angle[i] = curves[i].normal_angle_deg;
-    if (c.has_brep && curve[i] >= 0 && static_cast<size_t>(curve[i]) < c.brep.curve_edges.size() &&
-        !c.brep.curve_edges[curve[i]].IsNull())
-      edge[i] = edge_map.FindIndex(c.brep.curve_edges[curve[i]]);
-  }
-  py::dict m;
-  m["curve"] = int_array(curve);
-  m["claimed"] = int_array(claimed);
-  m["gap"] = py::array_t<double>(static_cast<py::ssize_t>(gap.size()), gap.data());
-  m["normal_angle_deg"] = py::array_t<double>(static_cast<py::ssize_t>(angle.size()), angle.data());
-  m["edge"] = int_array(edge);
-  d["curve_measures"] = m;
-
-  if (c.has_brep) {
-    py::dict b;
-    b["valid"] = c.brep.valid;
-    b["is_solid"] = c.brep.is_solid;
-    b["faces"] = c.brep.num_faces;
-    b["edges"] = c.brep.num_edges;
-    b["vertices"] = c.brep.num_vertices;
-    b["solids"] = c.brep.num_solids;
-    b["shells"] = c.brep.num_shells;
-    b["check_message"] = c.brep.check_message;
-    b["tolerance"] = c.brep.tolerance;
-    d["brep"] = b;
-    d["brep_text"] = occt::brep_text(c.brep.shape);
-  } else {
-    d["brep"] = py::none();
-    d["brep_text"] = py::none();
-  }
-  return d;
+  return conversion;
 }
 
 /// Fairs a cage (as `subd2nurbs fair`): the free vertices minimise the thin-plate (+ membrane)
@@ -546,19 +606,6 @@ py::dict brep_summary(const std::string& text) {
   return d;
 }
 
-/// Writes BREP text as STEP / IGES / BREP (by extension), atomically, as the CLI does.
-void write_shape_file(const std::string& text, const std::string& path, const std::string& schema) {
-  if (schema != "ap214" && schema != "ap242") throw pipeline::SettingsError("schema", "must be ap214 or ap242");
-  occt::Format format;
-  try {
-    format = occt::format_from_path(path);
-  } catch (const std::invalid_argument&) {
-    throw pipeline::SettingsError("path", "must end in .step, .stp, .iges, .igs or .brep: '" + path + "'");
-  }
-  occt::write_shape(occt::read_brep_text(text), path, format,
-                    schema == "ap242" ? occt::StepSchema::AP242 : occt::StepSchema::AP214);
-}
-
 /// OCCT's measurement of a STEP / IGES / BREP file.
 py::dict file_summary(const std::string& path) {
   return brep_summary(occt::brep_text(occt::read_shape(path)));
@@ -576,9 +623,45 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.def("validate", &validate);
   m.def("info", &info);
   m.def("refine", &refine);
-  m.def("convert", &convert);
+  py::class_<Settings>(m, "Settings",
+                       "The settings of a conversion (subd2nurbs.convert's keyword arguments), checked by the "
+                       "converter's rules when made")
+      .def(py::init(&make_settings))
+      .def_property_readonly("level", [](const Settings& s) { return s.settings.level; })
+      .def_property_readonly("tolerance", [](const Settings& s) { return s.settings.tolerance; })
+      .def_property_readonly("absolute", [](const Settings& s) { return s.settings.absolute; })
+      .def_property_readonly("brep", [](const Settings& s) { return s.settings.build_brep; })
+      .def_property_readonly("polar", [](const Settings& s) { return s.settings.patch.polar; })
+      .def_property_readonly("radial_steps", [](const Settings& s) { return s.settings.patch.cap.radial_steps; })
+      .def_property_readonly("polar_lambda", [](const Settings& s) { return s.settings.patch.cap.lambda; })
+      .def_property_readonly("separate_poles", [](const Settings& s) { return s.settings.patch.separate_poles; })
+      .def_property_readonly("fit", [](const Settings& s) { return pipeline::to_string(s.settings.fit.mode); })
+      .def_property_readonly("fair", [](const Settings& s) { return s.settings.fit.fair_weight; })
+      .def_property_readonly("faces", [](const Settings& s) { return pipeline::to_string(s.settings.faces); })
+      .def_property_readonly("max_faces", [](const Settings& s) { return s.settings.limits.max_faces; })
+      .def_property_readonly("max_memory", [](const Settings& s) { return s.settings.limits.max_memory; })
+      .def_property_readonly("preview",
+                             [](const Settings& s) { return s.preview.empty() ? py::object(py::none()) : py::str(s.preview); })
+      .def_property_readonly("preview_samples", [](const Settings& s) { return s.preview_samples; });
+  py::class_<Conversion, std::shared_ptr<Conversion>>(m, "Conversion",
+                                                      "A conversion's result; subd2nurbs.ConversionResult wraps it")
+      .def_property_readonly("report_json", [](const Conversion& c) { return pipeline::report_json(c.result); })
+      .def_property_readonly("brep", &Conversion::brep)
+      .def_property_readonly("brep_text", &Conversion::text)
+      .def_property_readonly("warnings", [](const Conversion& c) { return pipeline::warning_texts(c.result); })
+      .def_property_readonly("diagnostics", &Conversion::diagnostics)
+      .def_property_readonly("curve_measures", &Conversion::curve_measures)
+      .def_property_readonly("cage_vertices", [](const Conversion& c) { return points_array(c.result.cage); })
+      .def_property_readonly("model_size", [](const Conversion& c) { return c.result.build.set.model_size; })
+      .def_property_readonly("closed", [](const Conversion& c) { return c.result.build.set.closed; })
+      .def_property_readonly("preview", &Conversion::preview)
+      .def("patches", &Conversion::patches)
+      .def("make_preview", &Conversion::make_preview, py::arg("color"), py::arg("samples"))
+      .def("write", &Conversion::write, py::arg("path"), py::arg("schema"));
+  m.def("convert", &convert, py::arg("positions"), py::arg("face_sizes"), py::arg("face_indices"), py::arg("creases"),
+        py::arg("corners"), py::arg("holes"), py::arg("options"), py::arg("settings"), py::arg("name"),
+        py::arg("warnings"), py::arg("progress"));
   m.def("fair", &fair_cage);
   m.def("brep_summary", &brep_summary, py::arg("text"));
-  m.def("write_shape", &write_shape_file);
   m.def("file_summary", &file_summary, py::arg("path"));
 }

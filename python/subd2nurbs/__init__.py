@@ -328,7 +328,7 @@ class ConversionResult:
         comes from), cells (a packed face: numpy (quads, 5) rows base_face, coarse_face, u, v,
         rotation, its domain one unit per quad; None for a patch of one quad or a polar cap).
     brep_text: OCCT BREP text of the B-rep (None with brep=False); FreeCAD reads it with
-        Part.Shape().importBrepFromString(text).
+        Part.Shape().importBrepFromString(text). Made from the shape on first use.
     brep: the B-rep's counts and validity (faces, edges, vertices, solids, shells, is_solid,
         valid, check_message, tolerance), or None.
     report: the quality report (subd2nurbs-report v1, docs/formats.md) as a dict.
@@ -342,30 +342,52 @@ class ConversionResult:
         code (a stable name, e.g. "pole_not_polar", "tolerance_not_met"), message (no program or
         option names), element (the cage vertex it is about, or -1), remedy (the keyword argument
         that may mend it, e.g. "separate_poles", or None).
+    preview: convert(preview=...): the coloured tessellation (see convert), else None;
+        make_preview() makes one later from the same patches.
+
+    The result keeps the converter's own result (the compiled module's Conversion: the patches,
+    the cage they came from and the B-rep as an OCCT shape), so write() and make_preview() need
+    no second conversion.
     """
 
-    def __init__(self, d):
-        self.patches = d["patches"]
-        self.brep_text = d["brep_text"]
-        self.brep = d["brep"]
-        self.report_json = d["report"]
-        self.report = json.loads(d["report"])
-        self.curve_measures = d["curve_measures"]
-        self.warnings = d["warnings"]
-        self.diagnostics = d["diagnostics"]
-        self.model_size = d["model_size"]
-        self.closed = d["closed"]
-        self.preview = d.get("preview")  # convert(preview=...): the coloured tessellation, else None
+    def __init__(self, conversion):
+        self._conversion = conversion
+        self._brep_text = None
+        self.patches = conversion.patches()
+        self.brep = conversion.brep
+        self.report_json = conversion.report_json
+        self.report = json.loads(self.report_json)
+        self.curve_measures = conversion.curve_measures
+        self.warnings = conversion.warnings
+        self.diagnostics = conversion.diagnostics
+        self.model_size = conversion.model_size
+        self.closed = conversion.closed
+        self.preview = conversion.preview  # convert(preview=...): the coloured tessellation, else None
         #: The cage that was converted (numpy (n, 3)): the input's vertices, or with
         #: fit="interpolate" the cage whose limit passes through them.
-        self.cage_vertices = d["cage_vertices"]
+        self.cage_vertices = conversion.cage_vertices
+
+    @property
+    def brep_text(self):
+        if self._brep_text is None:
+            self._brep_text = self._conversion.brep_text
+        return self._brep_text
 
     def write(self, path, schema="ap214"):
         """Writes the B-rep as STEP (.step/.stp, schema "ap214" or "ap242"), IGES (.iges/.igs)
-        or BREP (.brep), atomically, with the CLI's writer. Raises WriteError naming the file."""
-        if self.brep_text is None:
+        or BREP (.brep), atomically, with the CLI's writer, from the shape the conversion made.
+        Raises WriteError naming the file."""
+        if self.brep is None:
             raise ConversionError("no B-rep to write: converted with brep=False")
-        _subd2nurbs.write_shape(self.brep_text, str(path), schema)
+        self._conversion.write(str(path), schema)
+
+    def make_preview(self, color="curvature", samples=16):
+        """The patches tessellated with per-vertex colours, as convert(preview=color,
+        preview_samples=samples) makes them (the same dict as `preview`), without converting
+        again."""
+        _checked("preview", color, lambda x: isinstance(x, str), "a string", str)
+        samples = _checked("preview_samples", samples, _is_int, "an integer", int)
+        return self._conversion.make_preview(color, samples)
 
     @property
     def num_patches(self):
@@ -424,10 +446,11 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         colours (preview_samples 2 .. 64 per patch side), as convert --preview / --color /
         --preview-samples do; the result's `preview`
         is then a dict of numpy arrays (positions, normals, colors, values, triangles) and the
-        colour map's value_min / value_max.
+        colour map's value_min / value_max (result.make_preview() makes another later).
     progress: a callable(stage: str, fraction: float) called as the stages run; `stage` is a
         line for people ("building patches (2 extra levels)") whose `key` attribute names the
-        stage: "fit", "patches", "deviation", "packing", "continuity" or "brep".
+        stage: "fit", "patches", "deviation", "packing", "continuity", "brep" or (with preview)
+        "preview".
     allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
     max_faces, max_memory: refuse (SettingsError, before any work) when the estimated polynomial
         pieces the patches are built from would be more, or the estimated memory larger,
@@ -451,11 +474,13 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         raise TypeError("progress must be callable(stage, fraction)")
     face_limit, memory = _limits(max_faces, max_memory)
     on_stage = None if progress is None else lambda text, fraction, key: progress(StageText(text, key), fraction)
-    d = _subd2nurbs.convert(*cage._args(), level, tolerance, bool(absolute), bool(brep),
-                            bool(polar), radial_steps, polar_lambda, bool(separate_poles),
-                            fit, fair, preview or "", preview_samples, cage.name, cage.warnings, on_stage,
-                            face_limit, memory, faces)
-    result = ConversionResult(d)
+    settings = _subd2nurbs.Settings(level=level, tolerance=tolerance, absolute=bool(absolute), brep=bool(brep),
+                                    polar=bool(polar), radial_steps=radial_steps, polar_lambda=polar_lambda,
+                                    separate_poles=bool(separate_poles), fit=fit, fair=fair, faces=faces,
+                                    max_faces=face_limit, max_memory=memory, preview=preview,
+                                    preview_samples=preview_samples)
+    result = ConversionResult(_subd2nurbs.convert(*cage._args(), settings=settings, name=cage.name,
+                                                  warnings=cage.warnings, progress=on_stage))
     if brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")
     return result

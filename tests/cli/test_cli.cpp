@@ -280,6 +280,43 @@ TEST(Cli, HelpListsExitCodesAndVersionPrints) {
   EXPECT_EQ(version.out.rfind("subd2nurbs ", 0), 0u) << version.out;
 }
 
+// Every subcommand that reads a cage reads glTF too (load_input), and its help says so; check
+// and limit measure a .glb like the OBJ it was written from. Oracle: the OBJ's own output.
+TEST(CliGltf, EveryCageReadingCommandTakesGltfAndSaysSo) {
+  for (const char* command : {"info", "refine", "convert", "check", "limit", "fair"}) {
+    const Result help = run(std::string(command) + " --help");
+    EXPECT_EQ(help.exit_code, 0) << command;
+    EXPECT_NE(help.out.find("glTF / GLB"), std::string::npos) << command << "\n" << help.out;
+  }
+  TempDir dir;
+  const std::string glb = dir.file("box.glb");
+  subd2nurbs::testing::GltfOptions o;
+  subd2nurbs::testing::write_gltf(read_obj(sample()).input, glb, o);
+  const Result from_glb = run("check " + quote(glb) + " --samples 3 --json " + quote(dir.file("g.json")) + " -q");
+  ASSERT_EQ(from_glb.exit_code, 0) << from_glb.err;
+  const Result from_obj = run("check " + quote(sample()) + " --samples 3 --json " + quote(dir.file("o.json")) + " -q");
+  ASSERT_EQ(from_obj.exit_code, 0) << from_obj.err;
+  EXPECT_EQ(python_json_check(dir.file("g.json"), "r['quality']['edges_summary'] == json.load(open(\"" +
+                                                      dir.file("o.json") + "\"))['quality']['edges_summary']"),
+            0);
+}
+
+// The --polar and --schema rules are the converter's (pipeline::polar_mode, step_schema): the
+// same words as the Python module's SettingsError.
+TEST(Cli, PolarAndSchemaRulesAreTheConverters) {
+  TempDir dir;
+  const Result polar = run("convert " + quote(sample()) + " -o " + quote(dir.file("a.step")) + " --polar maybe");
+  EXPECT_EQ(polar.exit_code, 1);
+  EXPECT_EQ(polar.err, "subd2nurbs: error: --polar must be on or off\n");
+  const Result refine = run("refine " + quote(sample()) + " -o " + quote(dir.file("a.obj")) + " --polar maybe");
+  EXPECT_EQ(refine.exit_code, 1);
+  EXPECT_EQ(refine.err, "subd2nurbs: error: --polar must be on or off\n");
+  const Result schema = run("convert " + quote(sample()) + " -o " + quote(dir.file("a.step")) + " --schema ap999");
+  EXPECT_EQ(schema.exit_code, 1);
+  EXPECT_EQ(schema.err, "subd2nurbs: error: --schema must be ap214 or ap242\n");
+  EXPECT_FALSE(std::filesystem::exists(dir.file("a.step")));
+}
+
 // --- convert ---------------------------------------------------------------------------------
 
 TEST(CliConvert, WritesEveryFormatAndAReportThatParses) {

@@ -404,6 +404,53 @@ class Workbench(unittest.TestCase):
         with self.assertRaises(TypeError):
             s2n.make_color_map(s2n.make_cage(path, doc=self.doc))
 
+    def test_one_conversion_serves_the_solid_the_check_and_the_color_map(self):
+        """The NURBS object keeps its last conversion, keyed by its inputs: check_quality and the
+        colour map use it; a change converts again, a failure keeps the last valid shape and a
+        return to the last good settings needs no conversion."""
+        path = corpus("catmark_cube_creases0")
+        calls = []
+        real = subd2nurbs.convert
+
+        def counting(*args, **kwargs):
+            calls.append(kwargs)
+            return real(*args, **kwargs)
+
+        subd2nurbs.convert = counting
+        try:
+            nurbs = s2n.make_nurbs(s2n.make_cage(path, doc=self.doc), progress=False)
+            self.assertEqual(len(calls), 1)
+            s2n.check_quality(nurbs, highlight=False)
+            cm = s2n.make_color_map(nurbs, "Deviation", samples=4)
+            cm.Coloring = "Zebra"
+            self.doc.recompute()
+            self.assertTrue(cm.isValid())
+            self.assertEqual(len(calls), 1)
+            nurbs.Level = 1
+            self.doc.recompute()
+            self.assertEqual(len(calls), 2)
+            self.assertEqual(calls[-1].get("level"), 1)
+            self.assertTrue(nurbs.isValid() and cm.isValid())
+            # The colour map follows the new conversion: the module's preview of level 1.
+            want = real(subd2nurbs.read_cage(path), level=1, brep=False, preview="zebra", preview_samples=4).preview
+            self.assertEqual(list(cm.Triangles), [int(i) for i in want["triangles"].reshape(-1)])
+            for got, p in zip(cm.Points, want["positions"]):
+                self.assertAlmostEqual((got - App.Vector(*map(float, p))).Length, 0, delta=1e-6)
+            area = nurbs.Shape.Area
+            nurbs.Level = -1  # refused: the last valid shape stays, with the rule as the message
+            self.doc.recompute()
+            self.assertFalse(nurbs.isValid())
+            self.assertIn("Level must be 0 .. 12", nurbs.getStatusString())
+            self.assertAlmostEqual(nurbs.Shape.Area, area, delta=1e-12 * area)
+            failed = len(calls)
+            nurbs.Level = 1
+            self.doc.recompute()
+            self.assertTrue(nurbs.isValid())
+            self.assertEqual(len(calls), failed)  # the kept result still matches
+            self.assertAlmostEqual(nurbs.Shape.Area, area, delta=1e-12 * area)
+        finally:
+            subd2nurbs.convert = real
+
     def test_undo_removes_the_conversion(self):
         self.doc.UndoMode = 1
         cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)

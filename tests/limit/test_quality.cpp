@@ -17,6 +17,7 @@
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
 #include "core/eval/nurbs_eval.h"
+#include "converter/pipeline/report.h"
 #include "core/eval/quality.h"
 #include "io/temp_dir.h"
 #include "limit_test_util.h"
@@ -219,5 +220,76 @@ TEST(Preview, GlbReadsBackWithTinygltfWithThePatchesAndTheirColours) {
       EXPECT_GT(grid_max, 0);
       EXPECT_NEAR(mesh.value_max, grid_max, 1e-6 * grid_max);  // stored as float
     }
+  }
+}
+
+// The quality and preview stages (issue #15): their results are data in the ConversionResult,
+// the same as measuring and tessellating on their own, and the report carries the quality
+// section exactly when the stage ran.
+TEST(QualityStage, IsTheStandaloneMeasureAndItsSectionIsInTheReport) {
+  Converted c = convert_shape("catmark_cube_creases0");
+  EXPECT_FALSE(c.result.quality);
+  EXPECT_FALSE(c.result.preview);
+  const std::string plain = pipeline::report_json(c.result);
+  EXPECT_EQ(plain.find("\"quality"), std::string::npos);
+  EXPECT_EQ(plain.substr(plain.size() - 4), "}\n}\n");  // timings_ms, then the end
+
+  pipeline::ConversionSettings settings;
+  settings.level = 0;
+  settings.quality_samples = 5;
+  settings.preview = pipeline::PreviewSettings{PreviewColor::Zebra, 4};
+  std::vector<std::string> stages;
+  pipeline::ConversionProgress progress;
+  progress.stage = [&](pipeline::Stage s, const std::string&) { stages.push_back(pipeline::to_string(s)); };
+  pipeline::ConversionResult r = pipeline::convert(c.base, c.pos, settings, progress);
+  ASSERT_TRUE(r.quality && r.preview);
+  ASSERT_GE(stages.size(), 2u);
+  EXPECT_EQ(stages[stages.size() - 2], "quality");
+  EXPECT_EQ(stages.back(), "preview");
+
+  const LimitEvaluator limit(c.base, c.pos);
+  const QualityReport q = measure_quality(r.build, limit, r.continuity, 5, &r.exported);
+  EXPECT_EQ(r.quality->samples_per_side, 5);
+  EXPECT_EQ(r.quality->deviation_max, q.deviation_max);
+  EXPECT_EQ(r.quality->patch_max, q.patch_max);
+  EXPECT_EQ(r.quality->edges.size(), q.edges.size());
+  const PreviewMesh mesh = build_preview(r.build, nullptr, PreviewColor::Zebra, 4);
+  EXPECT_EQ(r.preview->positions, mesh.positions);
+  EXPECT_EQ(r.preview->colors, mesh.colors);
+  EXPECT_EQ(r.preview->indices, mesh.indices);
+
+  const std::string report = pipeline::report_json(r);
+  const size_t at = report.find("\n  \"quality\": {\n    \"samples_per_side\": 5,");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_LT(report.find("\"timings_ms\""), at);  // after the conversion's timings
+  EXPECT_NE(report.find("\n  \"quality_ms\": ", at), std::string::npos);
+  const std::string check = pipeline::quality_report_json(r);
+  EXPECT_EQ(check.rfind("{\n  \"format\": \"subd2nurbs-quality\",", 0), 0u);
+  // The same section in both documents: the one writer, the one function.
+  const std::string key = "\n  \"quality\": ";
+  const size_t in_check = check.find(key);
+  ASSERT_NE(in_check, std::string::npos);
+  const size_t from = at + key.size(), to = report.find(",\n  \"quality_ms\"", at);
+  EXPECT_EQ(check.substr(in_check + key.size(), check.size() - 3 - in_check - key.size()),
+            report.substr(from, to - from));
+}
+
+TEST(QualityStage, SamplesFollowTheirRules) {
+  pipeline::ConversionSettings settings;
+  settings.quality_samples = 1;
+  try {
+    pipeline::validate(settings);
+    FAIL() << "1 sample per side was accepted";
+  } catch (const pipeline::SettingsError& e) {
+    EXPECT_EQ(e.setting(), "samples");
+    EXPECT_EQ(e.rule(), "must be 2 .. 64");
+  }
+  settings.quality_samples.reset();
+  settings.preview = pipeline::PreviewSettings{PreviewColor::Curvature, 65};
+  try {
+    pipeline::validate(settings);
+    FAIL() << "65 preview samples per side were accepted";
+  } catch (const pipeline::SettingsError& e) {
+    EXPECT_EQ(e.setting(), "preview_samples");
   }
 }

@@ -479,6 +479,78 @@ class Writing(unittest.TestCase):
             self.assertEqual(sorted(os.listdir(d)), ["a.brep", "a.iges", "a.step", "a.stp", "cli.step"])
 
 
+class BoundTypes(unittest.TestCase):
+    """The compiled part's bound types (issue #15): the settings as one object checked by the
+    converter's rules, the result keeping the converter's own data (the OCCT shape, the patches
+    and the cage they came from)."""
+
+    def test_settings_object_maps_the_keywords_onto_the_converters_settings(self):
+        st = s2n._subd2nurbs.Settings(level=2, faces="per-quad", preview="zebra", preview_samples=4, max_memory="1G")
+        self.assertEqual((st.level, st.tolerance, st.faces, st.preview, st.preview_samples, st.fit),
+                         (2, None, "per-quad", "zebra", 4, "approximate"))
+        self.assertEqual(st.max_memory, 1024.0 ** 3)
+        with self.assertRaises(TypeError):
+            s2n._subd2nurbs.Settings(colour="red")
+        # The converter's rule text, the same error as convert() raises.
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n._subd2nurbs.Settings(radial_steps=3)
+        self.assertEqual((e.exception.setting, e.exception.rule, str(e.exception)),
+                         ("radial_steps", "must be 1 or 2", "radial_steps must be 1 or 2"))
+
+    def test_write_and_brep_text_come_from_the_kept_shape(self):
+        r = s2n.convert(s2n.read_cage(corpus("catmark_cube_creases0")))
+        text = r.brep_text
+        self.assertIs(r.brep_text, text)  # made once, on first use
+        self.assertEqual(s2n.brep_summary(text)["faces"], r.brep["faces"])
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "a.brep")
+            r.write(path)
+            with open(path) as fh:  # OCCT's BREP file is its BREP text behind the drawable header
+                self.assertEqual(fh.read(), "DBRep_DrawableShape\n" + text)
+        no_brep = s2n.convert(s2n.read_cage(corpus("catmark_cube_creases0")), brep=False)
+        self.assertIsNone(no_brep.brep_text)
+        with self.assertRaises(s2n.ConversionError):
+            no_brep.write(os.path.join(tempfile.gettempdir(), "never.step"))
+
+    def test_schema_rule_is_the_converters(self):
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        r = s2n.convert(s2n.read_cage(corpus("catmark_cube")))
+        with tempfile.TemporaryDirectory() as d:
+            with self.assertRaises(s2n.SettingsError) as e:
+                r.write(os.path.join(d, "a.step"), schema="ap999")
+            self.assertEqual((e.exception.setting, e.exception.rule), ("schema", "must be ap214 or ap242"))
+            cli = subprocess.run([CLI, "convert", corpus("catmark_cube"), "-o", os.path.join(d, "b.step"),
+                                  "--schema", "ap999"], capture_output=True, text=True)
+            self.assertEqual(cli.stderr, "subd2nurbs: error: --%s %s\n" % (e.exception.setting, e.exception.rule))
+            self.assertEqual(os.listdir(d), [])
+
+    def test_make_preview_is_the_preview_stage_without_a_second_conversion(self):
+        cage = s2n.read_cage(corpus("catmark_cube_creases0"))
+        r = s2n.convert(cage, level=1)
+        for color in ("curvature", "deviation", "zebra"):
+            later = r.make_preview(color, 5)
+            direct = s2n.convert(cage, level=1, brep=False, preview=color, preview_samples=5)
+            self.assertEqual(later["color"], color)
+            for key in ("positions", "normals", "colors", "values", "triangles"):
+                np.testing.assert_array_equal(later[key], direct.preview[key], key)
+            self.assertEqual((later["value_min"], later["value_max"]),
+                             (direct.preview["value_min"], direct.preview["value_max"]))
+        # 5 x 5 points per patch: the preview's own grid, not the conversion's.
+        self.assertEqual(len(r.make_preview("zebra", 5)["positions"]), 25 * r.report["patches"]["total"])
+        with self.assertRaises(s2n.SettingsError) as e:
+            r.make_preview("zebra", 65)
+        self.assertEqual((e.exception.setting, e.exception.rule), ("preview_samples", "must be 2 .. 64"))
+        with self.assertRaises(s2n.SettingsError) as e:
+            r.make_preview("rainbow", 5)
+        self.assertEqual(e.exception.setting, "preview")
+
+    def test_preview_is_a_stage_of_the_conversion(self):
+        keys = []
+        s2n.convert(s2n.read_cage(corpus("catmark_cube")), brep=False, preview="zebra",
+                    progress=lambda stage, fraction: keys.append(stage.key))
+        self.assertEqual(keys[-1], "preview")
+
+
 class Versions(unittest.TestCase):
     def test_occt_version(self):
         self.assertRegex(s2n.OCC_VERSION, r"^\d+\.\d+\.\d+")
