@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/limit/stam_eigen.h"
+#include "core/mesh/marks.h"
 #include "core/util/constants.h"
 
 namespace subd2nurbs {
@@ -535,53 +536,57 @@ LocalLevel extract_two_ring(const SubdivLevel& L, const std::vector<Point3>& P, 
 
 LocalLevel extract_two_ring_impl(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
   const PolyMesh& m = L.mesh;
-  std::unordered_map<int, int> face_local;
+  thread_local std::vector<int> face_store, vertex_store;
+  Marks face_local(face_store, m.num_faces());
+  // Per vertex: -1 outer (or not in the ring), 0 inner, 1 + its local index once numbered.
+  Marks vertex_mark(vertex_store, m.num_vertices());
   std::vector<int> faces;
   auto add_face = [&](int g) {
-    if (face_local.emplace(g, static_cast<int>(faces.size())).second) faces.push_back(g);
+    if (face_local.set(g, static_cast<int>(faces.size()))) faces.push_back(g);
   };
   auto faces_at = [&](int v, auto&& fn) {
     const int* c = m.vertex_corners(v);
     for (int i = 0, n = m.vertex_face_count(v); i < n; ++i) fn(m.corner_face(c[i]));
   };
   add_face(f);
-  std::unordered_map<int, char> inner;  // V1: vertices of faces touching f
+  std::vector<int> inner;  // V1: vertices of faces touching f
   for (int h = m.face_begin(f); h < m.face_end(f); ++h)
     faces_at(m.corner_vertex(h), [&](int g) {
-      for (int k = m.face_begin(g); k < m.face_end(g); ++k) inner[m.corner_vertex(k)] = 1;
+      for (int k = m.face_begin(g); k < m.face_end(g); ++k)
+        if (vertex_mark.set(m.corner_vertex(k), 0)) inner.push_back(m.corner_vertex(k));
     });
-  for (const auto& kv : inner) faces_at(kv.first, add_face);
+  for (int v : inner) faces_at(v, add_face);
 
   // Local vertices: inner vertices once; outer vertices once per fan of local faces.
-  std::unordered_map<int, int> inner_local;
   std::vector<int> local_orig;
   std::vector<int> sizes, idx;
-  struct Occ { int face_pos; int orig; int prev, next; };
-  std::unordered_map<int, std::vector<int>> outer_occ;  // orig -> occurrence ids
+  struct Occ { int orig; int face_pos; int prev, next; };
   std::vector<Occ> occ;
   for (int lf = 0; lf < static_cast<int>(faces.size()); ++lf) {
     const int g = faces[lf];
     sizes.push_back(m.face_size(g));
     for (int h = m.face_begin(g); h < m.face_end(g); ++h) {
       const int v = m.corner_vertex(h);
-      if (inner.count(v)) {
-        auto it = inner_local.find(v);
-        if (it == inner_local.end()) {
-          it = inner_local.emplace(v, static_cast<int>(local_orig.size())).first;
+      if (vertex_mark.get(v) >= 0) {
+        if (vertex_mark.get(v) == 0) {
+          vertex_mark.put(v, 1 + static_cast<int>(local_orig.size()));
           local_orig.push_back(v);
         }
-        idx.push_back(it->second);
+        idx.push_back(vertex_mark.get(v) - 1);
       } else {
-        outer_occ[v].push_back(static_cast<int>(occ.size()));
-        occ.push_back({static_cast<int>(idx.size()), v, m.corner_vertex(m.prev(h)), m.to_vertex(h)});
+        occ.push_back({v, static_cast<int>(idx.size()), m.corner_vertex(m.prev(h)), m.to_vertex(h)});
         idx.push_back(-1);
       }
     }
   }
-  for (auto& kv : outer_occ) {
-    const std::vector<int>& list = kv.second;
-    const int k = static_cast<int>(list.size());
-    std::vector<int> parent(k);
+  // The occurrences of each outer vertex, joined where two of them share a neighbour.
+  std::stable_sort(occ.begin(), occ.end(), [](const Occ& a, const Occ& b) { return a.orig < b.orig; });
+  std::vector<int> parent, comp_local;
+  for (size_t first = 0; first < occ.size();) {
+    size_t last = first;
+    while (last < occ.size() && occ[last].orig == occ[first].orig) ++last;
+    const int k = static_cast<int>(last - first);
+    parent.resize(k);
     for (int i = 0; i < k; ++i) parent[i] = i;
     auto find = [&](int i) {
       while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -589,20 +594,21 @@ LocalLevel extract_two_ring_impl(const SubdivLevel& L, const std::vector<Point3>
     };
     for (int i = 0; i < k; ++i)
       for (int j = i + 1; j < k; ++j) {
-        const Occ& a = occ[list[i]];
-        const Occ& b = occ[list[j]];
+        const Occ& a = occ[first + i];
+        const Occ& b = occ[first + j];
         if (a.prev == b.next || a.next == b.prev || a.prev == b.prev || a.next == b.next)
           parent[find(i)] = find(j);
       }
-    std::unordered_map<int, int> comp_local;
+    comp_local.assign(k, -1);
     for (int i = 0; i < k; ++i) {
-      auto it = comp_local.find(find(i));
-      if (it == comp_local.end()) {
-        it = comp_local.emplace(find(i), static_cast<int>(local_orig.size())).first;
-        local_orig.push_back(kv.first);
+      int& local = comp_local[find(i)];
+      if (local < 0) {
+        local = static_cast<int>(local_orig.size());
+        local_orig.push_back(occ[first].orig);
       }
-      idx[occ[list[i]].face_pos] = it->second;
+      idx[occ[first + i].face_pos] = local;
     }
+    first = last;
   }
   LocalLevel out;
   const int nv = static_cast<int>(local_orig.size());

@@ -4,38 +4,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/mesh/marks.h"
+
 namespace subd2nurbs {
-
-namespace {
-
-/// Per-thread marks over the elements (faces or vertices) of whatever mesh a call works on,
-/// so that a call costs O(what it touches) however large the mesh: marks set by one use are
-/// reset when it ends. Each function keeps its own store; none of them recurses.
-class Marks {
- public:
-  Marks(std::vector<int>& store, int size) : mark_(store) {
-    if (static_cast<int>(mark_.size()) < size) mark_.resize(size, -1);
-  }
-  Marks(const Marks&) = delete;
-  Marks& operator=(const Marks&) = delete;
-  ~Marks() {
-    for (int i : touched_) mark_[i] = -1;
-  }
-  int get(int i) const { return mark_[i]; }
-  /// Sets i's mark; false if it was set already (then it is left as it was).
-  bool set(int i, int value) {
-    if (mark_[i] >= 0) return false;
-    mark_[i] = value;
-    touched_.push_back(i);
-    return true;
-  }
-
- private:
-  std::vector<int>& mark_;
-  std::vector<int> touched_;
-};
-
-}  // namespace
 
 std::vector<int> face_rings(const PolyMesh& m, const std::vector<int>& seed_vertices, int rings) {
   thread_local std::vector<int> face_store, vertex_store;
