@@ -31,15 +31,40 @@ NetPoint eval_net(const Point3* net, double u, double v) {
   double bu[4], dbu[4], bv[4], dbv[4];
   bernstein(u, bu, dbu);
   bernstein(v, bv, dbv);
+  // Contract along v first (rows of the net against bv and dbv), then along u.
   NetPoint r{V3::Zero(), V3::Zero(), V3::Zero()};
-  for (int i = 0; i < 4; ++i)
+  for (int i = 0; i < 4; ++i) {
+    double row[3] = {0, 0, 0}, drow[3] = {0, 0, 0};
     for (int j = 0; j < 4; ++j) {
-      const V3 P = to_eigen(net[i * 4 + j]);
-      r.p += bu[i] * bv[j] * P;
-      r.du += dbu[i] * bv[j] * P;
-      r.dv += bu[i] * dbv[j] * P;
+      const Point3& P = net[i * 4 + j];
+      for (int c = 0; c < 3; ++c) {
+        row[c] += bv[j] * P[c];
+        drow[c] += dbv[j] * P[c];
+      }
     }
+    for (int c = 0; c < 3; ++c) {
+      r.p[c] += bu[i] * row[c];
+      r.du[c] += dbu[i] * row[c];
+      r.dv[c] += bu[i] * drow[c];
+    }
+  }
   return r;
+}
+
+// Squared distance from q to the bounding box of a net: a lower bound of its squared distance
+// to the patch (a Bezier patch lies in the convex hull of its net).
+double squared_distance_to_box(const Point3* net, const V3& q) {
+  double d2 = 0;
+  for (int c = 0; c < 3; ++c) {
+    double lo = net[0][c], hi = net[0][c];
+    for (int k = 1; k < 16; ++k) {
+      lo = std::min(lo, net[k][c]);
+      hi = std::max(hi, net[k][c]);
+    }
+    const double out = q[c] < lo ? lo - q[c] : (q[c] > hi ? q[c] - hi : 0.0);
+    d2 += out * out;
+  }
+  return d2;
 }
 
 // Distance from q to a Bezier patch: best of a 3x3 seed grid, then clamped Gauss-Newton.
@@ -191,8 +216,13 @@ DeviationReport measure_deviation(const PatchBuild& build, int sample_levels, co
         done[v] = 1;
         const V3 q = to_eigen(limit[v]);
         double d = 1e300;
-        for (int c : candidates)
-          if (piece.has_net[c]) d = std::min(d, distance_to_net(&piece.nets[static_cast<size_t>(c) * 16], q));
+        for (int c : candidates) {  // the root face first: it usually holds the nearest point
+          if (!piece.has_net[c]) continue;
+          const Point3* net = &piece.nets[static_cast<size_t>(c) * 16];
+          // A net whose box is no nearer than the best distance so far cannot lower it.
+          if (d < 1e300 && squared_distance_to_box(net, q) >= d * d) continue;
+          d = std::min(d, distance_to_net(net, q));
+        }
         if (d > fd.max) fd.where = limit[v];
         fd.max = std::max(fd.max, d);
         ++fd.samples;
