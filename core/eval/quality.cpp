@@ -30,8 +30,9 @@ double angle_deg(const Point3& a, const Point3& b) {
 int coarse_face(const PatchBuild& b, int patch) { return b.coarse_face.at(static_cast<size_t>(patch)); }
 
 /// Closest point on the limit surface near `start` (Gauss-Newton in the start's face,
-/// parameters clamped to [0,1]^2).
-double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x) {
+/// parameters clamped to [0,1]^2). The search stops once a step would move the point by less
+/// than `stop` (model units): the distance cannot drop by more than that.
+double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x, double stop) {
   LimitPoint q = L.evaluate_point(p.face, p.sub, p.u, p.v);
   double best = norm(sub(q.p, x));
   for (int it = 0; it < 12 && best > 0; ++it) {
@@ -43,6 +44,9 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x) 
     const double du = (b1 * a22 - b2 * a12) / det, dv = (a11 * b2 - a12 * b1) / det;
     const double nu = std::clamp(p.u + du, 0.0, 1.0), nv = std::clamp(p.v + dv, 0.0, 1.0);
     if (nu == p.u && nv == p.v) break;
+    const double su = nu - p.u, sv = nv - p.v;  // the step taken, in model space below
+    const Point3 step{su * q.du[0] + sv * q.dv[0], su * q.du[1] + sv * q.dv[1], su * q.du[2] + sv * q.dv[2]};
+    if (norm(step) < stop) break;
     p.u = nu;
     p.v = nv;
     q = L.evaluate_point(p.face, p.sub, p.u, p.v);
@@ -106,7 +110,7 @@ LimitParam patch_to_limit(const PatchBuild& b, int patch, double s, double t) {
 double limit_distance(const PatchBuild& b, const LimitEvaluator& limit, int patch, double s, double t) {
   const LimitParam lp = patch_to_limit(b, patch, s, t);
   const Point3 x = evaluate(b.set.patches[static_cast<size_t>(patch)], s, t).p;
-  return closest_distance(limit, lp, x);
+  return closest_distance(limit, lp, x, tolerances::kSameSurface * b.set.model_size);
 }
 
 std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b, int patch, int n) {
@@ -178,7 +182,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
         // The closest-point distance is at most the same-parameter one; searching for it only
         // pays where the patch is not the limit itself (Construction Q reparametrizes).
         d.distance = d.parametric > tolerances::kSameSurface * ps.model_size
-                         ? std::min(d.parametric, closest_distance(limit, d.limit, d.point))
+                         ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, tolerances::kSameSurface * ps.model_size))
                          : d.parametric;
         out.push_back(e);
       }
