@@ -115,11 +115,15 @@ void translate(std::exception_ptr p) {
 
 // --- cages ----------------------------------------------------------------------------------
 
-BoundaryRule boundary_rule(const std::string& s) {
-  if (s == "none") return BoundaryRule::None;
-  if (s == "edge-only") return BoundaryRule::EdgeOnly;
-  if (s == "edge-and-corner") return BoundaryRule::EdgeAndCorner;
-  throw pipeline::SettingsError("boundary", "must be none, edge-only or edge-and-corner, not '" + s + "'");
+/// The options as the package passes them ({boundary, crease_method, triangles}, each optional),
+/// checked by the converter's rules.
+SubdivOptions subdiv_options(const py::dict& options) {
+  SubdivOptions o;
+  auto name = [&](const char* key) { return std::string(py::str(options[key])); };
+  if (options.contains("boundary")) o.boundary = pipeline::boundary_rule(name("boundary"));
+  if (options.contains("crease_method")) o.crease_method = pipeline::crease_method(name("crease_method"));
+  if (options.contains("triangles")) o.triangles = pipeline::triangle_rule(name("triangles"));
+  return o;
 }
 
 /// A cage as the package passes it: (positions Nx3, face_sizes, face_indices,
@@ -139,13 +143,7 @@ MeshInput make_input(const DoubleArray& positions, const IntArray& face_sizes, c
   for (const auto& [a, b, s] : creases) in.creases.push_back({a, b, s});
   for (const auto& [v, s] : corners) in.corners.push_back({v, s});
   in.holes = holes;
-  if (options.contains("boundary")) in.options.boundary = boundary_rule(py::str(options["boundary"]));
-  if (options.contains("crease_method"))
-    in.options.crease_method = std::string(py::str(options["crease_method"])) == "chaikin" ? CreaseMethod::Chaikin
-                                                                                          : CreaseMethod::Uniform;
-  if (options.contains("triangles"))
-    in.options.triangles = std::string(py::str(options["triangles"])) == "smooth" ? TriangleRule::Smooth
-                                                                                 : TriangleRule::Catmark;
+  in.options = subdiv_options(options);
   return in;
 }
 
@@ -388,7 +386,8 @@ Settings make_settings(const py::kwargs& kwargs) {
     else if (name == "tolerance") c.tolerance = v.cast<std::optional<double>>();
     else if (name == "absolute") c.absolute = v.cast<bool>();
     else if (name == "brep") c.build_brep = v.cast<bool>();
-    else if (name == "polar") c.patch.polar = v.cast<bool>();
+    else if (name == "polar")  // True / False, or the command line's "on" / "off"
+      c.patch.polar = py::isinstance<py::str>(v) ? pipeline::polar_mode(v.cast<std::string>()) : v.cast<bool>();
     else if (name == "radial_steps") c.patch.cap.radial_steps = v.cast<int>();
     else if (name == "polar_lambda") c.patch.cap.lambda = v.cast<double>();
     else if (name == "separate_poles") c.patch.separate_poles = v.cast<bool>();
@@ -619,6 +618,8 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.attr("__version__") = SUBD2NURBS_VERSION;
   m.attr("OCC_VERSION") = OCC_VERSION_COMPLETE;
   m.def("read_cage", &read_cage_file, py::arg("path"));
+  m.def("check_options", [](const py::dict& options) { subdiv_options(options); });
+  m.def("setting_names", &pipeline::setting_names);
   m.def("recover_quads", &recover_quads_from);
   m.def("validate", &validate);
   m.def("info", &info);
