@@ -210,6 +210,14 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
   }
 }
 
+CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::string& description,
+                           std::string& mesh) {
+  CLI::App* command = app.add_subcommand(name, description);
+  command->add_option("MESH", mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
+      ->required();
+  return command;
+}
+
 void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning) {
   command.add_option_function<double>(
       "--max-faces", [&values](const double& n) { values.max_faces = n; },
@@ -315,15 +323,12 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
 
   InfoOptions info;
   CLI::App* info_command =
-      app.add_subcommand("info", "Describe a cage: counts, boundary, creases, warnings");
-  info_command->add_option("MESH", info.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
+      add_cage_command(app, "info", "Describe a cage: counts, boundary, creases, warnings", info.mesh);
   info_command->add_flag("--json", info.json, "Print JSON on stdout instead of text");
 
   RefineOptions refine;
   CLI::App* refine_command =
-      app.add_subcommand("refine", "Refine a cage uniformly and write the result as OBJ");
-  refine_command->add_option("MESH", refine.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
-      ->required();
+      add_cage_command(app, "refine", "Refine a cage uniformly and write the result as OBJ", refine.mesh);
   refine_command->add_option("-l,--levels", refine.levels,
                              "Number of refinement levels (0 .. " + std::to_string(pipeline::kMaxRefineLevels) + ")")
       ->capture_default_str();
@@ -334,11 +339,11 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                     "the output faces (default " + number(pipeline::kDefaultMaxRefineFaces) + ")");
 
   ConvertOptions convert;
-  CLI::App* convert_command = app.add_subcommand(
-      "convert",
+  CLI::App* convert_command = add_cage_command(
+      app, "convert",
       "Convert a cage to bicubic NURBS patches, written as STEP, IGES, BREP or patch JSON "
-      "(by the output's extension), with continuity and deviation measures");
-  convert_command->add_option("MESH", convert.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
+      "(by the output's extension), with continuity and deviation measures",
+      convert.mesh);
   convert_command
       ->add_option("-o,--output", convert.output,
                    "Output file: .step/.stp, .iges/.igs, .brep, or .json (the patches as JSON)")

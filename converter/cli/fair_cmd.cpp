@@ -13,12 +13,11 @@
 namespace subd2nurbs::cli {
 
 CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& o) {
-  CLI::App* c = app.add_subcommand(
-      "fair",
+  CLI::App* c = add_cage_command(
+      app, "fair",
       "Fair a cage: move its free vertices to minimise the thin-plate energy of the limit surface, "
-      "keeping the limit points close to where they were; write the cage as OBJ");
-  c->add_option("MESH", o.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
-      ->required();
+      "keeping the limit points close to where they were; write the cage as OBJ",
+      o.mesh);
   c->add_option("-o,--output", o.output, "Output OBJ file (same topology and tags)")->required();
   c->add_option("--weight", o.weight, "Weight W > 0 of the energy against keeping the limit points (default 1)");
   c->add_option("--keep", o.keep, "Vertices kept fixed (repeatable): boundary, creases (ends of tagged crease "
