@@ -35,10 +35,10 @@ class JsonWriter {
   /// Containers. `items_indent` >= 0: each item on a line of its own, indented so many spaces,
   /// and the closing bracket on a line indented `close_indent` (an empty one stays {} / []);
   /// < 0: items inline.
-  JsonWriter& begin_object(int items_indent = -1, int close_indent = 0);
-  JsonWriter& end_object();
-  JsonWriter& begin_array(int items_indent = -1, int close_indent = 0);
-  JsonWriter& end_array();
+  JsonWriter& begin_object(int items_indent = -1, int close_indent = 0) { return open('{', items_indent, close_indent); }
+  JsonWriter& end_object() { return close('}'); }
+  JsonWriter& begin_array(int items_indent = -1, int close_indent = 0) { return open('[', items_indent, close_indent); }
+  JsonWriter& end_array() { return close(']'); }
   /// The next item of the open container starts a line indented `indent` spaces.
   JsonWriter& break_line(int indent);
 
@@ -88,8 +88,8 @@ class JsonWriter {
     bool empty = true;
   };
   void before_item();
-  void open(char bracket, int items_indent, int close_indent);
-  void close(char bracket);
+  JsonWriter& open(char bracket, int items_indent, int close_indent);
+  JsonWriter& close(char bracket);
 
   Numbers numbers_;
   Spacing spacing_;
