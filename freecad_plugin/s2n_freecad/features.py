@@ -84,15 +84,36 @@ class _Stateless:
         return None
 
 
-class CageFeature(_Stateless):
+class _Feature(_Stateless):
+    """A document object's proxy: setup() adds its properties, again when a document is read
+    back (properties added since it was saved); restored_state() resets what it keeps."""
+
+    #: (property, group, tooltip) of the link to the object this one is made from, the first
+    #: property in the editor; None: no such link.
+    SOURCE = None
+
+    def __init__(self, obj):
+        self.onDocumentRestored(obj)
+
+    def onDocumentRestored(self, obj):
+        obj.Proxy = self
+        self.restored_state()
+        if self.SOURCE:
+            name, group, doc = self.SOURCE
+            _add(obj, "App::PropertyLink", name, group, doc)
+        self.setup(obj)
+
+    @staticmethod
+    def setup(obj):
+        """Adds the object's other properties (those it has are kept)."""
+        raise NotImplementedError
+
+
+class CageFeature(_Feature):
     """Proxy of a Cage object: the cage's arrays as properties (coordinates in double
     precision), its shape the cage's edges."""
 
     TYPE = "Subd2Nurbs::Cage"
-
-    def __init__(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
 
     @staticmethod
     def setup(obj):
@@ -171,11 +192,6 @@ class CageFeature(_Stateless):
         placement = obj.Placement
         obj.Shape = Part.Compound(edges)
         obj.Placement = placement
-
-    def onDocumentRestored(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
-
 
 
 def is_cage(obj):
@@ -278,20 +294,15 @@ def settings_named_by_property():
                                        rule=e.rule) from None
 
 
-class NurbsFeature(_Stateless):
+class NurbsFeature(_Feature):
     """Proxy of a NURBS object: converts its Source (Cage or Mesh::Feature) on recompute."""
 
     TYPE = "Subd2Nurbs::NURBS"
-
-    def __init__(self, obj):
-        obj.Proxy = self
-        self._cache = None
-        self.setup(obj)
+    SOURCE = ("Source", "Conversion", "The Cage or Mesh::Feature to convert")
 
     @staticmethod
     def setup(obj):
         g = "Conversion"
-        _add(obj, "App::PropertyLink", "Source", g, "The Cage or Mesh::Feature to convert")
         _add(obj, "App::PropertyInteger", "Level", g,
              "If > 0: extra refinement levels at every irregular vertex (0 with Tolerance 0: the "
              "default tolerance, 1e-4 of the model size)")
@@ -424,11 +435,6 @@ class NurbsFeature(_Stateless):
         inputs are unchanged; converted again after a reload or a change)."""
         return self.conversion(obj)[1]
 
-    def onDocumentRestored(self, obj):
-        obj.Proxy = self
-        self._cache = None
-        self.setup(obj)
-
     def restored_state(self):
         self._cache = None
 
@@ -436,27 +442,22 @@ class NurbsFeature(_Stateless):
 COLORINGS = ["Curvature", "Deviation", "Zebra"]
 
 
-class ColorMapFeature(_Stateless):
+class ColorMapFeature(_Feature):
     """Proxy of a ColorMap object: the NURBS object's patches tessellated with per-vertex
     colours, exactly as `subd2nurbs convert --preview P.glb --color ...` makes them (mean
     curvature, deviation from the exact limit surface, or zebra stripes), from the NURBS
     object's last conversion (NurbsFeature.conversion)."""
 
     TYPE = "Subd2Nurbs::ColorMap"
+    SOURCE = ("Nurbs", "Color map", "The NURBS object to colour")
 
     def __init__(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
+        super().__init__(obj)
         obj.Samples = 12
-
-    def onDocumentRestored(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
 
     @staticmethod
     def setup(obj):
         g = "Color map"
-        _add(obj, "App::PropertyLink", "Nurbs", g, "The NURBS object to colour")
         _add(obj, "App::PropertyEnumeration", "Coloring", g,
              "Mean curvature (blue negative, red positive), deviation from the exact limit surface "
              "(blue 0 .. red max) or zebra stripes of the normal", choices=COLORINGS)
