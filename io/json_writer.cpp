@@ -67,13 +67,14 @@ void JsonWriter::before_item() {
   }
 }
 
-void JsonWriter::open(char bracket, int items_indent, int close_indent) {
+JsonWriter& JsonWriter::open(char bracket, int items_indent, int close_indent) {
   before_item();
   s_ += bracket;
   stack_.push_back({items_indent, close_indent});
+  return *this;
 }
 
-void JsonWriter::close(char bracket) {
+JsonWriter& JsonWriter::close(char bracket) {
   if (stack_.empty()) throw std::logic_error("JsonWriter: closing a container that is not open");
   const Level level = stack_.back();
   stack_.pop_back();
@@ -83,22 +84,6 @@ void JsonWriter::close(char bracket) {
     s_.append(static_cast<size_t>(level.close_indent), ' ');
   }
   s_ += bracket;
-}
-
-JsonWriter& JsonWriter::begin_object(int items_indent, int close_indent) {
-  open('{', items_indent, close_indent);
-  return *this;
-}
-JsonWriter& JsonWriter::end_object() {
-  close('}');
-  return *this;
-}
-JsonWriter& JsonWriter::begin_array(int items_indent, int close_indent) {
-  open('[', items_indent, close_indent);
-  return *this;
-}
-JsonWriter& JsonWriter::end_array() {
-  close(']');
   return *this;
 }
 

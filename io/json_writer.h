@@ -1,6 +1,6 @@
 // The one JSON writer of the project: the patch JSON (io/patch_json.h), the conversion report
-// and its quality section, and `check --json` (converter/pipeline/report.h) are all written
-// with it, by the CLI and the Python module alike.
+// and its quality section, and `check --json` (converter/pipeline/report.h), `info --json` and
+// the fair report (converter/cli) are all written with it, by the CLI and the Python module alike.
 //
 // It writes text as it goes, with the layout the caller asks for: items inline ("a": 1, "b": 2),
 // or a container's items one a line at an indent, or a line break before one item. So a
@@ -35,10 +35,10 @@ class JsonWriter {
   /// Containers. `items_indent` >= 0: each item on a line of its own, indented so many spaces,
   /// and the closing bracket on a line indented `close_indent` (an empty one stays {} / []);
   /// < 0: items inline.
-  JsonWriter& begin_object(int items_indent = -1, int close_indent = 0);
-  JsonWriter& end_object();
-  JsonWriter& begin_array(int items_indent = -1, int close_indent = 0);
-  JsonWriter& end_array();
+  JsonWriter& begin_object(int items_indent = -1, int close_indent = 0) { return open('{', items_indent, close_indent); }
+  JsonWriter& end_object() { return close('}'); }
+  JsonWriter& begin_array(int items_indent = -1, int close_indent = 0) { return open('[', items_indent, close_indent); }
+  JsonWriter& end_array() { return close(']'); }
   /// The next item of the open container starts a line indented `indent` spaces.
   JsonWriter& break_line(int indent);
 
@@ -61,9 +61,17 @@ class JsonWriter {
   /// A key and its value in one call: key(name).number(x) and so on.
   JsonWriter& member(std::string_view name, double x) { return key(name).number(x); }
   JsonWriter& member(std::string_view name, int i) { return key(name).integer(i); }
+  JsonWriter& member(std::string_view name, long long i) { return key(name).integer(i); }
   JsonWriter& member(std::string_view name, bool b) { return key(name).boolean(b); }
   JsonWriter& member(std::string_view name, const char* s) { return key(name).string(s); }
   JsonWriter& member(std::string_view name, const std::string& s) { return key(name).string(s); }
+  /// Several members in one call: members("a", 1, "b", 2.5, "c", "text").
+  template <class Value, class... Rest>
+  JsonWriter& members(std::string_view name, const Value& value, const Rest&... rest) {
+    member(name, value);
+    if constexpr (sizeof...(rest) > 0) members(rest...);
+    return *this;
+  }
 
   /// The text so far (append a final newline yourself).
   const std::string& text() const { return s_; }
@@ -80,8 +88,8 @@ class JsonWriter {
     bool empty = true;
   };
   void before_item();
-  void open(char bracket, int items_indent, int close_indent);
-  void close(char bracket);
+  JsonWriter& open(char bracket, int items_indent, int close_indent);
+  JsonWriter& close(char bracket);
 
   Numbers numbers_;
   Spacing spacing_;

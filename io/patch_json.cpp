@@ -48,11 +48,7 @@ void write_patch(JsonWriter& w, const NurbsPatch& p) {
     w.key("cells").begin_array();
     for (const PatchCell& c : p.cells) {
       w.begin_object();
-      w.key("base_face").integer(c.base_face);
-      w.key("coarse_face").integer(c.coarse_face);
-      w.key("u").integer(c.u);
-      w.key("v").integer(c.v);
-      w.key("rotation").integer(c.rotation);
+      w.members("base_face", c.base_face, "coarse_face", c.coarse_face, "u", c.u, "v", c.v, "rotation", c.rotation);
       w.end_object();
     }
     w.end_array();
@@ -70,8 +66,7 @@ void write_patch(JsonWriter& w, const NurbsPatch& p) {
       w.begin_array();
       for (const SidePiece& q : pieces) {
         w.begin_object();
-        w.key("curve").integer(q.curve);
-        w.key("reversed").boolean(q.reversed);
+        w.members("curve", q.curve, "reversed", q.reversed);
         write_range(w, q.t0, q.t1);
         w.end_object();
       }
@@ -94,9 +89,7 @@ void write_curve(JsonWriter& w, const BoundaryCurve& c) {
   w.key("uses").begin_array();
   for (const CurveUse& u : c.uses) {
     w.begin_object();
-    w.key("patch").integer(u.patch);
-    w.key("side").integer(u.side);
-    w.key("reversed").boolean(u.reversed);
+    w.members("patch", u.patch, "side", u.side, "reversed", u.reversed);
     if (u.t0 != 0 || u.t1 != 1) write_range(w, u.t0, u.t1);  // a piece of a split side (polar cap)
     w.end_object();
   }
@@ -124,8 +117,7 @@ void write_list(JsonWriter& w, const char* name, const std::vector<T>& items, Fn
 std::string patch_set_to_json(const PatchSet& ps) {
   JsonWriter w(JsonWriter::Numbers::Exact, JsonWriter::Spacing::Compact, "patch JSON");
   w.begin_object();
-  w.key("format").string("subd2nurbs-patches");
-  w.key("version").integer(1);
+  w.members("format", "subd2nurbs-patches", "version", 1);
   w.key("model_size").number(ps.model_size, "model_size");
   w.key("closed").boolean(ps.closed);
   write_list(w, "patches", ps.patches, write_patch);

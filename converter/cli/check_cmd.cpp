@@ -14,11 +14,11 @@
 namespace subd2nurbs::cli {
 
 CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
-  CLI::App* c = app.add_subcommand(
-      "check",
+  CLI::App* c = add_cage_command(
+      app, "check",
       "Measure the conversion's patches against the exact limit surface: deviation, gaps and "
-      "normal jumps per edge with the class each edge should have, curvature");
-  c->add_option("MESH", o.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
+      "normal jumps per edge with the class each edge should have, curvature",
+      o.mesh);
   c->add_option("--level", o.level,
                 "Pin the refinement levels beyond the minimum (as convert --level; default: the "
                 "levels convert's default tolerance chooses)")

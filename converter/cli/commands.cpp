@@ -29,6 +29,7 @@
 #include "io/obj_writer.h"
 #include "io/atomic_file.h"
 #include "io/input_file.h"
+#include "io/json_writer.h"
 #include "converter/pipeline/conversion.h"
 
 #ifndef SUBD2NURBS_VERSION
@@ -118,61 +119,56 @@ void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
 
 // --- info as JSON ----------------------------------------------------------------------------
 
-std::string json_histogram(const std::map<int, int>& histogram) {
-  std::string s = "{";
-  for (const auto& [key, count] : histogram)
-    s += (s.size() > 1 ? ", " : "") + json_string(std::to_string(key)) + ": " + std::to_string(count);
-  return s + "}";
+void write_histogram(JsonWriter& w, const std::map<int, int>& histogram) {
+  w.begin_object();
+  for (const auto& [key, count] : histogram) w.member(std::to_string(key), count);
+  w.end_object();
 }
 
 void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
   const SubdivOptions& o = loaded.level.options;
-  auto flag = [](bool b) { return b ? "true" : "false"; };
-  out << "{\n"
-      << "  \"file\": " << json_string(loaded.cage.path) << ",\n"
-      << "  \"vertices\": " << s.vertices << ",\n"
-      << "  \"faces\": " << s.faces << ",\n"
-      << "  \"edges\": " << s.edges << ",\n"
-      << "  \"corners\": " << s.corners << ",\n"
-      << "  \"face_sizes\": " << json_histogram(s.face_sizes) << ",\n"
-      << "  \"valences\": " << json_histogram(s.valences) << ",\n"
-      << "  \"boundary\": {\"edges\": " << s.boundary_edges << ", \"vertices\": "
-      << s.boundary_vertices << ", \"loops\": " << s.boundary_loops
-      << ", \"topological_corners\": " << s.topological_corners << "},\n"
-      << "  \"creases\": {\"infinite_edges\": " << s.infinite_crease_edges
-      << ", \"semi_sharp_edges\": " << s.semi_sharp_crease_edges
-      << ", \"corner_vertices\": " << s.corner_vertices << "},\n"
-      << "  \"holes\": " << s.holes << ",\n"
-      << "  \"extraordinary_vertices\": " << s.extraordinary_vertices << ",\n"
-      << "  \"unused_vertices\": " << s.unused_vertices << ",\n"
-      << "  \"components\": " << s.components << ",\n"
-      << "  \"euler_characteristic\": " << s.euler_characteristic << ",\n"
-      << "  \"closed\": " << flag(s.closed) << ",\n"
-      << "  \"bounds\": {\"min\": " << json_point(s.bounds.min) << ", \"max\": "
-      << json_point(s.bounds.max) << ", \"diagonal\": " << json_number(s.bounds.diagonal)
-      << "},\n"
-      << "  \"options\": {\"boundary\": " << json_string(to_string(o.boundary))
-      << ", \"crease_method\": " << json_string(to_string(o.crease_method))
-      << ", \"triangles\": " << json_string(to_string(o.triangles)) << "},\n";
+  JsonWriter w(JsonWriter::Numbers::Report, JsonWriter::Spacing::Spaced);
+  w.begin_object(2);
+  w.members("file", loaded.cage.path, "vertices", s.vertices, "faces", s.faces, "edges", s.edges, "corners",
+            s.corners);
+  write_histogram(w.key("face_sizes"), s.face_sizes);
+  write_histogram(w.key("valences"), s.valences);
+  w.key("boundary").begin_object();
+  w.members("edges", s.boundary_edges, "vertices", s.boundary_vertices, "loops", s.boundary_loops,
+            "topological_corners", s.topological_corners);
+  w.end_object().key("creases").begin_object();
+  w.members("infinite_edges", s.infinite_crease_edges, "semi_sharp_edges", s.semi_sharp_crease_edges,
+            "corner_vertices", s.corner_vertices);
+  w.end_object();
+  w.members("holes", s.holes, "extraordinary_vertices", s.extraordinary_vertices, "unused_vertices",
+            s.unused_vertices, "components", s.components, "euler_characteristic", s.euler_characteristic,
+            "closed", s.closed);
+  w.key("bounds").begin_object();
+  w.key("min").point(s.bounds.min).key("max").point(s.bounds.max).member("diagonal", s.bounds.diagonal);
+  w.end_object().key("options").begin_object();
+  w.members("boundary", to_string(o.boundary), "crease_method", to_string(o.crease_method), "triangles",
+            to_string(o.triangles));
+  w.end_object().key("quad_recovery");
   const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
-  if (q.applied)
-    out << "  \"quad_recovery\": {\"source_triangles\": " << q.source_triangles << ", \"quads\": " << q.quads
-        << ", \"triangles_kept\": " << q.triangles_kept << ", \"fan_vertices\": " << q.fan_vertices << "},\n";
-  else
-    out << "  \"quad_recovery\": null,\n";
+  if (q.applied) {
+    w.begin_object();
+    w.members("source_triangles", q.source_triangles, "quads", q.quads, "triangles_kept", q.triangles_kept,
+              "fan_vertices", q.fan_vertices);
+    w.end_object();
+  } else {
+    w.null();
+  }
   const PolarDetection polar = detect_polar_structures(loaded.level);
-  out << "  \"polar_structures\": [";
-  for (size_t i = 0; i < polar.structures.size(); ++i)
-    out << (i ? ", " : "") << "{\"vertex\": " << polar.structures[i].pole << ", \"valence\": " << polar.structures[i].valence << "}";
-  out << "],\n  \"not_polar\": [";
-  for (size_t i = 0; i < polar.rejected.size(); ++i)
-    out << (i ? ",\n    " : "\n    ") << "{\"vertex\": " << polar.rejected[i].vertex << ", \"valence\": "
-        << polar.rejected[i].valence << ", \"reason\": " << json_string(polar.rejected[i].reason) << "}";
-  out << (polar.rejected.empty() ? "],\n" : "\n  ],\n");
-  out << "  \"warnings\": [";
-  for (size_t i = 0; i < loaded.warnings.size(); ++i)
-    out << (i ? ",\n    " : "\n    ") << json_string(loaded.warnings[i]);
-  out << (loaded.warnings.empty() ? "]\n" : "\n  ]\n") << "}\n";
+  w.key("polar_structures").begin_array();
+  for (const PolarStructure& p : polar.structures)
+    w.begin_object().members("vertex", p.pole, "valence", p.valence).end_object();
+  w.end_array().key("not_polar").begin_array(4, 2);
+  for (const RejectedPole& r : polar.rejected)
+    w.begin_object().members("vertex", r.vertex, "valence", r.valence, "reason", r.reason).end_object();
+  w.end_array().key("warnings").begin_array(4, 2);
+  for (const std::string& warning : loaded.warnings) w.string(warning);
+  w.end_array().end_object();
+  out << w.text() << "\n";
 }
 
 }  // namespace
@@ -208,6 +204,14 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
                          ": give each output its own name");
     seen.emplace_back(option, absolute);
   }
+}
+
+CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::string& description,
+                           std::string& mesh) {
+  CLI::App* command = app.add_subcommand(name, description);
+  command->add_option("MESH", mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
+      ->required();
+  return command;
 }
 
 void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning) {
@@ -315,15 +319,12 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
 
   InfoOptions info;
   CLI::App* info_command =
-      app.add_subcommand("info", "Describe a cage: counts, boundary, creases, warnings");
-  info_command->add_option("MESH", info.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
+      add_cage_command(app, "info", "Describe a cage: counts, boundary, creases, warnings", info.mesh);
   info_command->add_flag("--json", info.json, "Print JSON on stdout instead of text");
 
   RefineOptions refine;
   CLI::App* refine_command =
-      app.add_subcommand("refine", "Refine a cage uniformly and write the result as OBJ");
-  refine_command->add_option("MESH", refine.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
-      ->required();
+      add_cage_command(app, "refine", "Refine a cage uniformly and write the result as OBJ", refine.mesh);
   refine_command->add_option("-l,--levels", refine.levels,
                              "Number of refinement levels (0 .. " + std::to_string(pipeline::kMaxRefineLevels) + ")")
       ->capture_default_str();
@@ -334,11 +335,11 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                     "the output faces (default " + number(pipeline::kDefaultMaxRefineFaces) + ")");
 
   ConvertOptions convert;
-  CLI::App* convert_command = app.add_subcommand(
-      "convert",
+  CLI::App* convert_command = add_cage_command(
+      app, "convert",
       "Convert a cage to bicubic NURBS patches, written as STEP, IGES, BREP or patch JSON "
-      "(by the output's extension), with continuity and deviation measures");
-  convert_command->add_option("MESH", convert.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
+      "(by the output's extension), with continuity and deviation measures",
+      convert.mesh);
   convert_command
       ->add_option("-o,--output", convert.output,
                    "Output file: .step/.stp, .iges/.igs, .brep, or .json (the patches as JSON)")

@@ -51,6 +51,11 @@ LoadedInput load_input(const std::string& path);
 ///        UsageError (an output is the input, or two outputs are the same file)
 void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs);
 
+/// A subcommand that reads a cage: `name` with its description and the required MESH argument
+/// (OBJ, or glTF / GLB: load_input) stored in `mesh`.
+CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::string& description,
+                           std::string& mesh);
+
 /// The --max-faces / --max-memory options of a subcommand.
 struct LimitOptionValues {
   std::optional<double> max_faces;  ///< not given: the default

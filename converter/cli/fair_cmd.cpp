@@ -6,19 +6,20 @@
 
 #include "converter/cli/commands.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/report.h"
 #include "core/fit/fairing.h"
 #include "io/atomic_file.h"
+#include "io/json_writer.h"
 #include "io/obj_writer.h"
 
 namespace subd2nurbs::cli {
 
 CLI::App* add_fair_command(CLI::App& app, FairCommandOptions& o) {
-  CLI::App* c = app.add_subcommand(
-      "fair",
+  CLI::App* c = add_cage_command(
+      app, "fair",
       "Fair a cage: move its free vertices to minimise the thin-plate energy of the limit surface, "
-      "keeping the limit points close to where they were; write the cage as OBJ");
-  c->add_option("MESH", o.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
-      ->required();
+      "keeping the limit points close to where they were; write the cage as OBJ",
+      o.mesh);
   c->add_option("-o,--output", o.output, "Output OBJ file (same topology and tags)")->required();
   c->add_option("--weight", o.weight, "Weight W > 0 of the energy against keeping the limit points (default 1)");
   c->add_option("--keep", o.keep, "Vertices kept fixed (repeatable): boundary, creases (ends of tagged crease "
@@ -52,26 +53,26 @@ void run_fair(const FairCommandOptions& o, std::ostream& err) {
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
   write_obj(o.output, r.positions, level);
 
-  using pipeline::json_number;
-  using pipeline::short_number;
   if (!o.report.empty()) {
-    auto stats = [](const FieldStats& s) {
-      return "{\"max\": " + json_number(s.max) + ", \"mean\": " + json_number(s.mean) + ", \"where\": " +
-             (s.where >= 0 ? std::to_string(s.where) : std::string("null")) + "}";
+    JsonWriter w(JsonWriter::Numbers::Report, JsonWriter::Spacing::Spaced);
+    auto stats = [&](const char* name, const FieldStats& s) {
+      pipeline::write_field_stats(w.key(name).begin_object(), s);
+      w.end_object();
     };
-    std::string keep_list;
-    for (size_t i = 0; i < o.keep.size(); ++i) keep_list += (i ? ", " : "") + pipeline::json_string(o.keep[i]);
-    const std::string text =
-        "{\n  \"format\": \"subd2nurbs-fair\",\n  \"version\": 1,\n  \"input\": " + pipeline::json_string(o.mesh) +
-        ",\n  \"output\": " + pipeline::json_string(o.output) + ",\n  \"weight\": " + json_number(o.weight) +
-        ",\n  \"membrane\": " + json_number(o.membrane) + ",\n  \"levels\": " + std::to_string(o.levels) +
-        ",\n  \"keep\": [" + keep_list + "],\n  \"kept_vertices\": " + std::to_string(r.kept) +
-        ",\n  \"free_vertices\": " + std::to_string(r.free) + ",\n  \"energy_before\": " +
-        json_number(r.energy_before) + ",\n  \"energy_after\": " + json_number(r.energy_after) +
-        ",\n  \"limit_moved\": " + stats(r.residual) + ",\n  \"cage_moved\": " + stats(r.displacement) +
-        ",\n  \"solve_ms\": " + json_number(ms) + "\n}\n";
-    write_file_atomically(o.report, [&](std::ostream& out) { out << text; });
+    w.begin_object(2);
+    w.members("format", "subd2nurbs-fair", "version", 1, "input", o.mesh, "output", o.output, "weight", o.weight,
+              "membrane", o.membrane, "levels", o.levels);
+    w.key("keep").begin_array();
+    for (const std::string& k : o.keep) w.string(k);
+    w.end_array();
+    w.members("kept_vertices", r.kept, "free_vertices", r.free, "energy_before", r.energy_before, "energy_after",
+              r.energy_after);
+    stats("limit_moved", r.residual);
+    stats("cage_moved", r.displacement);
+    w.member("solve_ms", ms).end_object();
+    write_file_atomically(o.report, [&](std::ostream& out) { out << w.text() << "\n"; });
   }
+  using pipeline::short_number;
   if (!o.quiet)
     err << "subd2nurbs: wrote " << o.output << ": energy " << short_number(r.energy_before) << " -> "
         << short_number(r.energy_after) << "; limit points moved max " << short_number(r.residual.max)

@@ -15,13 +15,12 @@
 
 namespace subd2nurbs::cli {
 
-
 CLI::App* add_limit_command(CLI::App& app, LimitOptions& options) {
-  CLI::App* c = app.add_subcommand(
-      "limit",
+  CLI::App* c = add_cage_command(
+      app, "limit",
       "Evaluate the exact limit surface: reads query lines \"f u v\" (quad f) or \"f s u v\" "
-      "(sub-face s of n-gon f) and prints \"Px Py Pz Nx Ny Nz Dux Duy Duz Dvx Dvy Dvz\" per query");
-  c->add_option("MESH", options.mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")->required();
+      "(sub-face s of n-gon f) and prints \"Px Py Pz Nx Ny Nz Dux Duy Duz Dvx Dvy Dvz\" per query",
+      options.mesh);
   c->add_option("QUERIES", options.queries, "File of query lines (default: standard input)");
   return c;
 }

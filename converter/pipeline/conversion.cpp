@@ -3,6 +3,7 @@
 #include "core/eval/nurbs_eval.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -101,16 +102,51 @@ std::vector<std::string> warning_texts(const ConversionResult& result) {
   return texts;
 }
 
-FitMode fit_mode(const std::string& name) {
-  if (name == "approximate") return FitMode::Approximate;
-  if (name == "interpolate") return FitMode::Interpolate;
-  throw SettingsError("fit", "must be approximate or interpolate");
+namespace {
+
+// The settings given by name: each value's name is its to_string; the rule lists them in order.
+constexpr std::array kBoundaryRules{BoundaryRule::None, BoundaryRule::EdgeOnly, BoundaryRule::EdgeAndCorner};
+constexpr std::array kCreaseMethods{CreaseMethod::Uniform, CreaseMethod::Chaikin};
+constexpr std::array kTriangleRules{TriangleRule::Catmark, TriangleRule::Smooth};
+constexpr std::array kFitModes{FitMode::Approximate, FitMode::Interpolate};
+constexpr std::array kFaceModes{FaceMode::Packed, FaceMode::PerQuad};
+constexpr std::array kPreviewColors{PreviewColor::Deviation, PreviewColor::Curvature, PreviewColor::Zebra};
+
+template <class E, size_t N>
+std::vector<std::string> names_of(const std::array<E, N>& values) {
+  std::vector<std::string> names;
+  for (const E v : values) names.emplace_back(to_string(v));
+  return names;
 }
 
-FaceMode face_mode(const std::string& name) {
-  if (name == "packed") return FaceMode::Packed;
-  if (name == "per-quad") return FaceMode::PerQuad;
-  throw SettingsError("faces", "must be packed or per-quad");
+/// The value named `name`; else SettingsError(setting, "must be a, b or c").
+template <class E, size_t N>
+E named(const char* setting, const std::array<E, N>& values, const std::string& name) {
+  for (const E v : values)
+    if (name == to_string(v)) return v;
+  const std::vector<std::string> names = names_of(values);
+  std::string rule = "must be " + names[0];
+  for (size_t i = 1; i < N; ++i) rule += (i + 1 < N ? ", " : " or ") + names[i];
+  throw SettingsError(setting, rule);
+}
+
+}  // namespace
+
+BoundaryRule boundary_rule(const std::string& name) { return named("boundary", kBoundaryRules, name); }
+CreaseMethod crease_method(const std::string& name) { return named("crease_method", kCreaseMethods, name); }
+TriangleRule triangle_rule(const std::string& name) { return named("triangles", kTriangleRules, name); }
+FitMode fit_mode(const std::string& name) { return named("fit", kFitModes, name); }
+FaceMode face_mode(const std::string& name) { return named("faces", kFaceModes, name); }
+PreviewColor preview_color(const std::string& name) { return named("preview", kPreviewColors, name); }
+
+std::vector<std::string> setting_names(const std::string& setting) {
+  if (setting == "boundary") return names_of(kBoundaryRules);
+  if (setting == "crease_method") return names_of(kCreaseMethods);
+  if (setting == "triangles") return names_of(kTriangleRules);
+  if (setting == "fit") return names_of(kFitModes);
+  if (setting == "faces") return names_of(kFaceModes);
+  if (setting == "preview") return names_of(kPreviewColors);
+  throw std::out_of_range("setting_names: '" + setting + "' is not a setting of named values");
 }
 
 void validate_fairing(double weight, const EnergyOptions& energy) {
@@ -139,11 +175,6 @@ occt::StepSchema step_schema(const std::string& name) {
   if (name == "ap214") return occt::StepSchema::AP214;
   if (name == "ap242") return occt::StepSchema::AP242;
   throw SettingsError("schema", "must be ap214 or ap242");
-}
-
-PreviewColor preview_color(const std::string& name) {
-  if (name == "deviation" || name == "curvature" || name == "zebra") return preview_color_from_string(name);
-  throw SettingsError("preview", "must be deviation, curvature or zebra");
 }
 
 const char* to_string(PreviewColor color) {

@@ -238,6 +238,19 @@ void validate_fairing(double weight, const EnergyOptions& energy);
 /// The vertices a fairing keeps, by name: boundary, creases, tagged. \throw SettingsError ("keep")
 KeepSet keep_set(const std::vector<std::string>& names);
 
+/// The cage's subdivision options (core/mesh/mesh_input.h) by their names (to_string), for every
+/// front end that takes them by name (the Python module's Cage and arrays, the workbench's Cage
+/// properties; OBJ files give them as OpenSubdiv tags, io/obj_reader.h).
+/// "none", "edge-only" or "edge-and-corner". \throw SettingsError ("boundary")
+BoundaryRule boundary_rule(const std::string& name);
+/// "uniform" or "chaikin". \throw SettingsError ("crease_method")
+CreaseMethod crease_method(const std::string& name);
+/// "catmark" or "smooth". \throw SettingsError ("triangles")
+TriangleRule triangle_rule(const std::string& name);
+/// The names a setting of named values accepts, in the order its rule lists them: "boundary",
+/// "crease_method", "triangles", "fit", "faces", "preview". \throw std::out_of_range for others
+std::vector<std::string> setting_names(const std::string& setting);
+
 /// Polar structures as the command line's --polar names them: "on" (polar caps, true) or "off"
 /// (Catmull-Clark). \throw SettingsError ("polar")
 bool polar_mode(const std::string& name);

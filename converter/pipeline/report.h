@@ -7,6 +7,7 @@
 #include <string>
 
 #include "converter/pipeline/conversion.h"
+#include "io/json_writer.h"
 
 namespace subd2nurbs::pipeline {
 
@@ -16,5 +17,9 @@ std::string report_json(const ConversionResult& result);
 
 /// `check --json`: the quality report of result.quality (which must be set), ending in a newline.
 std::string quality_report_json(const ConversionResult& result);
+
+/// The members "max", "mean" and "where" (the vertex, or null) of a field's size, as the
+/// report's "fit" and the fair report (`subd2nurbs fair --report`) give them.
+void write_field_stats(JsonWriter& w, const FieldStats& stats);
 
 }  // namespace subd2nurbs::pipeline

@@ -13,16 +13,31 @@ import subd2nurbs
 
 ICONS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "Resources", "icons")
 
-BOUNDARY = ["edge-and-corner", "edge-only", "none"]
-CREASE_METHOD = ["uniform", "chaikin"]
-TRIANGLES = ["catmark", "smooth"]
-POLAR = ["Polar caps", "Catmull-Clark"]
-#: Which surface the cage stands for: its own limit (which misses its vertices) or the limit of
-#: the cage solved to pass through them (subd2nurbs.convert(fit="interpolate")).
-FIT = ["Approximate", "Interpolate"]
-#: Faces of the NURBS object: each regular region of quads as one B-spline face (the default,
-#: as `subd2nurbs convert --faces packed`), or one face per coarse quad.
-FACES = ["Packed", "PerQuad"]
+
+def _default_first(option, default):
+    """The converter's names of a cage option (subd2nurbs.CAGE_OPTIONS), the default first (a new
+    enumeration property starts at its first choice)."""
+    return [default] + [n for n in subd2nurbs.CAGE_OPTIONS[option] if n != default]
+
+
+#: The Cage object's subdivision options: the converter's names, which its rules check.
+BOUNDARY = _default_first("boundary", "edge-and-corner")
+CREASE_METHOD = _default_first("crease_method", "uniform")
+TRIANGLES = _default_first("triangles", "catmark")
+#: The NURBS object's choices (names for people) and the converter's name of each: polar
+#: structures as polar caps or Catmull-Clark (subd2nurbs.convert(polar="on"/"off")); the surface
+#: the cage stands for, its own limit (which misses its vertices) or the limit of the cage solved
+#: to pass through them (fit="interpolate"); faces, each regular region of quads as one B-spline
+#: face (the default, as `subd2nurbs convert --faces packed`) or one face per coarse quad. A
+#: value outside a table goes to the converter as it is, whose rule refuses it.
+CONVERTER_NAMES = {
+    "polar": {"Polar caps": "on", "Catmull-Clark": "off"},
+    "fit": {"Approximate": "approximate", "Interpolate": "interpolate"},
+    "faces": {"Packed": "packed", "PerQuad": "per-quad"},
+}
+POLAR = list(CONVERTER_NAMES["polar"])
+FIT = list(CONVERTER_NAMES["fit"])
+FACES = list(CONVERTER_NAMES["faces"])
 OUTPUT = ["Solid", "Shell"]
 
 
@@ -69,15 +84,36 @@ class _Stateless:
         return None
 
 
-class CageFeature(_Stateless):
+class _Feature(_Stateless):
+    """A document object's proxy: setup() adds its properties, again when a document is read
+    back (properties added since it was saved); restored_state() resets what it keeps."""
+
+    #: (property, group, tooltip) of the link to the object this one is made from, the first
+    #: property in the editor; None: no such link.
+    SOURCE = None
+
+    def __init__(self, obj):
+        self.onDocumentRestored(obj)
+
+    def onDocumentRestored(self, obj):
+        obj.Proxy = self
+        self.restored_state()
+        if self.SOURCE:
+            name, group, doc = self.SOURCE
+            _add(obj, "App::PropertyLink", name, group, doc)
+        self.setup(obj)
+
+    @staticmethod
+    def setup(obj):
+        """Adds the object's other properties (those it has are kept)."""
+        raise NotImplementedError
+
+
+class CageFeature(_Feature):
     """Proxy of a Cage object: the cage's arrays as properties (coordinates in double
     precision), its shape the cage's edges."""
 
     TYPE = "Subd2Nurbs::Cage"
-
-    def __init__(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
 
     @staticmethod
     def setup(obj):
@@ -137,8 +173,9 @@ class CageFeature(_Stateless):
         cv = list(obj.CreaseVertices)
         creases = [(cv[2 * i], cv[2 * i + 1], s) for i, s in enumerate(obj.CreaseSharpness)]
         corners = list(zip(obj.CornerVertices, obj.CornerSharpness))
-        return subd2nurbs.Cage(v, faces, creases, corners, list(obj.Holes), obj.Boundary, obj.CreaseMethod,
-                               obj.TriangleRule, name=obj.Label)
+        with settings_named_by_property():  # the converter's rules of the options
+            return subd2nurbs.Cage(v, faces, creases, corners, list(obj.Holes), obj.Boundary, obj.CreaseMethod,
+                                   obj.TriangleRule, name=obj.Label)
 
     def execute(self, obj):
         import Part
@@ -155,11 +192,6 @@ class CageFeature(_Stateless):
         placement = obj.Placement
         obj.Shape = Part.Compound(edges)
         obj.Placement = placement
-
-    def onDocumentRestored(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
-
 
 
 def is_cage(obj):
@@ -211,23 +243,18 @@ class _Progress:
 
 #: The property of each converter setting (subd2nurbs.SettingsError.setting) on a NURBS or
 #: ColorMap object: the converter's rules name it so.
-PROPERTY_OF_SETTING = {"level": "Level", "tolerance": "Tolerance", "fit": "Fit", "fair": "FairWeight",
-                       "faces": "Faces", "max_faces": "MaxFaces", "max_memory": "MaxMemoryMiB",
-                       "preview": "Coloring", "preview_samples": "Samples"}
+PROPERTY_OF_SETTING = {"level": "Level", "tolerance": "Tolerance", "polar": "PolarHandling", "fit": "Fit",
+                       "fair": "FairWeight", "faces": "Faces", "max_faces": "MaxFaces", "max_memory": "MaxMemoryMiB",
+                       "preview": "Coloring", "preview_samples": "Samples", "boundary": "Boundary",
+                       "crease_method": "CreaseMethod", "triangles": "TriangleRule"}
 
 
 def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate", fair_weight=0.0, faces="Packed",
                  **options):
     """subd2nurbs.convert with the NURBS object's settings (and further convert options).
     fit: "Approximate" or "Interpolate"; fair_weight != 0 (> 0, with "Interpolate"): a fair fit;
-    faces: "Packed" or "PerQuad". The converter's rules check the values; a SettingsError names
-    the property (PROPERTY_OF_SETTING)."""
-    if faces not in FACES:
-        raise subd2nurbs.SettingsError("Faces must be one of %s" % ", ".join(FACES))
-    if fit not in FIT:
-        raise subd2nurbs.SettingsError("Fit must be one of %s" % ", ".join(FIT))
-    if polar not in POLAR:
-        raise subd2nurbs.SettingsError("PolarHandling must be one of %s" % ", ".join(POLAR))
+    faces: "Packed" or "PerQuad" (CONVERTER_NAMES). The converter's rules check the values; a
+    SettingsError names the property (PROPERTY_OF_SETTING)."""
     if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
         raise subd2nurbs.SettingsError("polar caps are not available in this subd2nurbs build: use Catmull-Clark")
     # Tolerance > 0 chooses the levels; else a nonzero Level pins them (a negative one is
@@ -239,9 +266,8 @@ def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate"
         kwargs = {"level": int(level)}
     else:
         kwargs = {}
-    kwargs["polar"] = polar == "Polar caps"
-    kwargs["fit"] = fit.lower()
-    kwargs["faces"] = "packed" if faces == "Packed" else "per-quad"
+    for setting, value in (("polar", polar), ("fit", fit), ("faces", faces)):
+        kwargs[setting] = CONVERTER_NAMES[setting].get(value, value)
     if fair_weight:
         kwargs["fair"] = float(fair_weight)
     kwargs.update(options)
@@ -268,20 +294,15 @@ def settings_named_by_property():
                                        rule=e.rule) from None
 
 
-class NurbsFeature(_Stateless):
+class NurbsFeature(_Feature):
     """Proxy of a NURBS object: converts its Source (Cage or Mesh::Feature) on recompute."""
 
     TYPE = "Subd2Nurbs::NURBS"
-
-    def __init__(self, obj):
-        obj.Proxy = self
-        self._cache = None
-        self.setup(obj)
+    SOURCE = ("Source", "Conversion", "The Cage or Mesh::Feature to convert")
 
     @staticmethod
     def setup(obj):
         g = "Conversion"
-        _add(obj, "App::PropertyLink", "Source", g, "The Cage or Mesh::Feature to convert")
         _add(obj, "App::PropertyInteger", "Level", g,
              "If > 0: extra refinement levels at every irregular vertex (0 with Tolerance 0: the "
              "default tolerance, 1e-4 of the model size)")
@@ -414,11 +435,6 @@ class NurbsFeature(_Stateless):
         inputs are unchanged; converted again after a reload or a change)."""
         return self.conversion(obj)[1]
 
-    def onDocumentRestored(self, obj):
-        obj.Proxy = self
-        self._cache = None
-        self.setup(obj)
-
     def restored_state(self):
         self._cache = None
 
@@ -426,27 +442,22 @@ class NurbsFeature(_Stateless):
 COLORINGS = ["Curvature", "Deviation", "Zebra"]
 
 
-class ColorMapFeature(_Stateless):
+class ColorMapFeature(_Feature):
     """Proxy of a ColorMap object: the NURBS object's patches tessellated with per-vertex
     colours, exactly as `subd2nurbs convert --preview P.glb --color ...` makes them (mean
     curvature, deviation from the exact limit surface, or zebra stripes), from the NURBS
     object's last conversion (NurbsFeature.conversion)."""
 
     TYPE = "Subd2Nurbs::ColorMap"
+    SOURCE = ("Nurbs", "Color map", "The NURBS object to colour")
 
     def __init__(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
+        super().__init__(obj)
         obj.Samples = 12
-
-    def onDocumentRestored(self, obj):
-        obj.Proxy = self
-        self.setup(obj)
 
     @staticmethod
     def setup(obj):
         g = "Color map"
-        _add(obj, "App::PropertyLink", "Nurbs", g, "The NURBS object to colour")
         _add(obj, "App::PropertyEnumeration", "Coloring", g,
              "Mean curvature (blue negative, red positive), deviation from the exact limit surface "
              "(blue 0 .. red max) or zebra stripes of the normal", choices=COLORINGS)

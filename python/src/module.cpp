@@ -47,6 +47,13 @@ namespace {
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
 
+/// Sets items of `d` from (key, value) pairs: set_items(d, "a", 1, "b", 2.5).
+template <class Value, class... Rest>
+void set_items(py::dict& d, const char* key, const Value& value, const Rest&... rest) {
+  d[key] = value;
+  if constexpr (sizeof...(rest) > 0) set_items(d, rest...);
+}
+
 // --- errors ---------------------------------------------------------------------------------
 
 const char* element_name(ElementKind k) {
@@ -60,10 +67,13 @@ const char* element_name(ElementKind k) {
   return "";
 }
 
-/// Raises subd2nurbs.errors.<name>(message, **attributes).
-void raise(const char* name, const std::string& message, const py::dict& attributes = py::dict()) {
+/// Raises subd2nurbs.errors.<name>(message, **attributes), the attributes as (name, value) pairs.
+template <class... Attributes>
+void raise(const char* name, const std::string& message, const Attributes&... attributes) {
+  py::dict a;
+  if constexpr (sizeof...(attributes) > 0) set_items(a, attributes...);
   py::object cls = py::module_::import("subd2nurbs.errors").attr(name);
-  py::object error = cls(message, **attributes);
+  py::object error = cls(message, **a);
   PyErr_SetObject(cls.ptr(), error.ptr());
 }
 
@@ -71,40 +81,21 @@ void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
   } catch (const InvalidMeshError& e) {
-    py::dict a;
-    a["code"] = to_string(e.code());
-    a["element"] = element_name(e.element());
-    a["index"] = e.index();
-    a["index2"] = e.index2();
-    raise("CageError", e.what(), a);
+    raise("CageError", e.what(), "code", to_string(e.code()), "element", element_name(e.element()), "index",
+          e.index(), "index2", e.index2());
   } catch (const InputError& e) {
-    py::dict a;
-    a["file"] = e.file();
-    a["line"] = e.line();
-    if (e.code()) a["code"] = to_string(*e.code());
-    raise("CageError", e.what(), a);
+    raise("CageError", e.what(), "file", e.file(), "line", e.line(), "code",
+          e.code() ? py::object(py::str(to_string(*e.code()))) : py::object(py::none()));
   } catch (const WriteError& e) {
-    py::dict a;
-    a["file"] = e.file();
-    raise("WriteError", e.what(), a);
+    raise("WriteError", e.what(), "file", e.file());
   } catch (const pipeline::SettingsError& e) {
-    py::dict a;
-    a["setting"] = e.setting();
-    a["rule"] = e.rule();
-    raise("SettingsError", e.what(), a);
+    raise("SettingsError", e.what(), "setting", e.setting(), "rule", e.rule());
   } catch (const FitError& e) {
-    py::dict a;
-    a["vertices"] = e.vertices();
-    raise("FitError", e.what(), a);
+    raise("FitError", e.what(), "vertices", e.vertices());
   } catch (const pipeline::ResourceError& e) {
-    py::dict a;
-    a["code"] = "resource-limit";
-    raise("SettingsError", e.what(), a);
+    raise("SettingsError", e.what(), "code", "resource-limit");
   } catch (const occt::ExportError& e) {
-    py::dict a;
-    a["stage"] = e.stage;
-    a["patch"] = e.patch;
-    raise("ConversionError", e.what(), a);
+    raise("ConversionError", e.what(), "stage", e.stage, "patch", e.patch);
   } catch (const std::bad_alloc&) {
     PyErr_SetString(PyExc_MemoryError, "out of memory");
   } catch (const std::invalid_argument& e) {
@@ -115,11 +106,15 @@ void translate(std::exception_ptr p) {
 
 // --- cages ----------------------------------------------------------------------------------
 
-BoundaryRule boundary_rule(const std::string& s) {
-  if (s == "none") return BoundaryRule::None;
-  if (s == "edge-only") return BoundaryRule::EdgeOnly;
-  if (s == "edge-and-corner") return BoundaryRule::EdgeAndCorner;
-  throw pipeline::SettingsError("boundary", "must be none, edge-only or edge-and-corner, not '" + s + "'");
+/// The options as the package passes them ({boundary, crease_method, triangles}, each optional),
+/// checked by the converter's rules.
+SubdivOptions subdiv_options(const py::dict& options) {
+  SubdivOptions o;
+  auto name = [&](const char* key) { return std::string(py::str(options[key])); };
+  if (options.contains("boundary")) o.boundary = pipeline::boundary_rule(name("boundary"));
+  if (options.contains("crease_method")) o.crease_method = pipeline::crease_method(name("crease_method"));
+  if (options.contains("triangles")) o.triangles = pipeline::triangle_rule(name("triangles"));
+  return o;
 }
 
 /// A cage as the package passes it: (positions Nx3, face_sizes, face_indices,
@@ -139,13 +134,7 @@ MeshInput make_input(const DoubleArray& positions, const IntArray& face_sizes, c
   for (const auto& [a, b, s] : creases) in.creases.push_back({a, b, s});
   for (const auto& [v, s] : corners) in.corners.push_back({v, s});
   in.holes = holes;
-  if (options.contains("boundary")) in.options.boundary = boundary_rule(py::str(options["boundary"]));
-  if (options.contains("crease_method"))
-    in.options.crease_method = std::string(py::str(options["crease_method"])) == "chaikin" ? CreaseMethod::Chaikin
-                                                                                          : CreaseMethod::Uniform;
-  if (options.contains("triangles"))
-    in.options.triangles = std::string(py::str(options["triangles"])) == "smooth" ? TriangleRule::Smooth
-                                                                                 : TriangleRule::Catmark;
+  in.options = subdiv_options(options);
   return in;
 }
 
@@ -165,19 +154,15 @@ py::array_t<int> int_array(const std::vector<int>& v) {
 
 py::dict cage_dict(const MeshInput& in) {
   py::dict d;
-  d["vertices"] = points_array(std::vector<Point3>(in.positions.begin(), in.positions.end()));
-  d["face_sizes"] = int_array(in.face_sizes);
-  d["face_indices"] = int_array(in.face_indices);
+  set_items(d, "vertices", points_array(std::vector<Point3>(in.positions.begin(), in.positions.end())),
+               "face_sizes", int_array(in.face_sizes), "face_indices", int_array(in.face_indices));
   py::list creases, corners;
   for (const CreaseTag& c : in.creases) creases.append(py::make_tuple(c.v0, c.v1, c.sharpness));
   for (const CornerTag& c : in.corners) corners.append(py::make_tuple(c.vertex, c.sharpness));
-  d["creases"] = creases;
-  d["corners"] = corners;
-  d["holes"] = in.holes;
+  set_items(d, "creases", creases, "corners", corners, "holes", in.holes);
   py::dict o;
-  o["boundary"] = to_string(in.options.boundary);
-  o["crease_method"] = to_string(in.options.crease_method);
-  o["triangles"] = to_string(in.options.triangles);
+  set_items(o, "boundary", to_string(in.options.boundary), "crease_method", to_string(in.options.crease_method),
+               "triangles", to_string(in.options.triangles));
   d["options"] = o;
   return d;
 }
@@ -193,10 +178,8 @@ std::vector<std::string> diagnostics_text(const Diagnostics& diagnostics) {
 
 py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
   py::dict d;
-  d["source_triangles"] = q.source_triangles;
-  d["quads"] = q.quads;
-  d["triangles_kept"] = q.triangles_kept;
-  d["fan_vertices"] = q.fan_vertices;
+  set_items(d, "source_triangles", q.source_triangles, "quads", q.quads, "triangles_kept", q.triangles_kept,
+               "fan_vertices", q.fan_vertices);
   return d;
 }
 
@@ -210,9 +193,8 @@ py::dict read_cage_file(const std::string& path) {
   std::vector<std::string> warnings;
   for (const Diagnostic& diag : cage.diagnostics) warnings.push_back(format_diagnostic(cage, diag));
   for (const Diagnostic& diag : validation) warnings.push_back(format_diagnostic(cage, diag));
-  d["warnings"] = warnings;
-  d["path"] = path;
-  d["quad_recovery"] = cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none());
+  set_items(d, "warnings", warnings, "path", path, "quad_recovery",
+            cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none()));
   return d;
 }
 
@@ -224,12 +206,8 @@ py::tuple recover_quads_from(const DoubleArray& positions, const IntArray& face_
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   const QuadRecoveryResult r = recover_quads(in);
   py::dict counts;
-  counts["source_triangles"] = r.input_triangles;
-  counts["quads"] = r.quads;
-  counts["triangles_kept"] = r.triangles_kept;
-  counts["fan_vertices"] = r.fan_vertices;
-  counts["fan_triangles"] = r.fan_triangles;
-  counts["other_faces"] = r.other_faces;
+  set_items(counts, "source_triangles", r.input_triangles, "quads", r.quads, "triangles_kept", r.triangles_kept,
+                    "fan_vertices", r.fan_vertices, "fan_triangles", r.fan_triangles, "other_faces", r.other_faces);
   return py::make_tuple(cage_dict(r.mesh), counts, r.sources);
 }
 
@@ -254,29 +232,17 @@ py::dict info(const DoubleArray& positions, const IntArray& face_sizes, const In
   const SubdivLevel level = SubdivLevel::from_input(in, &diagnostics);
   const MeshStats s = compute_stats(level, std::vector<Point3>(in.positions.begin(), in.positions.end()));
   py::dict d;
-  d["vertices"] = s.vertices;
-  d["faces"] = s.faces;
-  d["edges"] = s.edges;
-  d["corners"] = s.corners;
-  d["face_sizes"] = s.face_sizes;
-  d["valences"] = s.valences;
-  d["boundary_edges"] = s.boundary_edges;
-  d["boundary_vertices"] = s.boundary_vertices;
-  d["boundary_loops"] = s.boundary_loops;
-  d["infinite_crease_edges"] = s.infinite_crease_edges;
-  d["semi_sharp_crease_edges"] = s.semi_sharp_crease_edges;
-  d["corner_vertices"] = s.corner_vertices;
-  d["topological_corners"] = s.topological_corners;
-  d["holes"] = s.holes;
-  d["extraordinary_vertices"] = s.extraordinary_vertices;
-  d["unused_vertices"] = s.unused_vertices;
-  d["components"] = s.components;
-  d["euler_characteristic"] = s.euler_characteristic;
-  d["closed"] = s.closed;
+  set_items(d, "vertices", s.vertices, "faces", s.faces, "edges", s.edges, "corners", s.corners,
+               "face_sizes", s.face_sizes, "valences", s.valences, "boundary_edges", s.boundary_edges,
+               "boundary_vertices", s.boundary_vertices, "boundary_loops", s.boundary_loops,
+               "infinite_crease_edges", s.infinite_crease_edges,
+               "semi_sharp_crease_edges", s.semi_sharp_crease_edges, "corner_vertices", s.corner_vertices,
+               "topological_corners", s.topological_corners, "holes", s.holes,
+               "extraordinary_vertices", s.extraordinary_vertices, "unused_vertices", s.unused_vertices,
+               "components", s.components, "euler_characteristic", s.euler_characteristic, "closed", s.closed);
   py::dict b;
-  b["min"] = std::vector<double>(s.bounds.min.begin(), s.bounds.min.end());
-  b["max"] = std::vector<double>(s.bounds.max.begin(), s.bounds.max.end());
-  b["diagonal"] = s.bounds.diagonal;
+  set_items(b, "min", std::vector<double>(s.bounds.min.begin(), s.bounds.min.end()),
+               "max", std::vector<double>(s.bounds.max.begin(), s.bounds.max.end()), "diagonal", s.bounds.diagonal);
   d["bounds"] = b;
   d["warnings"] = diagnostics_text(diagnostics);
   return d;
@@ -333,10 +299,7 @@ py::dict patch_dict(const NurbsPatch& p) {
   d["degree_u"] = p.degree_u;
   d["degree_v"] = p.degree_v;
   const py::dict ku = knots_dict(p.knots_u), kv = knots_dict(p.knots_v);
-  d["knots_u"] = ku["knots"];
-  d["mults_u"] = ku["mults"];
-  d["knots_v"] = kv["knots"];
-  d["mults_v"] = kv["mults"];
+  set_items(d, "knots_u", ku["knots"], "mults_u", ku["mults"], "knots_v", kv["knots"], "mults_v", kv["mults"]);
   py::array_t<double> poles({static_cast<py::ssize_t>(p.num_poles_u), static_cast<py::ssize_t>(p.num_poles_v),
                              py::ssize_t{3}});
   auto m = poles.mutable_unchecked<3>();
@@ -388,7 +351,8 @@ Settings make_settings(const py::kwargs& kwargs) {
     else if (name == "tolerance") c.tolerance = v.cast<std::optional<double>>();
     else if (name == "absolute") c.absolute = v.cast<bool>();
     else if (name == "brep") c.build_brep = v.cast<bool>();
-    else if (name == "polar") c.patch.polar = v.cast<bool>();
+    else if (name == "polar")  // True / False, or the command line's "on" / "off"
+      c.patch.polar = py::isinstance<py::str>(v) ? pipeline::polar_mode(v.cast<std::string>()) : v.cast<bool>();
     else if (name == "radial_steps") c.patch.cap.radial_steps = v.cast<int>();
     else if (name == "polar_lambda") c.patch.cap.lambda = v.cast<double>();
     else if (name == "separate_poles") c.patch.separate_poles = v.cast<bool>();
@@ -414,15 +378,11 @@ py::dict preview_dict(const PreviewMesh& mesh, const std::string& color) {
   const auto n = static_cast<py::ssize_t>(mesh.values.size());
   auto rows = [&](const std::vector<float>& v) { return py::array_t<float>({n, static_cast<py::ssize_t>(3)}, v.data()); };
   py::dict pv;
-  pv["positions"] = rows(mesh.positions);
-  pv["normals"] = rows(mesh.normals);
-  pv["colors"] = rows(mesh.colors);
-  pv["values"] = py::array_t<float>(n, mesh.values.data());
+  set_items(pv, "positions", rows(mesh.positions), "normals", rows(mesh.normals), "colors", rows(mesh.colors),
+                "values", py::array_t<float>(n, mesh.values.data()));
   pv["triangles"] = py::array_t<std::uint32_t>({static_cast<py::ssize_t>(mesh.indices.size() / 3), static_cast<py::ssize_t>(3)},
                                               mesh.indices.data());
-  pv["value_min"] = mesh.value_min;
-  pv["value_max"] = mesh.value_max;
-  pv["color"] = color;
+  set_items(pv, "value_min", mesh.value_min, "value_max", mesh.value_max, "color", color);
   return pv;
 }
 
@@ -449,11 +409,9 @@ struct Conversion {
     py::list list;
     for (const pipeline::ConversionDiagnostic& x : result.diagnostics) {
       py::dict e;
-      e["severity"] = pipeline::to_string(x.severity);
-      e["code"] = pipeline::to_string(x.code);
-      e["message"] = x.message;
-      e["element"] = x.element;
-      e["remedy"] = x.remedy.empty() ? py::object(py::none()) : py::object(py::str(x.remedy));
+      set_items(e, "severity", pipeline::to_string(x.severity), "code", pipeline::to_string(x.code),
+                   "message", x.message, "element", x.element,
+                   "remedy", x.remedy.empty() ? py::object(py::none()) : py::object(py::str(x.remedy)));
       list.append(e);
     }
     return list;
@@ -478,11 +436,10 @@ struct Conversion {
         edge[i] = edge_map.FindIndex(c.brep.curve_edges[curve[i]]);
     }
     py::dict m;
-    m["curve"] = int_array(curve);
-    m["claimed"] = int_array(claimed);
-    m["gap"] = py::array_t<double>(static_cast<py::ssize_t>(gap.size()), gap.data());
-    m["normal_angle_deg"] = py::array_t<double>(static_cast<py::ssize_t>(angle.size()), angle.data());
-    m["edge"] = int_array(edge);
+    set_items(m, "curve", int_array(curve), "claimed", int_array(claimed),
+                 "gap", py::array_t<double>(static_cast<py::ssize_t>(gap.size()), gap.data()),
+                 "normal_angle_deg", py::array_t<double>(static_cast<py::ssize_t>(angle.size()), angle.data()),
+                 "edge", int_array(edge));
     return m;
   }
 
@@ -490,15 +447,9 @@ struct Conversion {
     if (!result.has_brep) return py::none();
     const occt::BrepResult& r = result.brep;
     py::dict b;
-    b["valid"] = r.valid;
-    b["is_solid"] = r.is_solid;
-    b["faces"] = r.num_faces;
-    b["edges"] = r.num_edges;
-    b["vertices"] = r.num_vertices;
-    b["solids"] = r.num_solids;
-    b["shells"] = r.num_shells;
-    b["check_message"] = r.check_message;
-    b["tolerance"] = r.tolerance;
+    set_items(b, "valid", r.valid, "is_solid", r.is_solid, "faces", r.num_faces, "edges", r.num_edges,
+                 "vertices", r.num_vertices, "solids", r.num_solids, "shells", r.num_shells,
+                 "check_message", r.check_message, "tolerance", r.tolerance);
     return std::move(b);
   }
 
@@ -577,14 +528,10 @@ py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, con
   limit_rows(level).rows.apply(start, targets);
   const FairResult r = fair(level, start, targets, fo);
   py::dict d;
-  d["vertices"] = points_array(r.positions);
-  d["energy_before"] = r.energy_before;
-  d["energy_after"] = r.energy_after;
-  d["limit_moved_max"] = r.residual.max;
-  d["limit_moved_mean"] = r.residual.mean;
-  d["cage_moved_max"] = r.displacement.max;
-  d["kept"] = r.kept;
-  d["free"] = r.free;
+  set_items(d, "vertices", points_array(r.positions), "energy_before", r.energy_before,
+               "energy_after", r.energy_after, "limit_moved_max", r.residual.max,
+               "limit_moved_mean", r.residual.mean, "cage_moved_max", r.displacement.max, "kept", r.kept,
+               "free", r.free);
   return d;
 }
 
@@ -592,17 +539,9 @@ py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, con
 py::dict brep_summary(const std::string& text) {
   const occt::ShapeSummary s = occt::summarize(occt::read_brep_text(text));
   py::dict d;
-  d["solids"] = s.solids;
-  d["shells"] = s.shells;
-  d["faces"] = s.faces;
-  d["edges"] = s.edges;
-  d["free_edges"] = s.free_edges;
-  d["valid"] = s.valid;
-  d["check_message"] = s.check_message;
-  d["area"] = s.area;
-  d["volume"] = s.volume;
-  d["max_gap"] = s.max_gap;
-  d["max_normal_angle_deg"] = s.max_normal_angle_deg;
+  set_items(d, "solids", s.solids, "shells", s.shells, "faces", s.faces, "edges", s.edges,
+               "free_edges", s.free_edges, "valid", s.valid, "check_message", s.check_message, "area", s.area,
+               "volume", s.volume, "max_gap", s.max_gap, "max_normal_angle_deg", s.max_normal_angle_deg);
   return d;
 }
 
@@ -619,6 +558,8 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.attr("__version__") = SUBD2NURBS_VERSION;
   m.attr("OCC_VERSION") = OCC_VERSION_COMPLETE;
   m.def("read_cage", &read_cage_file, py::arg("path"));
+  m.def("check_options", [](const py::dict& options) { subdiv_options(options); });
+  m.def("setting_names", &pipeline::setting_names);
   m.def("recover_quads", &recover_quads_from);
   m.def("validate", &validate);
   m.def("info", &info);

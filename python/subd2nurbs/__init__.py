@@ -43,7 +43,7 @@ OCC_VERSION = _subd2nurbs.OCC_VERSION
 __all__ = [
     "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "fair",
     "brep_summary", "file_summary",
-    "occt_compatible", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
+    "occt_compatible", "CAGE_OPTIONS", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
 ]
 
@@ -53,9 +53,10 @@ HAS_POLAR = True
 #: Sharpness at or above this is infinitely sharp (OpenSubdiv's convention).
 INFINITE_SHARPNESS = 10.0
 
-_BOUNDARY = ("none", "edge-only", "edge-and-corner")
-_CREASE_METHOD = ("uniform", "chaikin")
-_TRIANGLES = ("catmark", "smooth")
+#: The names each cage option accepts (the converter's, in the order its rule lists them): keys
+#: "boundary", "crease_method", "triangles".
+CAGE_OPTIONS = {option: tuple(_subd2nurbs.setting_names(option))
+                for option in ("boundary", "crease_method", "triangles")}
 
 
 def _is_int(x):
@@ -104,6 +105,8 @@ class Cage:
     holes: faces that produce no surface.
     boundary: "edge-and-corner" (default), "edge-only" or "none".
     crease_method: "uniform" (default) or "chaikin"; triangles: "catmark" (default) or "smooth".
+        Any other name raises SettingsError with the converter's rule ("boundary must be none,
+        edge-only or edge-and-corner"), as every front end words it (CAGE_OPTIONS lists the names).
 
     Raises CageError naming the element ("face 12: vertex index 99 out of range ...").
     Topology (manifold edges and vertices, orientation) is checked by the core when the cage
@@ -193,11 +196,10 @@ class Cage:
                 raise CageError("hole %d: face index %r out of range (the cage has %d faces)"
                                 % (i, h, len(sizes)), element="hole", index=i, code="invalid-tag")
             hole_list.append(int(h))
-        for value, allowed, what in ((boundary, _BOUNDARY, "boundary"),
-                                     (crease_method, _CREASE_METHOD, "crease_method"),
-                                     (triangles, _TRIANGLES, "triangles")):
-            if value not in allowed:
-                raise SettingsError("%s must be one of %s, not %r" % (what, ", ".join(allowed), value))
+        options = {"boundary": boundary, "crease_method": crease_method, "triangles": triangles}
+        for setting, value in options.items():
+            _checked(setting, value, lambda x: isinstance(x, str), "a string", str)
+        _subd2nurbs.check_options(options)  # the converter's rules
 
         self.vertices = v
         self.face_sizes = np.array(sizes, dtype=np.int32)
@@ -205,7 +207,7 @@ class Cage:
         self.creases = crease_list
         self.corners = corner_list
         self.holes = hole_list
-        self.options = {"boundary": boundary, "crease_method": crease_method, "triangles": triangles}
+        self.options = options
         self.name = name
         #: Warnings from reading the file (None for a cage built from arrays: validation
         #: warnings then come from validate() and convert()).
@@ -431,7 +433,8 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
         --tolerance / --absolute. Excludes level. With neither: DEFAULT_TOLERANCE (1e-4), as the
         command line does.
     polar: polar structures (triangle fans around a pole, docs/math.md 3.1) become one singular
-        polar cap each (as --polar on, the default); False: Catmull-Clark everywhere.
+        polar cap each (as --polar on, the default); False: Catmull-Clark everywhere. The command
+        line's names "on" / "off" are taken too (any other string: SettingsError, its rule).
     radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
     separate_poles: poles of valence 3..5 or too close to another get the separating first
         step and become caps too (as --separate-poles; needs polar).
@@ -475,7 +478,7 @@ def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_i
     face_limit, memory = _limits(max_faces, max_memory)
     on_stage = None if progress is None else lambda text, fraction, key: progress(StageText(text, key), fraction)
     settings = _subd2nurbs.Settings(level=level, tolerance=tolerance, absolute=bool(absolute), brep=bool(brep),
-                                    polar=bool(polar), radial_steps=radial_steps, polar_lambda=polar_lambda,
+                                    polar=polar if isinstance(polar, str) else bool(polar), radial_steps=radial_steps, polar_lambda=polar_lambda,
                                     separate_poles=bool(separate_poles), fit=fit, fair=fair, faces=faces,
                                     max_faces=face_limit, max_memory=memory, preview=preview,
                                     preview_samples=preview_samples)

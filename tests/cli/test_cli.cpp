@@ -6,12 +6,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <regex>
 #include <string>
 
 #include "common/gltf_writer.h"
 #include "common/run_command.h"
+#include "converter/pipeline/conversion.h"
 #include "core/refine/refiner.h"
 #include "io/obj_reader.h"
 #include "io/temp_dir.h"
@@ -306,20 +308,67 @@ TEST(CliGltf, EveryCageReadingCommandTakesGltfAndSaysSo) {
             0);
 }
 
-// The --polar and --schema rules are the converter's (pipeline::polar_mode, step_schema): the
-// same words as the Python module's SettingsError.
-TEST(Cli, PolarAndSchemaRulesAreTheConverters) {
+// Each setting's rule is the converter's (pipeline::validate, polar_mode, step_schema, ...): the
+// command line prints the rule the pipeline gives for the same value, after its own option name.
+// Oracle: the pipeline's SettingsError, called directly.
+TEST(Cli, SettingsRulesAreTheConverters) {
+  namespace pl = subd2nurbs::pipeline;
+  auto settings_rule = [](const std::function<void(pl::ConversionSettings&)>& change) {
+    return [change] {
+      pl::ConversionSettings s;
+      change(s);
+      pl::validate(s);
+    };
+  };
+  auto fairing_rule = [](int levels, double membrane) {
+    return [levels, membrane] {
+      subd2nurbs::EnergyOptions energy;
+      energy.levels = levels;
+      energy.membrane = membrane;
+      pl::validate_fairing(1.0, energy);
+    };
+  };
   TempDir dir;
-  const Result polar = run("convert " + quote(sample()) + " -o " + quote(dir.file("a.step")) + " --polar maybe");
-  EXPECT_EQ(polar.exit_code, 1);
-  EXPECT_EQ(polar.err, "subd2nurbs: error: --polar must be on or off\n");
-  const Result refine = run("refine " + quote(sample()) + " -o " + quote(dir.file("a.obj")) + " --polar maybe");
-  EXPECT_EQ(refine.exit_code, 1);
-  EXPECT_EQ(refine.err, "subd2nurbs: error: --polar must be on or off\n");
-  const Result schema = run("convert " + quote(sample()) + " -o " + quote(dir.file("a.step")) + " --schema ap999");
-  EXPECT_EQ(schema.exit_code, 1);
-  EXPECT_EQ(schema.err, "subd2nurbs: error: --schema must be ap214 or ap242\n");
-  EXPECT_FALSE(std::filesystem::exists(dir.file("a.step")));
+  struct Case {
+    std::string command, options, flag;
+    std::function<void()> converter;  // throws the pipeline's SettingsError for the same value
+  };
+  const std::string glb = quote(dir.file("p.glb"));
+  const std::vector<Case> cases = {
+      {"convert", "--polar maybe", "--polar", [] { pl::polar_mode("maybe"); }},
+      {"refine", "--polar maybe", "--polar", [] { pl::polar_mode("maybe"); }},
+      {"convert", "--schema ap999", "--schema", [] { pl::step_schema("ap999"); }},
+      {"convert", "--fit exact", "--fit", [] { pl::fit_mode("exact"); }},
+      {"convert", "--faces all", "--faces", [] { pl::face_mode("all"); }},
+      {"check", "--faces all", "--faces", [] { pl::face_mode("all"); }},
+      {"convert", "--preview " + glb + " --color rainbow", "--color", [] { pl::preview_color("rainbow"); }},
+      {"convert", "--level 13", "--level", settings_rule([](pl::ConversionSettings& s) { s.level = 13; })},
+      {"check", "--level 13", "--level", settings_rule([](pl::ConversionSettings& s) { s.level = 13; })},
+      {"convert", "--radial-steps 3", "--radial-steps",
+       settings_rule([](pl::ConversionSettings& s) { s.patch.cap.radial_steps = 3; })},
+      {"convert", "--lambda 0", "--lambda", settings_rule([](pl::ConversionSettings& s) { s.patch.cap.lambda = 0; })},
+      {"convert", "--fit interpolate --fair=-1", "--fair", settings_rule([](pl::ConversionSettings& s) {
+         s.fit.mode = pl::FitMode::Interpolate;
+         s.fit.fair_weight = -1;
+       })},
+      {"fair", "--keep nothing", "--keep", [] { pl::keep_set({"nothing"}); }},
+      {"fair", "--levels 5", "--levels", fairing_rule(5, 0)},
+      {"fair", "--membrane=-1", "--membrane", fairing_rule(2, -1)},
+  };
+  for (const Case& c : cases) {
+    std::string rule = "(no SettingsError)";
+    try {
+      c.converter();
+    } catch (const pl::SettingsError& e) {
+      rule = e.rule();
+    }
+    const std::string output =
+        c.command == "check" ? "" : " -o " + quote(dir.file(c.command == "convert" ? "a.step" : "a.obj"));
+    const Result r = run(c.command + " " + quote(sample()) + output + " " + c.options);
+    EXPECT_EQ(r.exit_code, 1) << c.command << " " << c.options;
+    EXPECT_EQ(r.err, "subd2nurbs: error: " + c.flag + " " + rule + "\n") << c.command << " " << c.options;
+  }
+  EXPECT_TRUE(dir.entries().empty());  // refused before any output
 }
 
 // --- convert ---------------------------------------------------------------------------------

@@ -182,7 +182,8 @@ class Workbench(unittest.TestCase):
     def test_settings_rules_are_the_converters_in_every_front_end(self):
         """Each setting's rule lives in the converter (issue #15): the CLI (exit 1), the Python
         module (SettingsError.setting / .rule) and the workbench show the same rule text, each
-        after its own name for the setting."""
+        after its own name for the setting. The Python module's error carries the converter's
+        text (raised in C++); the CLI and the workbench are compared with it."""
         path = corpus("catmark_cube")
         cage = subd2nurbs.read_cage(path)
         glb = os.path.join(self.tmp, "p.glb")
@@ -206,8 +207,8 @@ class Workbench(unittest.TestCase):
             ({"fair": 1.0}, ["--fair", "1"], {"FairWeight": 1.0}, "fair", "needs the interpolating fit"),
             ({"fit": "interpolate", "fair": -2.0}, ["--fit", "interpolate", "--fair=-2"],
              {"Fit": "Interpolate", "FairWeight": -2.0}, "fair", fair_rule),
-            ({"fit": "exact"}, ["--fit", "exact"], None, "fit", "must be approximate or interpolate"),
-            ({"faces": "all"}, ["--faces", "all"], None, "faces", "must be packed or per-quad"),
+            ({"fit": "exact"}, ["--fit", "exact"], {"Fit": "exact"}, "fit", "must be approximate or interpolate"),
+            ({"faces": "all"}, ["--faces", "all"], {"Faces": "all"}, "faces", "must be packed or per-quad"),
             ({"max_faces": 0}, ["--max-faces", "0"], {"MaxFaces": -1.0}, "max_faces", "must be a positive number"),
             ({"max_memory": -1}, None, {"MaxMemoryMiB": -1.0}, "max_memory", "must be a positive number"),
             ({"max_memory": "12Q"}, ["--max-memory", "12Q"], None, "max_memory",
@@ -216,6 +217,10 @@ class Workbench(unittest.TestCase):
              {"Samples": 1}, "preview_samples", "must be 2 .. 64"),
             ({"preview": "rainbow"}, ["--preview", glb, "--color", "rainbow"], None, "preview",
              "must be deviation, curvature or zebra"),
+            # Polar mode: the command line's names are the converter's; the workbench maps its
+            # PolarHandling choices onto them, and a value outside its choices meets the rule.
+            ({"polar": "sometimes"}, ["--polar", "sometimes"], {"PolarHandling": "sometimes"}, "polar",
+             "must be on or off"),
         ]
         cli_name = {"polar_lambda": "--lambda", "preview": "--color"}
         nurbs = s2n.make_nurbs(s2n.make_cage(path, doc=self.doc), progress=False)
@@ -226,25 +231,48 @@ class Workbench(unittest.TestCase):
                     subd2nurbs.convert(cage, brep=False, **kwargs)
                 self.assertEqual((e.exception.setting, e.exception.rule), (setting, rule))
                 self.assertEqual(str(e.exception), "%s %s" % (setting, rule))
+                converters = e.exception.rule
                 if options is not None:
                     r = subprocess.run([CLI, "convert", path, "-o", os.path.join(self.tmp, "o.step")] + options,
                                        capture_output=True, text=True)
                     self.assertEqual(r.returncode, 1, r.stderr)
                     flag = cli_name.get(setting, "--" + setting.replace("_", "-"))
-                    self.assertEqual(r.stderr, "subd2nurbs: error: %s %s\n" % (flag, rule))
+                    self.assertEqual(r.stderr, "subd2nurbs: error: %s %s\n" % (flag, converters))
                 if properties is not None:
                     obj = color_map if "Samples" in properties else nurbs
-                    saved = {name: getattr(obj, name) for name in properties}
-                    for name, value in properties.items():
-                        setattr(obj, name, value)
-                    self.doc.recompute()
-                    self.assertFalse(obj.isValid())
-                    shown = features.PROPERTY_OF_SETTING[setting]
-                    self.assertIn("%s %s" % (shown, rule), obj.getStatusString())
-                    for name, value in saved.items():
-                        setattr(obj, name, value)
-                    self.doc.recompute()
-                    self.assertTrue(obj.isValid())
+                    self.assert_property_rule(obj, properties, setting, converters)
+        # The cage's subdivision options: the Python module's Cage and the workbench's Cage
+        # object (its Boundary, CreaseMethod, TriangleRule); the command line reads them from
+        # OBJ tags, in OpenSubdiv's own words (docs/formats.md).
+        cage_object = nurbs.Source
+        for setting, prop in (("boundary", "Boundary"), ("crease_method", "CreaseMethod"),
+                              ("triangles", "TriangleRule")):
+            with self.subTest(setting=setting):
+                self.assertEqual(features.PROPERTY_OF_SETTING[setting], prop)
+                # The workbench offers the converter's names, no others.
+                self.assertEqual(sorted(cage_object.getEnumerationsOfProperty(prop)),
+                                 sorted(subd2nurbs.CAGE_OPTIONS[setting]))
+                with self.assertRaises(subd2nurbs.SettingsError) as e:
+                    subd2nurbs.Cage(cage.vertices, cage.faces, **{setting: "sometimes"})
+                self.assertEqual(e.exception.setting, setting)
+                self.assertEqual(str(e.exception), "%s %s" % (setting, e.exception.rule))
+                # A choice the converter does not know (a document from another version): the
+                # Cage object and the NURBS object made from it fail with the converter's rule.
+                choices = cage_object.getEnumerationsOfProperty(prop)
+                current = getattr(cage_object, prop)
+                setattr(cage_object, prop, choices + ["sometimes"])
+                setattr(cage_object, prop, "sometimes")
+                self.doc.recompute()
+                self.assertFalse(cage_object.isValid())
+                self.assertIn("%s %s" % (prop, e.exception.rule), cage_object.getStatusString())
+                with self.assertRaises(subd2nurbs.SettingsError) as shown:  # the NURBS object's conversion
+                    nurbs.Proxy.result(nurbs)
+                self.assertEqual(str(shown.exception), "%s %s" % (prop, e.exception.rule))
+                setattr(cage_object, prop, choices)
+                setattr(cage_object, prop, current)
+                self.doc.recompute()
+                self.assertTrue(cage_object.isValid())
+                self.assertTrue(nurbs.isValid())
         with self.assertRaises(subd2nurbs.SettingsError) as e:  # before the document is touched
             s2n.make_nurbs(nurbs.Source, level=13, progress=False)
         self.assertEqual(str(e.exception), "Level must be 0 .. 12")
@@ -256,6 +284,26 @@ class Workbench(unittest.TestCase):
             with self.assertRaises(subd2nurbs.SettingsError) as e:
                 subd2nurbs.convert(cage, brep=False, **kwargs)
             self.assertEqual(e.exception.setting, next(iter(kwargs)))
+
+    def assert_property_rule(self, obj, properties, setting, rule):
+        """Sets `properties` on `obj` (an enumeration first given the value as a choice): the
+        recompute fails with the converter's `rule` after the property's name; restored, it
+        succeeds again."""
+        saved = {name: (getattr(obj, name), obj.getEnumerationsOfProperty(name)) for name in properties}
+        for name, value in properties.items():
+            choices = saved[name][1]
+            if choices is not None and value not in choices:
+                setattr(obj, name, choices + [value])
+            setattr(obj, name, value)
+        self.doc.recompute()
+        self.assertFalse(obj.isValid())
+        self.assertIn("%s %s" % (features.PROPERTY_OF_SETTING[setting], rule), obj.getStatusString())
+        for name, (value, choices) in saved.items():
+            if choices is not None:
+                setattr(obj, name, choices)
+            setattr(obj, name, value)
+        self.doc.recompute()
+        self.assertTrue(obj.isValid())
 
     def test_packed_faces_are_the_same_solid(self):
         """Faces = Packed (the default) merges regular regions into one face each: fewer faces,

@@ -524,6 +524,58 @@ class BoundTypes(unittest.TestCase):
             self.assertEqual(cli.stderr, "subd2nurbs: error: --%s %s\n" % (e.exception.setting, e.exception.rule))
             self.assertEqual(os.listdir(d), [])
 
+    def test_cage_options_follow_the_converters_rule_on_every_path(self):
+        """boundary, crease_method and triangles have one rule, the converter's (issue #15): the
+        Cage, the arrays handed to the compiled module (no silent default for an unknown name)
+        and the workbench (tests/freecad) refuse a name with the same SettingsError."""
+        v, f = cube_cage()
+        cage = s2n.Cage(v, f)
+        for setting, documented in (("boundary", "must be none, edge-only or edge-and-corner"),
+                                    ("crease_method", "must be uniform or chaikin"),
+                                    ("triangles", "must be catmark or smooth")):
+            with self.subTest(setting=setting):
+                with self.assertRaises(s2n.SettingsError) as e:
+                    s2n.Cage(v, f, **{setting: "sometimes"})
+                self.assertEqual((e.exception.setting, e.exception.rule), (setting, documented))
+                self.assertEqual(str(e.exception), "%s %s" % (setting, documented))
+                # Every name the rule lists is taken (and kept as given).
+                for name in s2n.CAGE_OPTIONS[setting]:
+                    self.assertEqual(s2n.Cage(v, f, **{setting: name}).options[setting], name)
+                # The compiled module's own entry points: the same error, not the default.
+                args = list(cage._args())
+                args[-1] = dict(cage.options, **{setting: "sometimes"})
+                for entry in (s2n._subd2nurbs.info, s2n._subd2nurbs.validate):
+                    with self.assertRaises(s2n.SettingsError) as direct:
+                        entry(*args)
+                    self.assertEqual((direct.exception.setting, direct.exception.rule), (setting, documented))
+                with self.assertRaises(s2n.SettingsError) as typed:
+                    s2n.Cage(v, f, **{setting: 1})
+                self.assertEqual(typed.exception.setting, setting)
+
+    def test_polar_mode_takes_the_command_lines_names_with_its_rule(self):
+        self.assertTrue(CLI, "SUBD2NURBS_CLI (the subd2nurbs executable) is not set")
+        cage_file = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "samples",
+                                 "capped_cylinder.obj")  # two polar structures
+        cage = s2n.read_cage(cage_file)
+        # "off" is Catmull-Clark (as polar=False), not a truthy string.
+        for name, flag in (("on", True), ("off", False)):
+            by_name = s2n.convert(cage, brep=False, polar=name)
+            by_flag = s2n.convert(cage, brep=False, polar=flag)
+            self.assertEqual({k: x for k, x in by_name.report.items() if not k.endswith("_ms")},
+                             {k: x for k, x in by_flag.report.items() if not k.endswith("_ms")})
+        self.assertEqual(len(s2n.convert(cage, brep=False, polar="on").report["polar"]["caps"]), 2)
+        self.assertEqual(len(s2n.convert(cage, brep=False, polar="off").report["polar"]["caps"]), 0)
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n.convert(cage, brep=False, polar="maybe")
+        self.assertEqual((e.exception.setting, e.exception.rule), ("polar", "must be on or off"))
+        with tempfile.TemporaryDirectory() as d:
+            for command in ("convert", "refine"):
+                out = os.path.join(d, "a.step" if command == "convert" else "a.obj")
+                cli = subprocess.run([CLI, command, cage_file, "-o", out, "--polar", "maybe"],
+                                     capture_output=True, text=True)
+                self.assertEqual(cli.returncode, 1)
+                self.assertEqual(cli.stderr, "subd2nurbs: error: --polar %s\n" % e.exception.rule)
+
     def test_make_preview_is_the_preview_stage_without_a_second_conversion(self):
         cage = s2n.read_cage(corpus("catmark_cube_creases0"))
         r = s2n.convert(cage, level=1)
