@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include "core/patch/quad_frames.h"
+#include "core/util/bicubic.h"
 #include "core/util/constants.h"
 #include "core/util/eigen_point.h"
 #include "core/util/parallel.h"
@@ -31,24 +32,9 @@ NetPoint eval_net(const Point3* net, double u, double v) {
   double bu[4], dbu[4], bv[4], dbv[4];
   bernstein(u, bu, dbu);
   bernstein(v, bv, dbv);
-  // Contract along v first (rows of the net against bv and dbv), then along u.
-  NetPoint r{V3::Zero(), V3::Zero(), V3::Zero()};
-  for (int i = 0; i < 4; ++i) {
-    double row[3] = {0, 0, 0}, drow[3] = {0, 0, 0};
-    for (int j = 0; j < 4; ++j) {
-      const Point3& P = net[i * 4 + j];
-      for (int c = 0; c < 3; ++c) {
-        row[c] += bv[j] * P[c];
-        drow[c] += dbv[j] * P[c];
-      }
-    }
-    for (int c = 0; c < 3; ++c) {
-      r.p[c] += bu[i] * row[c];
-      r.du[c] += dbu[i] * row[c];
-      r.dv[c] += bu[i] * drow[c];
-    }
-  }
-  return r;
+  Point3 p, du, dv;
+  bicubic_first(net, bu, dbu, bv, dbv, p, du, dv);
+  return {to_eigen(p), to_eigen(du), to_eigen(dv)};
 }
 
 // Squared distance from q to the bounding box of a net: a lower bound of its squared distance

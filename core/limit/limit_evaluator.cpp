@@ -12,6 +12,7 @@
 
 #include "core/limit/stam_eigen.h"
 #include "core/mesh/marks.h"
+#include "core/util/bicubic.h"
 #include "core/util/constants.h"
 
 namespace subd2nurbs {
@@ -151,21 +152,7 @@ LimitPoint bspline16_first(const Point3* P, double s, double t) {
   basis(s, Ns, Ds, DDs);
   basis(t, Nt, Dt, DDt);
   LimitPoint d;
-  for (int a = 0; a < 4; ++a) {
-    double rp[3] = {0, 0, 0}, rt[3] = {0, 0, 0};
-    for (int b = 0; b < 4; ++b) {
-      const Point3& q = P[4 * a + b];
-      for (int k = 0; k < 3; ++k) {
-        rp[k] += Nt[b] * q[k];
-        rt[k] += Dt[b] * q[k];
-      }
-    }
-    for (int k = 0; k < 3; ++k) {
-      d.p[k] += Ns[a] * rp[k];
-      d.du[k] += Ds[a] * rp[k];
-      d.dv[k] += Ns[a] * rt[k];
-    }
-  }
+  bicubic_first(P, Ns, Ds, Nt, Dt, d.p, d.du, d.dv);
   return d;
 }
 
