@@ -49,9 +49,4 @@ constexpr int kMaxFanExtraLevels = pipeline::kMaxFanExtraLevels;
 ///        occt::ExportError (OCCT failed, or the B-rep is not valid: nothing is written)
 void run_convert(const ConvertOptions& options, std::ostream& err);
 
-/// JSON text helpers shared by the subcommands (converter/pipeline/text.h).
-using pipeline::json_number;
-using pipeline::json_point;
-using pipeline::json_string;
-
 }  // namespace subd2nurbs::cli
