@@ -159,6 +159,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   };
   const int num_patches = static_cast<int>(ps.patches.size());
   const MeasuredSurfaces measured_surface(b, exported);
+  const double same_surface = tolerances::kSameSurface * ps.model_size;
   constexpr int kBlock = 256;
   std::vector<std::vector<Evaluated>> block(kBlock);
   for (int first = 0; first < num_patches; first += kBlock) {
@@ -181,8 +182,8 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
         d.parametric = norm(sub(d.point, e.L.p));
         // The closest-point distance is at most the same-parameter one; searching for it only
         // pays where the patch is not the limit itself (Construction Q reparametrizes).
-        d.distance = d.parametric > tolerances::kSameSurface * ps.model_size
-                         ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, tolerances::kSameSurface * ps.model_size))
+        d.distance = d.parametric > same_surface
+                         ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface))
                          : d.parametric;
         out.push_back(e);
       }
