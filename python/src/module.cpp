@@ -337,13 +337,13 @@ struct Settings {
   pipeline::ConversionSettings settings;
   std::string preview;      ///< "" for none
   int preview_samples = 16;
-  py::object max_memory = py::none();
 };
 
 Settings make_settings(const py::kwargs& kwargs) {
   Settings s;
   pipeline::ConversionSettings& c = s.settings;
   std::optional<double> max_faces;
+  py::object max_memory = py::none();
   for (const auto& item : kwargs) {
     const std::string name = py::str(item.first);
     const py::handle v = item.second;
@@ -360,17 +360,18 @@ Settings make_settings(const py::kwargs& kwargs) {
     else if (name == "fair") c.fit.fair_weight = v.cast<std::optional<double>>();
     else if (name == "faces") c.faces = pipeline::face_mode(v.cast<std::string>());
     else if (name == "max_faces") max_faces = v.cast<std::optional<double>>();
-    else if (name == "max_memory") s.max_memory = py::reinterpret_borrow<py::object>(v);
+    else if (name == "max_memory") max_memory = py::reinterpret_borrow<py::object>(v);
     else if (name == "preview") s.preview = v.is_none() ? std::string() : v.cast<std::string>();
     else if (name == "preview_samples") s.preview_samples = v.cast<int>();
     else throw py::type_error("Settings: unknown setting '" + name + "'");
   }
   // In the order the rules have always been checked: limits, conversion, preview.
-  c.limits = resource_limits(max_faces, s.max_memory);
+  c.limits = resource_limits(max_faces, max_memory);
   pipeline::validate(c);
-  if (!s.preview.empty()) pipeline::preview_color(s.preview);
+  std::optional<PreviewColor> color;
+  if (!s.preview.empty()) color = pipeline::preview_color(s.preview);
   pipeline::check_samples("preview_samples", s.preview_samples);
-  if (!s.preview.empty()) c.preview = pipeline::PreviewSettings{pipeline::preview_color(s.preview), s.preview_samples};
+  if (color) c.preview = pipeline::PreviewSettings{*color, s.preview_samples};
   return s;
 }
 
