@@ -177,10 +177,6 @@ occt::StepSchema step_schema(const std::string& name) {
   throw SettingsError("schema", "must be ap214 or ap242");
 }
 
-const char* to_string(PreviewColor color) {
-  return color == PreviewColor::Deviation ? "deviation" : color == PreviewColor::Curvature ? "curvature" : "zebra";
-}
-
 void check_samples(const std::string& setting, int samples) {
   if (samples < 2 || samples > 64) throw SettingsError(setting, "must be 2 .. 64");
 }

@@ -259,7 +259,6 @@ occt::StepSchema step_schema(const std::string& name);
 
 /// The preview colouring: "deviation", "curvature" or "zebra". \throw SettingsError ("preview")
 PreviewColor preview_color(const std::string& name);
-const char* to_string(PreviewColor color);  ///< "deviation", "curvature", "zebra"
 /// Samples per patch side of a preview or a quality measure: 2 .. 64. \throw SettingsError (`setting`)
 void check_samples(const std::string& setting, int samples);
 

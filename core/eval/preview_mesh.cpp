@@ -42,11 +42,13 @@ void diverging(double x, float rgb[3]) {  // -1 blue, 0 white, +1 red
 
 }  // namespace
 
-PreviewColor preview_color_from_string(const std::string& name) {
-  if (name == "deviation") return PreviewColor::Deviation;
-  if (name == "curvature") return PreviewColor::Curvature;
-  if (name == "zebra") return PreviewColor::Zebra;
-  throw std::invalid_argument("unknown preview colouring '" + name + "' (deviation, curvature or zebra)");
+const char* to_string(PreviewColor color) {
+  switch (color) {
+    case PreviewColor::Deviation: return "deviation";
+    case PreviewColor::Curvature: return "curvature";
+    case PreviewColor::Zebra: return "zebra";
+  }
+  return "?";
 }
 
 PreviewMesh build_preview(const PatchBuild& b, const LimitEvaluator* limit, PreviewColor color, int n) {

@@ -14,8 +14,8 @@ namespace subd2nurbs {
 
 enum class PreviewColor { Deviation, Curvature, Zebra };
 
-/// "deviation", "curvature", "zebra"; \throw std::invalid_argument for another name.
-PreviewColor preview_color_from_string(const std::string& name);
+/// "deviation", "curvature", "zebra" (the names the front ends accept, pipeline::preview_color).
+const char* to_string(PreviewColor color);
 
 struct PreviewMesh {
   std::vector<float> positions;       ///< xyz per vertex

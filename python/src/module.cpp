@@ -456,7 +456,7 @@ struct Conversion {
 
   py::object preview() const {
     if (!result.preview) return py::none();
-    return preview_dict(*result.preview, pipeline::to_string(result.preview_settings.color));
+    return preview_dict(*result.preview, to_string(result.preview_settings.color));
   }
 
   /// The preview stage on this result's patches (as convert(preview=...) makes it).
