@@ -89,7 +89,10 @@ PolyMesh PolyMesh::build(int num_vertices, const std::vector<int>& face_sizes,
     }
   }
 
-  m.quads_ = nc == 4 * nf;  // sizes are >= 3, so this means every face is a quad
+  // Every face a quad (not only 4 corners per face on average: a triangle and a pentagon
+  // have 8 corners too).
+  m.quads_ = true;
+  for (int f = 0; f < nf && m.quads_; ++f) m.quads_ = face_sizes[f] == 4;
 
   // Outgoing corners per vertex (unordered for now): counting sort.
   m.vertex_offsets_.assign(num_vertices + 1, 0);

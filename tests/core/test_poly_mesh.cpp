@@ -86,6 +86,26 @@ TEST(PolyMesh, NgonAndHighValence) {
   expect_consistent(m);
 }
 
+TEST(PolyMesh, TrianglesAndPentagonsAveragingFourCornersAreNotQuads) {
+  // A triangle and a pentagon glued along one edge: 8 corners on 2 faces, as two quads would
+  // have. Found by fuzz_convert (tests/fuzz/regressions/fuzz_convert/pillows_3_4_5.obj): the
+  // mesh was taken for all quads, its connectivity was wrong and refinement wrote out of bounds.
+  MeshInput in;
+  in.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {1, -1, 0}, {0.5, -1.5, 0}, {0, -1, 0}};
+  in.face_sizes = {3, 5};
+  in.face_indices = {0, 1, 2, 1, 0, 5, 4, 3};
+  const PolyMesh m = validate_and_build(in);
+  EXPECT_FALSE(m.all_quads());
+  EXPECT_EQ(m.num_edges(), 7);
+  EXPECT_EQ(m.face_size(0), 3);
+  EXPECT_EQ(m.corner_face(4), 1);
+  EXPECT_EQ(m.next(2), 0);
+  int boundary_edges = 0;
+  for (int e = 0; e < m.num_edges(); ++e) boundary_edges += m.is_boundary_edge(e);
+  EXPECT_EQ(boundary_edges, 6);
+  expect_consistent(m);
+}
+
 TEST(PolyMesh, UnusedVertexIsAWarning) {
   MeshInput m = cube();
   m.positions.push_back({5, 5, 5});
