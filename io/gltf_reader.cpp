@@ -69,12 +69,6 @@ Matrix local_transform(const tinygltf::Node& node) {
   return multiply(t, multiply(r, s));
 }
 
-/// Node instances (one per path from the scene to a node) a scene may expand to.
-constexpr long kMaxNodeInstances = 100000;
-/// Triangles (and, separately, vertices) all instances together may bring; each is kept
-/// before quad recovery.
-constexpr long kMaxInstancedTriangles = 20000000;
-
 std::string coordinate_text(double x) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%g", x);
@@ -83,7 +77,8 @@ std::string coordinate_text(double x) {
 
 class Reader {
  public:
-  Reader(const std::string& path, const tinygltf::Model& model) : path_(path), model_(model) {}
+  Reader(const std::string& path, const tinygltf::Model& model, const GltfLimits& limits)
+      : path_(path), model_(model), limits_(limits) {}
 
   [[noreturn]] void fail(const std::string& message) const { throw InputError(path_, 0, message); }
 
@@ -211,20 +206,21 @@ class Reader {
       if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES)
         fail(prim_name + ": mode " + std::to_string(prim.mode) + " is not supported (only triangles, mode 4)");
       // Instances multiply triangles: refuse before reading anything.
-      triangles_ += static_cast<long>(std::min<size_t>(triangle_count(prim), kMaxInstancedTriangles));
-      if (triangles_ > kMaxInstancedTriangles)
+      triangles_ += static_cast<long>(std::min(triangle_count(prim), static_cast<size_t>(limits_.instanced_triangles)));
+      if (triangles_ > limits_.instanced_triangles)
         fail(where + ": instancing " + prim_name + " here brings the scene to more than " +
-             std::to_string(kMaxInstancedTriangles) + " triangles (each path from the scene to a node is one "
+             std::to_string(limits_.instanced_triangles) + " triangles (each path from the scene to a node is one "
              "instance of its mesh)");
       const auto it = prim.attributes.find("POSITION");
       if (it == prim.attributes.end()) fail(prim_name + " has no POSITION attribute");
       // Every instance transforms and welds all of the primitive's vertices, used or not.
       if (it->second >= 0 && it->second < static_cast<int>(model_.accessors.size()))
         vertices_ += static_cast<long>(
-            std::min<size_t>(model_.accessors[static_cast<size_t>(it->second)].count, kMaxInstancedTriangles));
-      if (vertices_ > kMaxInstancedTriangles)
+            std::min(model_.accessors[static_cast<size_t>(it->second)].count,
+                     static_cast<size_t>(limits_.instanced_triangles)));
+      if (vertices_ > limits_.instanced_triangles)
         fail(where + ": instancing " + prim_name + " here brings the scene to more than " +
-             std::to_string(kMaxInstancedTriangles) + " vertices (each path from the scene to a node is one "
+             std::to_string(limits_.instanced_triangles) + " vertices (each path from the scene to a node is one "
              "instance of its mesh)");
       const std::vector<std::array<double, 3>> local = positions(it->second, "POSITION of " + prim_name);
       const std::vector<long> idx = indices(prim.indices, local.size(), "indices of " + prim_name);
@@ -269,8 +265,8 @@ class Reader {
       fail("the scene refers to node " + std::to_string(n) + ", which does not exist");
     const std::string where = "node " + std::to_string(n);
     if (depth > 64) fail(where + ": the node hierarchy is deeper than 64 (a cycle?)");
-    if (++instances_ > kMaxNodeInstances)
-      fail(where + ": the scene expands to more than " + std::to_string(kMaxNodeInstances) +
+    if (++instances_ > limits_.node_instances)
+      fail(where + ": the scene expands to more than " + std::to_string(limits_.node_instances) +
            " node instances (a node listed as a child several times is instanced once per path)");
     const tinygltf::Node& node = model_.nodes[static_cast<size_t>(n)];
     const Matrix local = local_transform(node);
@@ -297,6 +293,7 @@ class Reader {
  private:
   std::string path_;
   const tinygltf::Model& model_;
+  GltfLimits limits_;
   MeshInput mesh_;
   std::map<std::array<double, 3>, int> weld_;
   long instances_ = 0;
@@ -345,7 +342,8 @@ LoadedCage read_gltf(const std::string& path) {
                     std::filesystem::path(path).parent_path().string());
 }
 
-LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bool binary, const std::string& base_dir) {
+LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bool binary, const std::string& base_dir,
+                      const GltfLimits& limits) {
   std::string_view bytes = file_bytes;
   if (!binary) {
     using namespace std::string_view_literals;
@@ -377,7 +375,7 @@ LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bo
     throw InputError(path, 0, "not a readable glTF file: " +
                                   (error.empty() ? std::string("unknown error") : printable(error, 400)));
   }
-  Reader reader(path, model);
+  Reader reader(path, model, limits);
   const MeshInput triangles = reader.read();
 
   LoadedCage cage;

@@ -222,6 +222,29 @@ TEST(GltfReader, InstanceExpansionIsCappedNamingTheNode) {
   EXPECT_NE(m.find("node "), std::string::npos) << m;
 }
 
+TEST(GltfReader, SmallerLimitsCapExactlyAtTheirValues) {
+  // Node 0 has n children, each an instance of the one-triangle mesh moved apart: 1 + n node
+  // instances, n triangles, 3n vertices.
+  const auto children = [](int n) {
+    std::string nodes = R"([{"children": [)";
+    for (int i = 1; i <= n; ++i) nodes += (i > 1 ? ", " : "") + std::to_string(i);
+    nodes += "]}";
+    for (int i = 1; i <= n; ++i) nodes += R"(, {"mesh": 0, "translation": [)" + std::to_string(10 * i) + ", 0, 0]}";
+    return nodes + "]";
+  };
+  GltfLimits limits;
+  limits.node_instances = 5;
+  EXPECT_EQ(parse_gltf(triangle_gltf("3", children(4)), "t.gltf", false, ".", limits).input.num_faces(), 4);
+  std::string m = message_of([&] { parse_gltf(triangle_gltf("3", children(5)), "t.gltf", false, ".", limits); });
+  EXPECT_NE(m.find("node 5: the scene expands to more than 5 node instances"), std::string::npos) << m;
+  limits.node_instances = 100;
+  limits.instanced_triangles = 9;  // vertices: 3 per instance
+  EXPECT_EQ(parse_gltf(triangle_gltf("3", children(3)), "t.gltf", false, ".", limits).input.num_faces(), 3);
+  m = message_of([&] { parse_gltf(triangle_gltf("3", children(4)), "t.gltf", false, ".", limits); });
+  EXPECT_NE(m.find("node 4: instancing mesh 0 primitive 0 here brings the scene to more than 9 vertices"),
+            std::string::npos) << m;
+}
+
 TEST(GltfReader, Utf8ByteOrderMarkIsSkippedAndUtf16Refused) {
   EXPECT_EQ(parse_gltf("\xEF\xBB\xBF" + triangle_gltf("3"), "t.gltf", false, ".").input.num_faces(), 1);
   EXPECT_NE(message_of([] { parse_gltf("\xFF\xFE{", "t.gltf", false, "."); }).find("UTF-16"), std::string::npos);
