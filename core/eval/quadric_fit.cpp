@@ -38,12 +38,24 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
       if (k != 6 + fixed) A(r, c++) = full[k];
     rhs(r) = -full[6 + fixed];
   }
-  // Least squares (the normal equations A^T A d = A^T c of docs/math.md 13, solved through the SVD
-  // of A, which is the same solution with the rank visible).
-  Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 8>> svd(A, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sv = svd.singularValues();
-  if (!(sv(7) > 1e-9 * sv(0))) return out;  // rank-deficient: e.g. neighbours on a few lines
-  const Eigen::Matrix<double, 8, 1> d = svd.solve(rhs);
+  // Least squares (the normal equations A^T A d = A^T c of docs/math.md 13), solved by a
+  // column-pivoting QR, A P = Q R. The fit is refused where A is rank-deficient (e.g. all
+  // neighbours on a few lines): smallest / largest singular value <= 1e-9. R has A's singular
+  // values, and with column pivoting its diagonal bounds them (Golub & Van Loan 5.4.2):
+  // s_min >= 3 |r_88| / sqrt(4^8 + 47) >= 0.0117 |r_88| and s_max <= ||R||_F <= 6 |r_11|, so
+  // |r_88| > 1e-6 |r_11| already means s_min / s_max > 1.9e-9. Only below that are the singular
+  // values computed (a Jacobi SVD of the 8 x 8 R, most of the fit's cost when always done).
+  const Eigen::ColPivHouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 8>> qr(A);
+  const Eigen::Matrix<double, 8, 8> R = qr.matrixR().topRows<8>().triangularView<Eigen::Upper>();
+  if (!(std::abs(R(7, 7)) > 1e-6 * std::abs(R(0, 0)))) {
+    const Eigen::JacobiSVD<Eigen::Matrix<double, 8, 8>> svd(R);  // singular values only
+    const auto& sv = svd.singularValues();
+    if (!(sv(7) > 1e-9 * sv(0))) return out;
+  }
+  Eigen::VectorXd qtc = rhs;
+  qtc.applyOnTheLeft(qr.householderQ().adjoint());
+  const Eigen::Matrix<double, 8, 1> y = R.triangularView<Eigen::Upper>().solve(qtc.head<8>());
+  const Eigen::Matrix<double, 8, 1> d = qr.colsPermutation() * y;
   double coef[9];
   for (int k = 0, c = 0; k < 9; ++k) coef[k] = k == 6 + fixed ? 1.0 : d(c++);
   Eigen::Vector3d grad(coef[6], coef[7], coef[8]);

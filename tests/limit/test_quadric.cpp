@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include <Eigen/Dense>
+
 #include "core/eval/quadric_fit.h"
 #include "common/shapes.h"
 #include "limit_test_util.h"
@@ -64,6 +66,36 @@ TEST(QuadricFit, MathChecksSphereSaddleCylinder) {
     lines.push_back({0, 0.1 * i, 0});
   }
   EXPECT_FALSE(fit_quadric({0, 0, 0}, lines, {0, 0, 1}).ok);
+}
+
+TEST(QuadricFit, RefusedExactlyWhereTheSystemIsRankDeficient) {
+  // A saddle's two rings flattened towards the plane z = 0 by a factor e: the fit's system
+  // loses rank as e -> 0 (the columns z^2, yz, zx vanish). The oracle is the definition: the
+  // singular values of the least-squares matrix (built here as docs/math.md 13 writes it),
+  // smallest / largest > 1e-9, against fit_quadric's decision (which skips the SVD where the
+  // pivoted QR's diagonal already bounds the ratio).
+  int refused = 0, fitted = 0;
+  for (int k = 0; k <= 32; ++k) {
+    const double e = std::pow(10.0, -k / 4.0);
+    const std::vector<Point3> nb =
+        ring_points([e](double x, double y) { return e * (x * x - 2 * y * y + 0.3 * x * y) / 2; }, 0.2, 0.5);
+    double rho = 0;
+    for (const Point3& q : nb) rho += q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
+    rho = std::sqrt(rho / nb.size());
+    Eigen::MatrixXd A(nb.size(), 8);  // z's gradient coefficient fixed: the tentative normal is +z
+    for (size_t r = 0; r < nb.size(); ++r) {
+      const double x = nb[r][0] / rho, y = nb[r][1] / rho, z = nb[r][2] / rho;
+      A.row(static_cast<Eigen::Index>(r)) << x * x, y * y, z * z, x * y, y * z, z * x, x, y;
+    }
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(A).singularValues();
+    const double ratio = sv(7) / sv(0);
+    if (ratio > 0.5e-9 && ratio < 2e-9) continue;  // too close to the threshold to call
+    const bool full_rank = ratio > 1e-9;
+    EXPECT_EQ(fit_quadric({0, 0, 0}, nb, {0, 0, 1}).ok, full_rank) << "e = " << e << ", ratio " << ratio;
+    (full_rank ? fitted : refused)++;
+  }
+  EXPECT_GT(fitted, 5);  // the sweep crosses the threshold
+  EXPECT_GT(refused, 5);
 }
 
 TEST(QuadricFit, SecondOrderOnAnAnalyticTorus) {
