@@ -90,6 +90,23 @@ TEST(RefineVsOsd, TrianglesBothRules) {
   }
 }
 
+TEST(RefineVsOsd, TrianglesAndPentagonsAveragingFourCorners) {
+  // A cube with its bottom split into two triangles and a vertex added on the top-back edge
+  // (two pentagons): 28 corners on 7 faces, as if all were quads. Such cages were once taken
+  // for all-quad meshes (PolyMesh::build), with wrong connectivity.
+  MeshInput m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 1, 1}};
+  add_face(m, {0, 3, 2});
+  add_face(m, {0, 2, 1});
+  add_face(m, {4, 5, 6, 8, 7});
+  add_face(m, {0, 1, 5, 4});
+  add_face(m, {1, 2, 6, 5});
+  add_face(m, {2, 3, 7, 8, 6});
+  add_face(m, {3, 0, 4, 7});
+  ASSERT_EQ(m.face_indices.size(), 4 * m.face_sizes.size());
+  expect_matches_osd(m);
+}
+
 TEST(RefineVsOsd, ValenceTwo) {
   expect_matches_osd(cube_with_valence_two_vertex());
 }
