@@ -26,6 +26,18 @@ double angle_deg(const Point3& a, const Point3& b) {
   return std::atan2(norm(c), dot(a, b)) * 180.0 / kPi;
 }
 
+/// The limit's unit normal at p: from the first derivatives (evaluate_point, which skips the
+/// second derivatives and curvature where the face is regular or Stam's), else, where they are
+/// parallel (at an extraordinary vertex), evaluate()'s normal, which has its fallback there.
+Point3 limit_normal(const LimitEvaluator& L, const LimitParam& p) {
+  const LimitPoint q = L.evaluate_point(p.face, p.sub, p.u, p.v);
+  const Point3 n = {q.du[1] * q.dv[2] - q.du[2] * q.dv[1], q.du[2] * q.dv[0] - q.du[0] * q.dv[2],
+                    q.du[0] * q.dv[1] - q.du[1] * q.dv[0]};
+  const double len = norm(n);
+  if (!(len > 0)) return L.evaluate(p.face, p.sub, p.u, p.v).normal;
+  return {n[0] / len, n[1] / len, n[2] / len};
+}
+
 /// Level-a face of a patch.
 int coarse_face(const PatchBuild& b, int patch) { return b.coarse_face.at(static_cast<size_t>(patch)); }
 
@@ -277,8 +289,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
           double pu, pv;
           side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
           pn[w] = unit_normal(measured_surface.at(use.patch, pu, pv, 1));
-          const LimitParam lp = patch_to_limit(b, use.patch, pu, pv);
-          ln[w] = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).normal;
+          ln[w] = limit_normal(limit, patch_to_limit(b, use.patch, pu, pv));
         }
         const double pj = angle_deg(pn[0], pn[1]), lj = angle_deg(ln[0], ln[1]);
         e.limit_normal_jump_deg = std::max(e.limit_normal_jump_deg, lj);
