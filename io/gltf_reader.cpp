@@ -14,6 +14,8 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <new>
+#include <stdexcept>
 #include <string_view>
 #include <vector>
 
@@ -366,10 +368,19 @@ LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bo
   loader.SetFsCallbacks(fs);
   std::string error, warning;
   const auto size = static_cast<unsigned int>(bytes.size());
-  const bool ok =
-      binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
-                                           reinterpret_cast<const unsigned char*>(bytes.data()), size, base_dir)
-             : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), size, base_dir);
+  bool ok = false;
+  try {
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                              reinterpret_cast<const unsigned char*>(bytes.data()), size, base_dir)
+                : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), size, base_dir);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    // tinygltf itself throws on some malformed files (e.g. std::out_of_range for a GLB whose
+    // buffer 0 is empty though a BIN chunk follows, found by fuzz_gltf): the file is bad.
+    error = std::string("the glTF loader failed: ") + e.what();
+    ok = false;
+  }
   if (!ok) {
     while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();
     throw InputError(path, 0, "not a readable glTF file: " +
