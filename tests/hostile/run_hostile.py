@@ -10,7 +10,8 @@ through the Python module, and checks every run:
   keeps its content, no new file appears in the output directory (no temporary left over),
   and a successful run replaces exactly the outputs it was asked for;
 * time and memory are bounded: each run has a wall-clock timeout and an address-space limit
-  (RLIMIT_AS; not under AddressSanitizer, whose shadow memory needs more address space).
+  (RLIMIT_AS; not under AddressSanitizer, whose shadow memory needs more address space; the
+  timeout is 5x longer there).
 
     run_hostile.py --corpus DIR --command info|convert|refine|limit|python|signal
                    [--cli build/subd2nurbs] [--python-path build/python]
@@ -75,6 +76,9 @@ class Runner:
         self.slowest = (0.0, "")
         asan = "asan" in os.environ.get("LD_PRELOAD", "") or os.environ.get("SUBD2NURBS_SANITIZED") == "1"
         self.memory_mb = 0 if asan else args.memory_mb
+        # Instrumented binaries are several times slower (with full malloc stacks, as
+        # scripts/sanitize.sh runs the tests that load OCCT, up to 10x): the bound scales.
+        self.timeout = args.timeout * (5 if asan else 1)
 
     def fail(self, case, why):
         self.failures.append("%s [%s]: %s" % (case["name"], self.args.command, why))
@@ -83,9 +87,9 @@ class Runner:
         t0 = time.monotonic()
         try:
             p = subprocess.run(argv, cwd=cwd, stdin=subprocess.DEVNULL, capture_output=True,
-                               timeout=self.args.timeout, preexec_fn=limit_memory(self.memory_mb))
+                               timeout=self.timeout, preexec_fn=limit_memory(self.memory_mb))
         except subprocess.TimeoutExpired:
-            self.fail(case, "no answer within %d s (blocked or unbounded work)" % self.args.timeout)
+            self.fail(case, "no answer within %d s (blocked or unbounded work)" % self.timeout)
             return None
         dt = time.monotonic() - t0
         self.runs += 1
@@ -308,7 +312,7 @@ class Runner:
                         os.path.join(work, "r.json"), "--quiet"]
                 p = subprocess.Popen(argv, cwd=work, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                      preexec_fn=limit_memory(self.memory_mb))
-                deadline = time.monotonic() + self.args.timeout * 4
+                deadline = time.monotonic() + self.timeout * 4
                 seen = False
                 while time.monotonic() < deadline and p.poll() is None:
                     if any(n.endswith(".tmp") for n in os.listdir(work)):
@@ -317,7 +321,7 @@ class Runner:
                         break
                     time.sleep(0.005)
                 try:
-                    p.wait(timeout=self.args.timeout)
+                    p.wait(timeout=self.timeout)
                 except subprocess.TimeoutExpired:
                     p.kill()
                     self.fail(case, "did not end after the signal")
