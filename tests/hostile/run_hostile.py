@@ -75,6 +75,7 @@ class Runner:
         self.runs = 0
         self.slowest = (0.0, "")
         asan = "asan" in os.environ.get("LD_PRELOAD", "") or os.environ.get("SUBD2NURBS_SANITIZED") == "1"
+        self.asan = asan
         self.memory_mb = 0 if asan else args.memory_mb
         # Instrumented binaries are several times slower (with full malloc stacks, as
         # scripts/sanitize.sh runs the tests that load OCCT, up to 10x): the bound scales.
@@ -165,6 +166,10 @@ class Runner:
         argv += case["args"].get(command, ["-l", "1"] if command == "refine" else [])
         if command == "convert" and "--quiet" not in argv:
             argv.append("--quiet")
+        if command == "convert" and self.asan and "--max-memory" not in argv:
+            # Without the address-space limit the memory guard would follow the machine's
+            # memory; the limit the process would have seen (3/4 of it) is given explicitly.
+            argv += ["--max-memory", "%dM" % (self.args.memory_mb * 3 // 4)]
         p = self.run(argv, work, case)
         if p is None:
             return
