@@ -27,15 +27,17 @@ double angle_deg(const Point3& a, const Point3& b) {
 }
 
 /// The limit's unit normal at p: from the first derivatives (evaluate_point, which skips the
-/// second derivatives and curvature where the face is regular or Stam's), else, where they are
-/// parallel (at an extraordinary vertex), evaluate()'s normal, which has its fallback there.
+/// second derivatives and curvature where the face is regular or Stam's; unit_normal), else,
+/// where they are (nearly) parallel, as at an extraordinary vertex, evaluate()'s normal, which
+/// has its fallback there.
 Point3 limit_normal(const LimitEvaluator& L, const LimitParam& p) {
   const LimitPoint q = L.evaluate_point(p.face, p.sub, p.u, p.v);
-  const Point3 n = {q.du[1] * q.dv[2] - q.du[2] * q.dv[1], q.du[2] * q.dv[0] - q.du[0] * q.dv[2],
-                    q.du[0] * q.dv[1] - q.du[1] * q.dv[0]};
-  const double len = norm(n);
-  if (!(len > 0)) return L.evaluate(p.face, p.sub, p.u, p.v).normal;
-  return {n[0] / len, n[1] / len, n[2] / len};
+  SurfaceDerivs d;
+  d.du = q.du;
+  d.dv = q.dv;
+  const Point3 n = unit_normal(d);
+  if (n[0] != 0 || n[1] != 0 || n[2] != 0) return n;
+  return L.evaluate(p.face, p.sub, p.u, p.v).normal;
 }
 
 /// Level-a face of a patch.
