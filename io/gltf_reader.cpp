@@ -379,7 +379,6 @@ LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bo
     // tinygltf itself throws on some malformed files (e.g. std::out_of_range for a GLB whose
     // buffer 0 is empty though a BIN chunk follows, found by fuzz_gltf): the file is bad.
     error = std::string("the glTF loader failed: ") + e.what();
-    ok = false;
   }
   if (!ok) {
     while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();

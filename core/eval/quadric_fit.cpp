@@ -41,8 +41,9 @@ QuadricFit fit_quadric(const Point3& p0, const std::vector<Point3>& nb, const Po
   // Least squares (the normal equations A^T A d = A^T c of docs/math.md 13), solved by a
   // column-pivoting QR, A P = Q R. The fit is refused where A is rank-deficient (e.g. all
   // neighbours on a few lines): smallest / largest singular value <= 1e-9. R has A's singular
-  // values, and with column pivoting its diagonal bounds them (Golub & Van Loan 5.4.2):
-  // s_min >= 3 |r_88| / sqrt(4^8 + 47) >= 0.0117 |r_88| and s_max <= ||R||_F <= 6 |r_11|, so
+  // values, and with column pivoting its diagonal bounds them (docs/math.md 13):
+  // s_min >= 3 |r_88| / sqrt(4^8 + 47) >= 0.0117 |r_88| (Faddeev, Kublanovskaya and Faddeeva)
+  // and s_max <= ||R||_F <= 6 |r_11| (every |r_ij| <= |r_ii| <= |r_11|), so
   // |r_88| > 1e-6 |r_11| already means s_min / s_max > 1.9e-9. Only below that are the singular
   // values computed (a Jacobi SVD of the 8 x 8 R, most of the fit's cost when always done).
   const Eigen::ColPivHouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, 8>> qr(A);

@@ -1,5 +1,6 @@
 #include "core/mesh/poly_mesh.h"
 
+#include <algorithm>
 #include <string>
 
 namespace subd2nurbs {
@@ -91,8 +92,7 @@ PolyMesh PolyMesh::build(int num_vertices, const std::vector<int>& face_sizes,
 
   // Every face a quad (not only 4 corners per face on average: a triangle and a pentagon
   // have 8 corners too).
-  m.quads_ = true;
-  for (int f = 0; f < nf && m.quads_; ++f) m.quads_ = face_sizes[f] == 4;
+  m.quads_ = std::all_of(face_sizes.begin(), face_sizes.end(), [](int n) { return n == 4; });
 
   // Outgoing corners per vertex (unordered for now): counting sort.
   m.vertex_offsets_.assign(num_vertices + 1, 0);
