@@ -124,11 +124,11 @@ void basis(double x, double N[4], double D[4], double DD[4]) {
   DD[3] = x;
 }
 
+/// The bicubic sum over 16 points P[4a + b] (a along s) from the basis values and derivatives
+/// in s and t.
 template <class Pt>
-Derivs bspline16(const Pt* P, double s, double t) {
-  double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
-  basis(s, Ns, Ds, DDs);
-  basis(t, Nt, Dt, DDt);
+Derivs tensor16(const Pt* P, const double Ns[4], const double Ds[4], const double DDs[4], const double Nt[4],
+                const double Dt[4], const double DDt[4]) {
   Derivs d;
   for (int a = 0; a < 4; ++a)
     for (int b = 0; b < 4; ++b) {
@@ -144,6 +144,66 @@ Derivs bspline16(const Pt* P, double s, double t) {
       }
     }
   return d;
+}
+
+template <class Pt>
+Derivs bspline16(const Pt* P, double s, double t) {
+  double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
+  basis(s, Ns, Ds, DDs);
+  basis(t, Nt, Dt, DDt);
+  return tensor16(P, Ns, Ds, DDs, Nt, Dt, DDt);
+}
+
+/// Basis functions of the semi-sharp cubic scheme on the span [0, 1] of four points
+/// x_-1, x_0, x_1, x_2 whose points x_0 and x_1 carry crease sharpness s0, s1 (0: smooth):
+/// the limit curve is sum N_i(x) x_i. One subdivision step keeps the span half [0, 1/2] or
+/// [1/2, 1] that holds x: new edge points are midpoints; the new point at a vertex of
+/// sharpness s is w x + (1 - w) (x_- + 6 x + x_+) / 8 with w = min(1, s), and its sharpness
+/// drops by 1 (docs/math.md 9.7). Once neither end of the span is sharp, the span is a uniform
+/// cubic B-spline span. With s0 = s1 = 0 this is basis().
+void semi_sharp_basis(double x, double s0, double s1, double N[4], double D[4], double DD[4]) {
+  double M[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};  // window = M * points
+  double scale = 1;                                                          // d(window param)/dx
+  while (s0 > 0 || s1 > 0) {
+    const double w0 = std::min(1.0, std::max(0.0, s0)), w1 = std::min(1.0, std::max(0.0, s1));
+    // The new points as combinations of the window x_-1 .. x_2, at -1/2, 0, 1/2, 1, 3/2.
+    const double rows[5][4] = {{0.5, 0.5, 0, 0},
+                               {(1 - w0) / 8, w0 + (1 - w0) * 0.75, (1 - w0) / 8, 0},
+                               {0, 0.5, 0.5, 0},
+                               {0, (1 - w1) / 8, w1 + (1 - w1) * 0.75, (1 - w1) / 8},
+                               {0, 0, 0.5, 0.5}};
+    const int first = x < 0.5 ? 0 : 1;  // the child window: rows first .. first + 3
+    double C[4][4];
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) {
+        double sum = 0;
+        for (int k = 0; k < 4; ++k) sum += rows[first + r][k] * M[k][c];
+        C[r][c] = sum;
+      }
+    std::copy(&C[0][0], &C[0][0] + 16, &M[0][0]);
+    if (first == 0) {  // the child's x_0 is the vertex x_0 again
+      x = 2 * x;
+      s0 = s0 - 1;
+      s1 = 0;  // the child's x_1 is the new edge point 1/2
+    } else {
+      x = 2 * x - 1;
+      s0 = 0;  // the child's x_0 is the new edge point 1/2, its x_1 the vertex x_1
+      s1 = s1 - 1;
+    }
+    scale *= 2;
+  }
+  double n[4], d[4], dd[4];
+  basis(x, n, d, dd);
+  for (int i = 0; i < 4; ++i) {
+    N[i] = D[i] = DD[i] = 0;
+    for (int r = 0; r < 4; ++r) {
+      N[i] += n[r] * M[r][i];
+      D[i] += d[r] * M[r][i];
+      DD[i] += dd[r] * M[r][i];
+    }
+    D[i] *= scale;
+    DD[i] *= scale * scale;
+  }
 }
 
 /// Position and first derivatives only.
@@ -223,8 +283,10 @@ CornerKind classify_corner(const SubdivLevel& L, int h) {
 struct Grid {
   Point3 P[16];
   bool have[16] = {};
+  int vertex[16] = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};  ///< -1: phantom
   Point3& at(int i, int j) { return P[(i + 1) * 4 + (j + 1)]; }
   bool& has(int i, int j) { return have[(i + 1) * 4 + (j + 1)]; }
+  int& vertex_at(int i, int j) { return vertex[(i + 1) * 4 + (j + 1)]; }
   void set(int i, int j, const Point3& p) { at(i, j) = p; has(i, j) = true; }
 };
 
@@ -239,12 +301,14 @@ void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, cons
     int i, j;
     corner_to_grid(k, a, b, i, j);
     g.set(i, j, P[vertex]);
+    g.vertex_at(i, j) = vertex;
   };
+  // Semi-sharp sides occur only in prepare_semi_sharp's grids: real points across them.
   bool sharp_side[4];
   for (int k = 0; k < 4; ++k) {
     const int h = hk[k];
     put(k, 0, 0, m.corner_vertex(h));
-    sharp_side[k] = L.edge_sharpness[m.corner_edge(h)] != 0.0f;
+    sharp_side[k] = infinite(L.edge_sharpness[m.corner_edge(h)]);
     if (sharp_side[k]) continue;
     const int t = m.twin(h);  // across side k: quad (to, from, x, y)
     put(k, 0, -1, m.to_vertex(m.next(t)));
@@ -288,16 +352,74 @@ void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, cons
 // Per-face evaluation data (cached for base faces)
 
 struct Prepared {
-  LimitMethod method = LimitMethod::Refined;  // Regular, Stam, or Refined (= not prepared)
-  std::array<Point3, 16> grid{};              // Regular: B-spline points, index 4a + b
+  LimitMethod method = LimitMethod::Refined;  // Regular, Stam, SemiSharp, or Refined (= not prepared)
+  std::array<Point3, 16> grid{};              // Regular, SemiSharp: the grid's points, index 4a + b
+  int across = 0;                             // SemiSharp: crease lines crossed along s (0) or t (1)
+  std::array<double, 2> sharpness{};          // SemiSharp: of the lines at 0 and 1 of that parameter
   int corner = 0;                             // Stam: the EV's corner of the face
   std::shared_ptr<const StamEigen> eig;
   Eigen::Matrix<double, Eigen::Dynamic, 3> ring;  // Stam: ring points in sector order
   Eigen::Matrix<double, Eigen::Dynamic, 3> chat;  // V^-1 ring
-  Eigen::Matrix<double, 7, 3> outer;             // Stam: outer points
+  Eigen::Matrix<double, 7, 3> outer = Eigen::Matrix<double, 7, 3>::Zero();  // Stam: outer points
   Point3 limit{};                                 // Stam: limit position of the EV; ring, chat
                                                   // and outer are relative to it
 };
+
+/// A quad whose 4x4 grid is regular (its corners interior, valence 4, untagged, between quads)
+/// and whose tagged edges among the 12 at its corners lie on semi-sharp crease lines of the grid
+/// in one direction, one sharpness along each line's three edges. Subdivision there is the
+/// tensor product of cubic B-spline subdivision along the lines and semi_sharp_basis's curve
+/// scheme across them (docs/math.md 9.7), so the limit is the closed-form product. Anything
+/// else (crossing lines, a sharpness changing along a line, infinitely sharp edges, vertex tags):
+/// method Refined.
+Prepared prepare_semi_sharp(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
+  Prepared out;
+  const PolyMesh& m = L.mesh;
+  CornerKind kind[4];
+  for (int k = 0; k < 4; ++k) {
+    const int v = m.corner_vertex(m.face_begin(f) + k);
+    if (m.is_boundary_vertex(v) || m.vertex_face_count(v) != 4 || L.vertex_sharpness[v] != 0.0f) return out;
+    const int* c = m.vertex_corners(v);
+    for (int i = 0; i < 4; ++i)
+      if (m.face_size(m.corner_face(c[i])) != 4) return out;
+    kind[k] = CornerKind::Regular;
+  }
+  Grid g;
+  gather_grid(L, P, f, kind, g);
+  for (int i = 0; i < 16; ++i)
+    if (g.vertex[i] < 0) return out;  // a phantom: an infinitely sharp side
+  // The sharpness of the three edges of grid line `line` (0 or 1) along s (rows) or t.
+  auto line_sharpness = [&](bool along_s, int line, float& sharpness) {
+    for (int k = -1; k <= 1; ++k) {
+      const int a = along_s ? g.vertex_at(k, line) : g.vertex_at(line, k);
+      const int b = along_s ? g.vertex_at(k + 1, line) : g.vertex_at(line, k + 1);
+      const int e = m.find_edge(a, b);
+      if (e < 0 || infinite(L.edge_sharpness[e])) return false;
+      if (k == -1) sharpness = L.edge_sharpness[e];
+      if (L.edge_sharpness[e] != sharpness) return false;
+    }
+    return true;
+  };
+  float row[2], col[2];
+  for (int l = 0; l < 2; ++l)
+    if (!line_sharpness(true, l, row[l]) || !line_sharpness(false, l, col[l])) return out;
+  const bool rows = row[0] > 0 || row[1] > 0, cols = col[0] > 0 || col[1] > 0;
+  if (rows == cols) return out;  // crossing lines meet at a corner rule
+  out.method = LimitMethod::SemiSharp;
+  std::copy(g.P, g.P + 16, out.grid.begin());
+  out.across = rows ? 1 : 0;
+  out.sharpness = rows ? std::array<double, 2>{row[0], row[1]} : std::array<double, 2>{col[0], col[1]};
+  return out;
+}
+
+/// The bases in s and t of a Regular or SemiSharp face.
+void grid_bases(const Prepared& pr, double s, double t, double Ns[4], double Ds[4], double DDs[4], double Nt[4],
+                double Dt[4], double DDt[4]) {
+  const bool semi_s = pr.method == LimitMethod::SemiSharp && pr.across == 0;
+  const bool semi_t = pr.method == LimitMethod::SemiSharp && pr.across == 1;
+  semi_s ? semi_sharp_basis(s, pr.sharpness[0], pr.sharpness[1], Ns, Ds, DDs) : basis(s, Ns, Ds, DDs);
+  semi_t ? semi_sharp_basis(t, pr.sharpness[0], pr.sharpness[1], Nt, Dt, DDt) : basis(t, Nt, Dt, DDt);
+}
 
 Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
   Prepared out;
@@ -310,7 +432,8 @@ Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
     if (kind[k] == CornerKind::SmoothEV) ev = ev < 0 ? k : 4;
     if (kind[k] == CornerKind::Other) ++bad;
   }
-  if (bad > 0 || ev == 4) return out;
+  if (bad > 0) return prepare_semi_sharp(L, P, f);
+  if (ev == 4) return out;
   Grid g;
   gather_grid(L, P, f, kind, g);
   if (ev < 0) {
@@ -487,6 +610,11 @@ void stam_normal_fallback(const Prepared& pr, LimitSample& out) {
 
 Derivs eval_prepared(const Prepared& pr, double s, double t, bool* singular) {
   if (pr.method == LimitMethod::Regular) return bspline16(pr.grid.data(), s, t);
+  if (pr.method == LimitMethod::SemiSharp) {
+    double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
+    grid_bases(pr, s, t, Ns, Ds, DDs, Nt, Dt, DDt);
+    return tensor16(pr.grid.data(), Ns, Ds, DDs, Nt, Dt, DDt);
+  }
   double a, b;
   corner_frame(pr.corner).apply(s, t, a, b);
   if (a <= 0 && b <= 0) {
@@ -900,6 +1028,13 @@ LimitPoint LimitEvaluator::evaluate_point(int f, int sub, double u, double v) co
     const int c = face_cache_[f];
     if (c >= 0 && cache_[c].prepared.method == LimitMethod::Regular)
       return bspline16_first(cache_[c].prepared.grid.data(), u, v);
+    if (c >= 0 && cache_[c].prepared.method == LimitMethod::SemiSharp) {
+      double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
+      grid_bases(cache_[c].prepared, u, v, Ns, Ds, DDs, Nt, Dt, DDt);
+      LimitPoint d;
+      bicubic_first(cache_[c].prepared.grid.data(), Ns, Ds, Nt, Dt, d.p, d.du, d.dv);
+      return d;
+    }
     if (c >= 0 && cache_[c].prepared.method == LimitMethod::Stam) {
       const Prepared& pr = cache_[c].prepared;
       bool singular = false;

@@ -12,6 +12,9 @@
 //     one): bicubic B-spline of its 16 points, phantom points across sharp sides (docs/math.md 6.2);
 //  2. the face has one interior smooth extraordinary vertex (all-quad 1-ring, no sharp edge)
 //     and its other three corners are regular: Stam's eigenbasis evaluation (stam_eigen.h);
+//  2'. the face's 4x4 grid is regular but crossed by semi-sharp crease lines in one direction,
+//     one sharpness per line: B-spline along the lines times the closed-form semi-sharp curve
+//     scheme across them (docs/math.md 9.7), as OpenSubdiv's single-crease patches;
 //  3. otherwise (boundaries or creases at irregular vertices, darts, semi-sharp tags, n-gons,
 //     two irregular corners): the face's 2-ring is cut out, refined once with refine_once
 //     (identical to OpenSubdiv), and the query continues on the child face that contains it.
@@ -48,7 +51,9 @@ struct LimitPoint {
   Point3 p{}, du{}, dv{};
 };
 
-enum class LimitMethod : unsigned char { Regular, Stam, Refined, Fallback };
+/// How evaluate() found a point: Regular, Stam or SemiSharp in the query's own face (closed form),
+/// Refined after refining towards it, Fallback at the documented corner points.
+enum class LimitMethod : unsigned char { Regular, Stam, Refined, Fallback, SemiSharp };
 
 class LimitEvaluator {
  public:

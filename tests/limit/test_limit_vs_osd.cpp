@@ -109,15 +109,82 @@ TEST(LimitVsOsd, RegularPatchesOfTheCorpusAgreeTo1e9OfTheDiagonal) {
   RecordProperty("compared", std::to_string(total.compared));
   RecordProperty("worst_position_rel", std::to_string(total.worst_p));
   RecordProperty("worst_derivative_rel", std::to_string(total.worst_d));
-  std::printf("compared %ld points: regular %ld, stam %ld, refined %ld, fallback %ld; worst %.3g / %.3g\n",
+  std::printf("compared %ld points: regular %ld, stam %ld, semi-sharp %ld, refined %ld, fallback %ld; worst %.3g / %.3g\n",
               total.compared, total.by_method[LimitMethod::Regular], total.by_method[LimitMethod::Stam],
-              total.by_method[LimitMethod::Refined], total.by_method[LimitMethod::Fallback], total.worst_p,
-              total.worst_d);
+              total.by_method[LimitMethod::SemiSharp], total.by_method[LimitMethod::Refined],
+              total.by_method[LimitMethod::Fallback], total.worst_p, total.worst_d);
   // Every path must have been exercised, or the test proves less than it claims.
   EXPECT_GT(total.compared, 10000);
   EXPECT_GT(total.by_method[LimitMethod::Regular], 1000);
   EXPECT_GT(total.by_method[LimitMethod::Stam], 100);
+  EXPECT_GT(total.by_method[LimitMethod::SemiSharp], 1000);
   EXPECT_GT(total.by_method[LimitMethod::Refined], 1000);
+}
+
+// The closed form at semi-sharp crease lines (limit_evaluator.h case 2') against OpenSubdiv on
+// a wavy 8 x 8 torus of quads crossed by crease lines: one line, two parallel lines (the faces
+// between them have both sides tagged), every sharpness regime (below 1, integer, fractional,
+// just below infinite), both crease methods. The samples crowd towards the lines, where the
+// scheme's pieces are 2^-k wide. Every face next to a line must take the closed form, so a
+// regression to refinement (or a wrong weight) fails here.
+TEST(LimitVsOsd, SemiSharpCreaseLinesInClosedForm) {
+  constexpr int N = 8;
+  const double pi = std::acos(-1.0);
+  MeshInput torus;
+  auto id = [&](int i, int j) { return ((i + N) % N) * N + (j + N) % N; };
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) {
+      const double a = 2 * pi * i / N, b = 2 * pi * j / N;
+      const double r = 1 + 0.1 * std::sin(3 * a + 2 * b);
+      torus.positions.push_back({(3 + r * std::cos(b)) * std::cos(a), (3 + r * std::cos(b)) * std::sin(a),
+                                 r * std::sin(b) + 0.05 * std::cos(5 * a)});
+    }
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j) {
+      torus.face_sizes.push_back(4);
+      for (int v : {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)}) torus.face_indices.push_back(v);
+    }
+  const std::vector<Point3> pos = positions_of(torus);
+  const double diag = diagonal(pos);
+  const double along[] = {0.0, 0.31, 0.5, 0.77, 1.0};
+  const double across[] = {0.0, 1e-3, 0.004, 0.0151, 0.06, 0.24, 0.5, 0.77, 0.97, 1.0};
+  long closed_form = 0;
+  for (CreaseMethod crease_method : {CreaseMethod::Uniform, CreaseMethod::Chaikin})
+    for (double sharpness : {0.4, 1.0, 2.5, 7.9, 9.99})
+      for (int lines : {1, 2}) {
+        MeshInput in = torus;
+        in.options.crease_method = crease_method;
+        // Lines j = 2 (and j = 3) all around the torus in i.
+        for (int l = 0; l < lines; ++l)
+          for (int i = 0; i < N; ++i) in.creases.push_back({id(i, 2 + l), id(i + 1, 2 + l), sharpness});
+        const SubdivLevel level = SubdivLevel::from_input(in);
+        const LimitEvaluator ours(level, pos);
+        const OsdLimitEvaluator osd(in, 10);
+        ASSERT_TRUE(osd.ok());
+        SCOPED_TRACE(std::string(to_string(crease_method)) + " sharpness " + std::to_string(sharpness) +
+                     " lines " + std::to_string(lines));
+        for (int i = 0; i < N; i += 3)
+          for (int j = 0; j < 4 + lines; ++j) {  // rows 0 .. 3 + lines: the lines and their neighbours
+            const int face = i * N + j;           // face (i, j): v runs along j, across the lines
+            for (double u : along)
+              for (double x : across)
+                for (double v : {x, 1 - x}) {
+                  LimitMethod method;
+                  const LimitSample s = ours.evaluate(face, 0, u, v, &method);
+                  const OsdLimitEvaluator::Sample ref = osd.eval(face, u, v);
+                  ASSERT_TRUE(ref.regular_patch);
+                  ASSERT_LT(dist(s.p, ref.p) / diag, 1e-12) << "face " << face << " (" << u << ", " << v << ")";
+                  ASSERT_LT(std::max(dist(s.du, ref.du), dist(s.dv, ref.dv)) / diag, 1e-10)
+                      << "face " << face << " (" << u << ", " << v << ")";
+                  const bool next_to_line = j == 1 || j == 2 || (lines == 2 && j == 3);
+                  if (next_to_line) {
+                    EXPECT_EQ(method, LimitMethod::SemiSharp) << "face " << face;
+                    ++closed_form;
+                  }
+                }
+          }
+      }
+  EXPECT_GT(closed_form, 10000);
 }
 
 TEST(LimitVsOsd, OsdScalesNgonDerivativesByTwo) {
