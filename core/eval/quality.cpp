@@ -291,9 +291,11 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
           double pu, pv;
           side_parameters(use.side, use.reversed ? 1 - s : s, pu, pv);
           pn[w] = unit_normal(measured_surface.at(use.patch, pu, pv, 1));
-          ln[w] = limit_normal(limit, patch_to_limit(b, use.patch, pu, pv));
+          if (crease) ln[w] = limit_normal(limit, patch_to_limit(b, use.patch, pu, pv));
         }
-        const double pj = angle_deg(pn[0], pn[1]), lj = angle_deg(ln[0], ln[1]);
+        // Across an edge that is not infinitely sharp the limit is tangent-plane continuous at
+        // every interior point of the edge (docs/math.md 11.2): its normal jump there is 0.
+        const double pj = angle_deg(pn[0], pn[1]), lj = crease ? angle_deg(ln[0], ln[1]) : 0.0;
         e.limit_normal_jump_deg = std::max(e.limit_normal_jump_deg, lj);
         e.normal_jump_error_deg = std::max(e.normal_jump_error_deg, std::abs(pj - lj));
       }
