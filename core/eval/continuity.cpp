@@ -21,7 +21,7 @@ using V3 = Eigen::Vector3d;
 struct SideFrame {
   V3 p, along, inward, inward2, normal;
 };
-SideFrame side_frame(const NurbsPatch& patch, int side, double t) {
+SideFrame side_frame(const PatchEvaluator& patch, int side, double t) {
   const SideDerivs d = side_derivatives(patch, side, t);
   return {to_eigen(d.p), to_eigen(d.along), to_eigen(d.inward), to_eigen(d.inward2), to_eigen(d.normal)};
 }
@@ -45,10 +45,11 @@ CurveMeasure measure_curve(const PatchSet& ps, int ci, int samples) {
   // A curve of several spans (e.g. coarse edges joined along a packed face) gets `samples`
   // per span.
   const int n = 1 + (samples - 1) * std::max<int>(1, static_cast<int>(c.knots.knots.size()) - 1);
+  const PatchEvaluator pa(ps.patches[A.patch]), pb(ps.patches[B.patch]);
   for (int k = 0; k < n; ++k) {
     const double s = static_cast<double>(k) / (n - 1);
-    const SideFrame fa = side_frame(ps.patches[A.patch], A.side, A.side_parameter(s));
-    const SideFrame fb = side_frame(ps.patches[B.patch], B.side, B.side_parameter(s));
+    const SideFrame fa = side_frame(pa, A.side, A.side_parameter(s));
+    const SideFrame fb = side_frame(pb, B.side, B.side_parameter(s));
     m.gap = std::max(m.gap, (fa.p - fb.p).norm());
     // A singular point (a polar cap's pole, at the end of its seam) has no normal and no
     // cross derivatives to compare.

@@ -172,6 +172,11 @@ void side_parameters(int side, double t, double& u, double& v) {
 }
 
 SideDerivs side_derivatives(const NurbsPatch& patch, int side, double t) {
+  return side_derivatives(PatchEvaluator(patch), side, t);
+}
+
+SideDerivs side_derivatives(const PatchEvaluator& evaluator, int side, double t) {
+  const NurbsPatch& patch = evaluator.patch();
   double u, v;
   side_parameters(side, t, u, v);
   // The unit square's point in the patch's domain ([0, mu] x [0, mv] for a packed face).
@@ -179,7 +184,7 @@ SideDerivs side_derivatives(const NurbsPatch& patch, int side, double t) {
   const double v0 = patch.knots_v.knots.front(), v1 = patch.knots_v.knots.back();
   u = u == 0 ? u0 : u == 1 ? u1 : u0 + u * (u1 - u0);
   v = v == 0 ? v0 : v == 1 ? v1 : v0 + v * (v1 - v0);
-  const SurfaceDerivs d = evaluate(patch, u, v);
+  const SurfaceDerivs d = evaluator.derivs(u, v);
   auto neg = [](const Point3& a) { return Point3{-a[0], -a[1], -a[2]}; };
   SideDerivs f;
   f.p = d.p;

@@ -29,6 +29,7 @@ class PatchEvaluator {
   /// Positions on the tensor grid us x vs (nu, nv <= 8): out[a * nv + b] = point(us[a], vs[b]),
   /// with one basis evaluation per parameter instead of one per point.
   void grid(const double* us, int nu, const double* vs, int nv, Point3* out) const;
+  const NurbsPatch& patch() const { return *patch_; }
 
  private:
   const NurbsPatch* patch_;
@@ -55,6 +56,9 @@ struct SideDerivs {
   Point3 normal{};                            ///< unit normal Xu x Xv
 };
 SideDerivs side_derivatives(const NurbsPatch& patch, int side, double t);
+/// The same with an evaluator of the patch made once for many side points (it flattens the
+/// knot vectors, which for a packed face are long).
+SideDerivs side_derivatives(const PatchEvaluator& patch, int side, double t);
 
 /// Basis functions and their first `nd` derivatives at x for a flat knot vector U and
 /// degree p: ders[k][j] is the k-th derivative of N_{span-p+j}. Returns the span index.

@@ -131,11 +131,11 @@ namespace {
 
 /// Closest point of a patch to x by damped Gauss-Newton from (u, v), v periodic; started a
 /// little away from u = 0, where a cap's Xv vanishes. Returns the distance.
-double distance_to_patch(const NurbsPatch& patch, const V3& x, double u, double v) {
+double distance_to_patch(const PatchEvaluator& patch, const V3& x, double u, double v) {
   u = std::max(u, 0.02);
-  double best = (x - to_eigen(evaluate(patch, u, v).p)).norm(), mu = 1e-3;
+  double best = (x - to_eigen(patch.point(u, v))).norm(), mu = 1e-3;
   for (int it = 0; it < 100 && best > 0; ++it) {
-    const SurfaceDerivs d = evaluate(patch, u, v);
+    const SurfaceDerivs d = patch.derivs(u, v, 1);
     const V3 r = x - to_eigen(d.p), xu = to_eigen(d.du), xv = to_eigen(d.dv);
     Eigen::Matrix2d A;
     A << xu.dot(xu) * (1 + mu), xu.dot(xv), xu.dot(xv), xv.dot(xv) * (1 + mu);
@@ -144,7 +144,7 @@ double distance_to_patch(const NurbsPatch& patch, const V3& x, double u, double 
     if (!step.allFinite()) break;
     const double un = std::clamp(u + step[0], 0.0, 1.0);
     const double vn = v + step[1] - std::floor(v + step[1]);
-    const double dist = (x - to_eigen(evaluate(patch, un, vn).p)).norm();
+    const double dist = (x - to_eigen(patch.point(un, vn))).norm();
     if (dist < best) {
       best = dist;
       u = un;
@@ -182,11 +182,12 @@ double cap_distance_to_bp(const PolarNet& rings0to3, const PolarCap& cap, const 
   double worst = (to_eigen(bp_limit_point(rings0to3)) - to_eigen(cap.centre)).norm();
   const int last = 2 << levels;  // input ring 2 = the cap's boundary
   const double scale = 1.0 / (1 << levels), pre = 1 << cap.radial_steps;
+  const PatchEvaluator evaluator(patch);
   for (int r = 3; r <= last && r + 1 <= p.num_rings(); ++r)
     for (int j = 0; j < p.n; ++j) {
       // Input parameter U = r 2^-levels; the cap's u = 2^s U - 1 where the two coincide.
       const double u = std::clamp((pre * r * scale - 1) / cap.m, 0.0, 1.0);
-      worst = std::max(worst, distance_to_patch(patch, to_eigen(bp_grid_limit(p, r, j)), u, static_cast<double>(j) / p.n));
+      worst = std::max(worst, distance_to_patch(evaluator, to_eigen(bp_grid_limit(p, r, j)), u, static_cast<double>(j) / p.n));
     }
   return worst;
 }
