@@ -115,21 +115,28 @@ SurfaceDerivs PatchEvaluator::derivs(double u, double v, int order) const {
 }
 
 void PatchEvaluator::grid(const double* us, int nu, const double* vs, int nv, Point3* out) const {
-  if (nu < 0 || nu > 8 || nv < 0 || nv > 8) throw std::invalid_argument("PatchEvaluator::grid: at most 8 x 8 points");
+  if (nu < 0 || nv < 0) throw std::invalid_argument("PatchEvaluator::grid: negative size");
   const NurbsPatch& patch = *patch_;
-  double Nu[8][3][4], Nv[8][3][4];
-  int su[8], sv[8];
-  for (int a = 0; a < nu; ++a) su[a] = basis_derivatives(U_, 3, us[a], 0, Nu[a]);
-  for (int b = 0; b < nv; ++b) sv[b] = basis_derivatives(V_, 3, vs[b], 0, Nv[b]);
+  struct Basis {
+    double N[3][4];
+    int span;
+  };
+  // Up to 16 parameters per direction on the stack (the builder's 4 x 4, the report's n x n).
+  Basis stack_u[16], stack_v[16];
+  std::vector<Basis> heap_u(nu > 16 ? nu : 0), heap_v(nv > 16 ? nv : 0);
+  Basis* Nu = nu > 16 ? heap_u.data() : stack_u;
+  Basis* Nv = nv > 16 ? heap_v.data() : stack_v;
+  for (int a = 0; a < nu; ++a) Nu[a].span = basis_derivatives(U_, 3, us[a], 0, Nu[a].N);
+  for (int b = 0; b < nv; ++b) Nv[b].span = basis_derivatives(V_, 3, vs[b], 0, Nv[b].N);
   const bool rational = !patch.weights.empty();
   for (int a = 0; a < nu; ++a)
     for (int b = 0; b < nv; ++b) {
       double S[3] = {0, 0, 0}, W = 0;
       for (int i = 0; i <= 3; ++i)
         for (int j = 0; j <= 3; ++j) {
-          const int pi = su[a] - 3 + i, pj = sv[b] - 3 + j;
+          const int pi = Nu[a].span - 3 + i, pj = Nv[b].span - 3 + j;
           const double w = rational ? patch.weights[static_cast<size_t>(pi) * patch.num_poles_v + pj] : 1.0;
-          const double bw = Nu[a][0][i] * Nv[b][0][j] * w;
+          const double bw = Nu[a].N[0][i] * Nv[b].N[0][j] * w;
           const Point3& P = patch.pole(pi, pj);
           for (int c = 0; c < 3; ++c) S[c] += bw * P[c];
           W += bw;

@@ -26,8 +26,8 @@ class PatchEvaluator {
   SurfaceDerivs derivs(double u, double v, int order = 2) const;
   /// The position alone.
   Point3 point(double u, double v) const { return derivs(u, v, 0).p; }
-  /// Positions on the tensor grid us x vs (nu, nv <= 8): out[a * nv + b] = point(us[a], vs[b]),
-  /// with one basis evaluation per parameter instead of one per point.
+  /// Positions on the tensor grid us x vs: out[a * nv + b] = point(us[a], vs[b]), with one
+  /// basis evaluation per parameter instead of one per point.
   void grid(const double* us, int nu, const double* vs, int nv, Point3* out) const;
   const NurbsPatch& patch() const { return *patch_; }
 

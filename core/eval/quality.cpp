@@ -92,11 +92,69 @@ class MeasuredSurfaces {
     place_parameters(place, s, t, u, v);
     return faces_[static_cast<size_t>(place.patch)].derivs(u, v, order);
   }
+  /// The surface's points at quad patch `pi`'s parameters (x_i, x_j), out[i * n + j], from one
+  /// grid evaluation (one basis evaluation per parameter instead of two per point). A quad's
+  /// cell in an exported face is turned by quarter turns, so the image of the grid is a grid.
+  void points(int pi, const std::vector<double>& x, std::vector<Point3>& out) const {
+    const int n = static_cast<int>(x.size());
+    out.resize(static_cast<size_t>(n) * n);
+    if (!exported_) {
+      faces_[static_cast<size_t>(pi)].grid(x.data(), n, x.data(), n, out.data());
+      return;
+    }
+    const PatchPlace& place = exported_->place[static_cast<size_t>(pi)];
+    const bool turned = (place.rotation & 1) != 0;  // s runs along v, t along u
+    std::vector<double> of_s(static_cast<size_t>(n)), of_t(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      double u, v;
+      place_parameters(place, x[i], x[0], u, v);
+      of_s[i] = turned ? v : u;
+      place_parameters(place, x[0], x[i], u, v);
+      of_t[i] = turned ? u : v;
+    }
+    const PatchEvaluator& face = faces_[static_cast<size_t>(place.patch)];
+    if (!turned) {
+      face.grid(of_s.data(), n, of_t.data(), n, out.data());
+      return;
+    }
+    std::vector<Point3> by_t(out.size());
+    face.grid(of_t.data(), n, of_s.data(), n, by_t.data());  // by_t[j * n + i]: (t_j, s_i)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) out[static_cast<size_t>(i) * n + j] = by_t[static_cast<size_t>(j) * n + i];
+  }
 
  private:
   const PackedSet* exported_;
   std::vector<PatchEvaluator> faces_;
 };
+
+/// The limit at quad patch `pi`'s parameters (x_i, x_j), out[i * n + j], through
+/// LimitEvaluator::evaluate_grid: patch_to_limit turns and scales a quad's parameters, so each
+/// limit parameter follows one of s and t.
+void limit_grid(const PatchBuild& b, const LimitEvaluator& limit, int pi, const std::vector<double>& x,
+                std::vector<LimitSample>& out) {
+  const int n = static_cast<int>(x.size());
+  out.resize(static_cast<size_t>(n) * n);
+  std::vector<LimitParam> of_s(static_cast<size_t>(n)), of_t(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    of_s[i] = patch_to_limit(b, pi, x[i], x[0]);
+    of_t[i] = patch_to_limit(b, pi, x[0], x[i]);
+  }
+  const bool turned = of_s[1].u == of_s[0].u;  // u follows t, v follows s
+  std::vector<double> us(static_cast<size_t>(n)), vs(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    us[i] = turned ? of_t[i].u : of_s[i].u;
+    vs[i] = turned ? of_s[i].v : of_t[i].v;
+  }
+  if (!turned) {
+    limit.evaluate_grid(of_s[0].face, of_s[0].sub, us.data(), n, vs.data(), n, out.data());
+    return;
+  }
+  std::vector<LimitSample> by_t(out.size());
+  limit.evaluate_grid(of_s[0].face, of_s[0].sub, us.data(), n, vs.data(), n, by_t.data());  // [j * n + i]
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) out[static_cast<size_t>(i) * n + j] = by_t[static_cast<size_t>(j) * n + i];
+}
 
 }  // namespace
 
@@ -169,7 +227,9 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   // taken in patch order, so the report does not depend on the threads.
   struct Evaluated {
     DeviationSample d;
-    LimitSample L;
+    Point3 limit_point{};                  // the limit's point at d's parameters
+    double k1 = 0, k2 = 0, mean = 0, gauss = 0;
+    bool curvature = false;                // exact derivatives and finite curvatures
   };
   const int num_patches = static_cast<int>(ps.patches.size());
   const MeasuredSurfaces measured_surface(b, exported);
@@ -184,22 +244,41 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       out.clear();
       const NurbsPatch& patch = ps.patches[pi];
       if (patch.kind == PatchKind::PolarCap) return;
-      for (const std::array<double, 2>& st : quality_sample_parameters(b, pi, n)) {
-        Evaluated e;
+      // quality_sample_parameters starts with the n x n grid x_i = i / (n - 1), (x_i, x_j) at
+      // i * n + j: its points come from one grid evaluation, the others one by one.
+      const std::vector<std::array<double, 2>> params = quality_sample_parameters(b, pi, n);
+      thread_local std::vector<double> x;
+      thread_local std::vector<Point3> grid;
+      thread_local std::vector<LimitSample> limit_samples;
+      x.resize(static_cast<size_t>(n));
+      for (int k = 0; k < n; ++k) x[k] = params[static_cast<size_t>(k)][1];
+      measured_surface.points(pi, x, grid);
+      limit_grid(b, limit, pi, x, limit_samples);
+      out.reserve(params.size());
+      LimitSample other;
+      for (size_t k = 0; k < params.size(); ++k) {
+        const std::array<double, 2>& st = params[k];
+        Evaluated& e = out.emplace_back();
         DeviationSample& d = e.d;
         d.patch = pi;
         d.s = st[0];
         d.t = st[1];
         d.limit = patch_to_limit(b, d.patch, d.s, d.t);
-        d.point = measured_surface.at(pi, d.s, d.t, 0).p;
-        e.L = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
-        d.parametric = norm(sub(d.point, e.L.p));
+        d.point = k < grid.size() ? grid[k] : measured_surface.at(pi, d.s, d.t, 0).p;
+        if (k >= limit_samples.size()) other = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
+        const LimitSample& L = k < limit_samples.size() ? limit_samples[k] : other;
+        e.limit_point = L.p;
+        e.curvature = L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2);
+        e.k1 = L.k1;
+        e.k2 = L.k2;
+        e.mean = L.mean;
+        e.gauss = L.gauss;
+        d.parametric = norm(sub(d.point, L.p));
         // The closest-point distance is at most the same-parameter one; searching for it only
         // pays where the patch is not the limit itself (Construction Q reparametrizes).
         d.distance = d.parametric > same_surface
                          ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface))
                          : d.parametric;
-        out.push_back(e);
       }
     });
     for (int i = 0; i < count; ++i) {
@@ -210,7 +289,6 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       }
       for (const Evaluated& e : block[i]) {
         const DeviationSample& d = e.d;
-        const LimitSample& L = e.L;
         ++q.deviation_samples;
         sum += d.distance;
         psum += d.parametric;
@@ -220,18 +298,18 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
           q.deviation_max = std::max(q.deviation_max, d.distance);
           if (d.distance >= q.deviation_max) q.worst = d;
         }
-        if (L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2)) {
+        if (e.curvature) {
           ++cs.samples;
-          cs.min_k = std::min(cs.min_k, L.k2);
-          cs.max_k = std::max(cs.max_k, L.k1);
-          cs.max_abs_gauss = std::max(cs.max_abs_gauss, std::abs(L.gauss));
-          if (std::abs(L.mean) >= cs.max_abs_mean) {
-            cs.max_abs_mean = std::abs(L.mean);
+          cs.min_k = std::min(cs.min_k, e.k2);
+          cs.max_k = std::max(cs.max_k, e.k1);
+          cs.max_abs_gauss = std::max(cs.max_abs_gauss, std::abs(e.gauss));
+          if (std::abs(e.mean) >= cs.max_abs_mean) {
+            cs.max_abs_mean = std::abs(e.mean);
             cs.where_max_abs_mean = d;
-            cs.where_max_abs_mean.point = L.p;
+            cs.where_max_abs_mean.point = e.limit_point;
           }
-          hsum += std::abs(L.mean);
-          h2sum += L.mean * L.mean;
+          hsum += std::abs(e.mean);
+          h2sum += e.mean * e.mean;
         }
       }
     }

@@ -412,13 +412,19 @@ Prepared prepare_semi_sharp(const SubdivLevel& L, const std::vector<Point3>& P, 
   return out;
 }
 
+/// The basis in s (axis 0) or t (axis 1) of a Regular or SemiSharp face.
+void axis_basis(const Prepared& pr, int axis, double x, double N[4], double D[4], double DD[4]) {
+  if (pr.method == LimitMethod::SemiSharp && pr.across == axis)
+    semi_sharp_basis(x, pr.sharpness[0], pr.sharpness[1], N, D, DD);
+  else
+    basis(x, N, D, DD);
+}
+
 /// The bases in s and t of a Regular or SemiSharp face.
 void grid_bases(const Prepared& pr, double s, double t, double Ns[4], double Ds[4], double DDs[4], double Nt[4],
                 double Dt[4], double DDt[4]) {
-  const bool semi_s = pr.method == LimitMethod::SemiSharp && pr.across == 0;
-  const bool semi_t = pr.method == LimitMethod::SemiSharp && pr.across == 1;
-  semi_s ? semi_sharp_basis(s, pr.sharpness[0], pr.sharpness[1], Ns, Ds, DDs) : basis(s, Ns, Ds, DDs);
-  semi_t ? semi_sharp_basis(t, pr.sharpness[0], pr.sharpness[1], Nt, Dt, DDt) : basis(t, Nt, Dt, DDt);
+  axis_basis(pr, 0, s, Ns, Ds, DDs);
+  axis_basis(pr, 1, t, Nt, Dt, DDt);
 }
 
 Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
@@ -1047,6 +1053,53 @@ LimitPoint LimitEvaluator::evaluate_point(int f, int sub, double u, double v) co
   }
   const LimitSample s = evaluate(f, sub, u, v);
   return LimitPoint{s.p, s.du, s.dv};
+}
+
+void LimitEvaluator::evaluate_grid(int f, int sub, const double* us, int nu, const double* vs, int nv,
+                                   LimitSample* out) const {
+  bool inside = true;
+  for (int a = 0; a < nu; ++a) inside = inside && us[a] >= 0 && us[a] <= 1;
+  for (int b = 0; b < nv; ++b) inside = inside && vs[b] >= 0 && vs[b] <= 1;
+  const int c = f >= 0 && f < static_cast<int>(face_cache_.size()) ? face_cache_[f] : -1;
+  const bool closed_form = c >= 0 && sub == 0 && inside && cache_[c].children.empty() &&
+                           (cache_[c].prepared.method == LimitMethod::Regular ||
+                            cache_[c].prepared.method == LimitMethod::SemiSharp);
+  if (!closed_form) {
+    for (int a = 0; a < nu; ++a)
+      for (int b = 0; b < nv; ++b) out[a * nv + b] = evaluate(f, sub, us[a], vs[b]);
+    return;
+  }
+  // The bicubic sum contracted along s once per us[a] (rows R_k = sum_i N_s^(k)_i P_i.), then
+  // along t per point.
+  const Prepared& pr = cache_[c].prepared;
+  thread_local std::vector<std::array<double, 12>> tb;  // per vs[b]: N, D, DD in t
+  tb.resize(static_cast<size_t>(nv));
+  for (int b = 0; b < nv; ++b) axis_basis(pr, 1, vs[b], &tb[b][0], &tb[b][4], &tb[b][8]);
+  for (int a = 0; a < nu; ++a) {
+    double N[3][4];
+    axis_basis(pr, 0, us[a], N[0], N[1], N[2]);
+    Point3 R[3][4] = {};
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) axpy(R[k][j], N[k][i], pr.grid[4 * i + j]);
+    for (int b = 0; b < nv; ++b) {
+      const double* Nt = &tb[b][0];
+      const double* Dt = &tb[b][4];
+      const double* DDt = &tb[b][8];
+      Derivs d;
+      for (int j = 0; j < 4; ++j) {
+        axpy(d.p, Nt[j], R[0][j]);
+        axpy(d.ds, Nt[j], R[1][j]);
+        axpy(d.dt, Dt[j], R[0][j]);
+        axpy(d.dss, Nt[j], R[2][j]);
+        axpy(d.dst, Dt[j], R[1][j]);
+        axpy(d.dtt, DDt[j], R[0][j]);
+      }
+      LimitSample& o = out[a * nv + b];
+      o = to_ptex(d, Affine{});
+      finish_sample(o);
+    }
+  }
 }
 
 LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMethod* method) const {

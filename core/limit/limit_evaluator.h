@@ -78,6 +78,10 @@ class LimitEvaluator {
   /// The same values of p, du, dv as evaluate(), without second derivatives and curvature
   /// (faster on regular faces).
   LimitPoint evaluate_point(int face, int sub, double u, double v) const;
+  /// evaluate() on the tensor grid us x vs of one (sub-)face: out[a * nv + b] at (us[a], vs[b]),
+  /// the same values up to rounding. On a face of case 1 or 2' the bicubic sum is contracted
+  /// along u once per us[a]; elsewhere the points are evaluated one by one.
+  void evaluate_grid(int face, int sub, const double* us, int nu, const double* vs, int nv, LimitSample* out) const;
 
  private:
   struct FaceCache;

@@ -89,6 +89,41 @@ TEST(LimitDerivatives, MatchCentralDifferencesOnEveryPath) {
   EXPECT_GT(seen[LimitMethod::Refined], 20);
 }
 
+// evaluate_grid against evaluate() at each of its points, on every kind of face: regular,
+// semi-sharp lines (closed form), Stam, refined, n-gon sub-faces, boundaries.
+TEST(LimitDerivatives, GridEvaluationIsPointEvaluation) {
+  const double us[] = {0.0, 0.125, 0.5, 0.9, 1.0}, vs[] = {0.0, 0.3, 0.75, 1.0};
+  for (const char* shape : {"catmark_torus", "catmark_pawn", "catmark_helmet", "catmark_gregory_test6",
+                            "catmark_nonquads", "catmark_single_crease"}) {
+    SCOPED_TRACE(shape);
+    const LoadedCage cage = read_obj(limit_corpus_path(shape));
+    const std::vector<Point3> pos = positions_of(cage.input);
+    const LimitEvaluator limit(SubdivLevel::from_input(cage.input), pos);
+    const double diag = diagonal(pos);
+    const PolyMesh& m = limit.base().mesh;
+    for (int f = 0; f < m.num_faces(); ++f) {
+      if (limit.base().face_hole[f]) continue;
+      for (int k = 0; k < (m.face_size(f) == 4 ? 1 : m.face_size(f)); ++k) {
+        LimitSample grid[5 * 4];
+        limit.evaluate_grid(f, k, us, 5, vs, 4, grid);
+        for (int a = 0; a < 5; ++a)
+          for (int b = 0; b < 4; ++b) {
+            const LimitSample& g = grid[a * 4 + b];
+            const LimitSample s = limit.evaluate(f, k, us[a], vs[b]);
+            ASSERT_LT(norm(sub(g.p, s.p)), 1e-13 * diag) << "face " << f << " sub-face " << k;
+            ASSERT_LT(norm(sub(g.du, s.du)) + norm(sub(g.dv, s.dv)), 1e-12 * diag) << "face " << f;
+            ASSERT_LT(norm(sub(g.duu, s.duu)) + norm(sub(g.duv, s.duv)) + norm(sub(g.dvv, s.dvv)),
+                      1e-11 * diag) << "face " << f;
+            ASSERT_EQ(g.exact_derivatives, s.exact_derivatives);
+            if (std::isfinite(s.mean)) {
+              ASSERT_NEAR(g.mean, s.mean, 1e-9 * (1 + std::abs(s.mean)));
+            }
+          }
+      }
+    }
+  }
+}
+
 TEST(LimitCurvature, SphereLikeSignConvention) {
   // The limit of a cube is convex: with outward normals both principal curvatures are
   // negative everywhere (MATH.md 8.3: a sphere with outward normal has k = -1/R).

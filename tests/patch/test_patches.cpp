@@ -105,6 +105,19 @@ TEST(Patches, PatchEvaluatorIsTheRationalBernsteinForm) {
       EXPECT_EQ(e.duv, d.duv);
     }
   EXPECT_THROW(eval.derivs(2, 0, 3), std::invalid_argument);
+  // The grid evaluation is the same rational sum, point by point, on grids beyond the 16
+  // parameters it keeps on the stack.
+  for (int n : {1, 4, 9, 17, 40}) {
+    std::vector<double> us(n), vs(n + 3);
+    for (int a = 0; a < n; ++a) us[a] = 1 + 2.0 * a / std::max(1, n - 1);
+    for (int b = 0; b < n + 3; ++b) vs[b] = -1 + 3.0 * b / (n + 2);
+    std::vector<Point3> grid(us.size() * vs.size());
+    eval.grid(us.data(), n, vs.data(), n + 3, grid.data());
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n + 3; ++b)
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(grid[a * (n + 3) + b][c], eval.point(us[a], vs[b])[c], 1e-14) << n << " " << a << " " << b;
+  }
 }
 
 TEST(Patches, StarsAreExactlyG1AtTheExtraordinaryVertex) {
