@@ -206,16 +206,6 @@ void semi_sharp_basis(double x, double s0, double s1, double N[4], double D[4], 
   }
 }
 
-/// Position and first derivatives only.
-LimitPoint bspline16_first(const Point3* P, double s, double t) {
-  double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
-  basis(s, Ns, Ds, DDs);
-  basis(t, Nt, Dt, DDt);
-  LimitPoint d;
-  bicubic_first(P, Ns, Ds, Nt, Dt, d.p, d.du, d.dv);
-  return d;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Corner classification
 
@@ -410,6 +400,11 @@ Prepared prepare_semi_sharp(const SubdivLevel& L, const std::vector<Point3>& P, 
   out.across = rows ? 1 : 0;
   out.sharpness = rows ? std::array<double, 2>{row[0], row[1]} : std::array<double, 2>{col[0], col[1]};
   return out;
+}
+
+/// A face whose limit is a tensor sum over its 16 grid points (Regular or SemiSharp).
+bool on_grid(const Prepared& pr) {
+  return pr.method == LimitMethod::Regular || pr.method == LimitMethod::SemiSharp;
 }
 
 /// The basis in s (axis 0) or t (axis 1) of a Regular or SemiSharp face.
@@ -615,8 +610,7 @@ void stam_normal_fallback(const Prepared& pr, LimitSample& out) {
 }
 
 Derivs eval_prepared(const Prepared& pr, double s, double t, bool* singular) {
-  if (pr.method == LimitMethod::Regular) return bspline16(pr.grid.data(), s, t);
-  if (pr.method == LimitMethod::SemiSharp) {
+  if (on_grid(pr)) {
     double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
     grid_bases(pr, s, t, Ns, Ds, DDs, Nt, Dt, DDt);
     return tensor16(pr.grid.data(), Ns, Ds, DDs, Nt, Dt, DDt);
@@ -1032,9 +1026,7 @@ LimitPoint LimitEvaluator::evaluate_point(int f, int sub, double u, double v) co
   if (f >= 0 && f < static_cast<int>(face_cache_.size()) && sub == 0 && u >= 0 && u <= 1 && v >= 0 &&
       v <= 1) {
     const int c = face_cache_[f];
-    if (c >= 0 && cache_[c].prepared.method == LimitMethod::Regular)
-      return bspline16_first(cache_[c].prepared.grid.data(), u, v);
-    if (c >= 0 && cache_[c].prepared.method == LimitMethod::SemiSharp) {
+    if (c >= 0 && on_grid(cache_[c].prepared)) {
       double Ns[4], Ds[4], DDs[4], Nt[4], Dt[4], DDt[4];
       grid_bases(cache_[c].prepared, u, v, Ns, Ds, DDs, Nt, Dt, DDt);
       LimitPoint d;
@@ -1061,9 +1053,8 @@ void LimitEvaluator::evaluate_grid(int f, int sub, const double* us, int nu, con
   for (int a = 0; a < nu; ++a) inside = inside && us[a] >= 0 && us[a] <= 1;
   for (int b = 0; b < nv; ++b) inside = inside && vs[b] >= 0 && vs[b] <= 1;
   const int c = f >= 0 && f < static_cast<int>(face_cache_.size()) ? face_cache_[f] : -1;
-  const bool closed_form = c >= 0 && sub == 0 && inside && cache_[c].children.empty() &&
-                           (cache_[c].prepared.method == LimitMethod::Regular ||
-                            cache_[c].prepared.method == LimitMethod::SemiSharp);
+  const bool closed_form =
+      c >= 0 && sub == 0 && inside && cache_[c].children.empty() && on_grid(cache_[c].prepared);
   if (!closed_form) {
     for (int a = 0; a < nu; ++a)
       for (int b = 0; b < nv; ++b) out[a * nv + b] = evaluate(f, sub, us[a], vs[b]);
