@@ -74,6 +74,25 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x, 
   return best;
 }
 
+/// A surface's values at a quad's sample grid (x_i, x_j), out[i * n + j]. of_s[i] and of_t[j]
+/// are the surface parameters that follow the quad's s and t: the first and second one, or,
+/// `turned` (a quarter turn between the quad and the surface), the second and first.
+/// grid(us, vs, o) fills o[a * n + b] with the values at (us[a], vs[b]).
+template <class T, class Grid>
+void on_quad_grid(bool turned, const std::vector<double>& of_s, const std::vector<double>& of_t, Grid&& grid,
+                  std::vector<T>& out) {
+  const size_t n = of_s.size();
+  out.resize(n * n);
+  if (!turned) {
+    grid(of_s.data(), of_t.data(), out.data());
+    return;
+  }
+  std::vector<T> by_t(out.size());  // by_t[j * n + i]: (t_j, s_i)
+  grid(of_t.data(), of_s.data(), by_t.data());
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = 0; j < n; ++j) out[i * n + j] = by_t[j * n + i];
+}
+
 /// The surfaces measured: the quad patches themselves, or the exported faces holding them,
 /// each with its knots expanded once.
 class MeasuredSurfaces {
@@ -97,30 +116,23 @@ class MeasuredSurfaces {
   /// cell in an exported face is turned by quarter turns, so the image of the grid is a grid.
   void points(int pi, const std::vector<double>& x, std::vector<Point3>& out) const {
     const int n = static_cast<int>(x.size());
-    out.resize(static_cast<size_t>(n) * n);
-    if (!exported_) {
-      faces_[static_cast<size_t>(pi)].grid(x.data(), n, x.data(), n, out.data());
-      return;
+    const PatchEvaluator* face = &faces_[static_cast<size_t>(pi)];
+    bool turned = false;
+    std::vector<double> of_s = x, of_t = x;
+    if (exported_) {
+      const PatchPlace& place = exported_->place[static_cast<size_t>(pi)];
+      face = &faces_[static_cast<size_t>(place.patch)];
+      turned = (place.rotation & 1) != 0;  // s runs along v, t along u
+      for (int i = 0; i < n; ++i) {
+        double u, v;
+        place_parameters(place, x[i], x[0], u, v);
+        of_s[i] = turned ? v : u;
+        place_parameters(place, x[0], x[i], u, v);
+        of_t[i] = turned ? u : v;
+      }
     }
-    const PatchPlace& place = exported_->place[static_cast<size_t>(pi)];
-    const bool turned = (place.rotation & 1) != 0;  // s runs along v, t along u
-    std::vector<double> of_s(static_cast<size_t>(n)), of_t(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
-      double u, v;
-      place_parameters(place, x[i], x[0], u, v);
-      of_s[i] = turned ? v : u;
-      place_parameters(place, x[0], x[i], u, v);
-      of_t[i] = turned ? u : v;
-    }
-    const PatchEvaluator& face = faces_[static_cast<size_t>(place.patch)];
-    if (!turned) {
-      face.grid(of_s.data(), n, of_t.data(), n, out.data());
-      return;
-    }
-    std::vector<Point3> by_t(out.size());
-    face.grid(of_t.data(), n, of_s.data(), n, by_t.data());  // by_t[j * n + i]: (t_j, s_i)
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) out[static_cast<size_t>(i) * n + j] = by_t[static_cast<size_t>(j) * n + i];
+    on_quad_grid(turned, of_s, of_t,
+                 [&](const double* us, const double* vs, Point3* o) { face->grid(us, n, vs, n, o); }, out);
   }
 
  private:
@@ -134,26 +146,23 @@ class MeasuredSurfaces {
 void limit_grid(const PatchBuild& b, const LimitEvaluator& limit, int pi, const std::vector<double>& x,
                 std::vector<LimitSample>& out) {
   const int n = static_cast<int>(x.size());
-  out.resize(static_cast<size_t>(n) * n);
-  std::vector<LimitParam> of_s(static_cast<size_t>(n)), of_t(static_cast<size_t>(n));
+  std::vector<LimitParam> s_line(static_cast<size_t>(n)), t_line(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) {
-    of_s[i] = patch_to_limit(b, pi, x[i], x[0]);
-    of_t[i] = patch_to_limit(b, pi, x[0], x[i]);
+    s_line[i] = patch_to_limit(b, pi, x[i], x[0]);
+    t_line[i] = patch_to_limit(b, pi, x[0], x[i]);
   }
-  const bool turned = of_s[1].u == of_s[0].u;  // u follows t, v follows s
-  std::vector<double> us(static_cast<size_t>(n)), vs(static_cast<size_t>(n));
+  const bool turned = s_line[1].u == s_line[0].u;  // u follows t, v follows s
+  std::vector<double> of_s(static_cast<size_t>(n)), of_t(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) {
-    us[i] = turned ? of_t[i].u : of_s[i].u;
-    vs[i] = turned ? of_s[i].v : of_t[i].v;
+    of_s[i] = turned ? s_line[i].v : s_line[i].u;
+    of_t[i] = turned ? t_line[i].u : t_line[i].v;
   }
-  if (!turned) {
-    limit.evaluate_grid(of_s[0].face, of_s[0].sub, us.data(), n, vs.data(), n, out.data());
-    return;
-  }
-  std::vector<LimitSample> by_t(out.size());
-  limit.evaluate_grid(of_s[0].face, of_s[0].sub, us.data(), n, vs.data(), n, by_t.data());  // [j * n + i]
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) out[static_cast<size_t>(i) * n + j] = by_t[static_cast<size_t>(j) * n + i];
+  const LimitParam& at = s_line[0];
+  on_quad_grid(turned, of_s, of_t,
+               [&](const double* us, const double* vs, LimitSample* o) {
+                 limit.evaluate_grid(at.face, at.sub, us, n, vs, n, o);
+               },
+               out);
 }
 
 }  // namespace
