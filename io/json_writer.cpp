@@ -144,10 +144,4 @@ JsonWriter& JsonWriter::point(const Point3& p, const char* what) {
   return end_array();
 }
 
-JsonWriter& JsonWriter::numbers(const std::vector<double>& values, const char* what) {
-  begin_array();
-  for (const double x : values) number(x, what);
-  return end_array();
-}
-
 }  // namespace subd2nurbs

@@ -57,7 +57,16 @@ class JsonWriter {
     for (const auto& v : values) integer(static_cast<long long>(v));
     return end_array();
   }
-  JsonWriter& numbers(const std::vector<double>& values, const char* what = "a number");
+  /// An array of the numbers of a container (as number()); braces make a std::vector.
+  JsonWriter& numbers(const std::vector<double>& values, const char* what = "a number") {
+    return numbers<std::vector<double>>(values, what);
+  }
+  template <class Container>
+  JsonWriter& numbers(const Container& values, const char* what = "a number") {
+    begin_array();
+    for (const double x : values) number(x, what);
+    return end_array();
+  }
   /// A key and its value in one call: key(name).number(x) and so on.
   JsonWriter& member(std::string_view name, double x) { return key(name).number(x); }
   JsonWriter& member(std::string_view name, int i) { return key(name).integer(i); }

@@ -19,7 +19,8 @@ void write_knots(JsonWriter& w, const KnotVector& k, const char* what) {
   w.end_object();
 }
 
-void write_points(JsonWriter& w, const std::vector<Point3>& ps, const char* what) {
+template <class Points>
+void write_points(JsonWriter& w, const Points& ps, const char* what) {
   w.begin_array();
   for (const Point3& p : ps) w.point(p, what);
   w.end_array();

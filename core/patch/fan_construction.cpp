@@ -279,12 +279,10 @@ std::vector<Fan> fans_at(const LevelView& L, int v) {
   for (int i = 0; i < nf; ++i)
     if (L.sharp_ray_out(cs[i])) { sharp_start = i; break; }
   if (sharp_start < 0) {
-    Fan fan{v, {}, true, FanMode::Smooth};
-    for (int i = 0; i < nf; ++i) fan.sectors.push_back(cs[i]);
-    const int n = nf;
-    fan.mode = (rule == VertexRule::Smooth && n >= 3) ? FanMode::Smooth : FanMode::Approximate;
-    if (rule == VertexRule::Smooth && n == 4) return out;  // regular
-    out.push_back(fan);
+    if (rule == VertexRule::Smooth && nf == 4) return out;  // regular
+    Fan fan{v, {}, true, (rule == VertexRule::Smooth && nf >= 3) ? FanMode::Smooth : FanMode::Approximate};
+    fan.sectors.assign(cs, cs + nf);
+    out.push_back(std::move(fan));
     return out;
   }
   if (rule == VertexRule::Dart) {

@@ -24,7 +24,7 @@ constexpr double kSide = 0x1p-46;
 
 }  // namespace
 
-LeafIndex::LeafIndex(const std::vector<PatchLeaf>& leaves) {
+LeafIndex::LeafIndex(const PatchLeaves& leaves) {
   nodes_.emplace_back();
   for (size_t i = 0; i < leaves.size(); ++i) {
     const PatchLeaf& l = leaves[i];
@@ -92,7 +92,7 @@ Point3 third_difference(const PatchLeaf& leaf, bool across_u, double t) {
 
 }  // namespace
 
-std::map<double, double> knot_line_jumps(const std::vector<PatchLeaf>& leaves, const LeafIndex& index, bool across_u) {
+std::map<double, double> knot_line_jumps(const PatchLeaves& leaves, const LeafIndex& index, bool across_u) {
   std::map<double, double> jumps;
   static const double kFractions[4] = {0.1, 0.37, 0.63, 0.9};
   for (const PatchLeaf& la : leaves) {
@@ -162,7 +162,7 @@ struct Collocation {
 
 // The cell's Bezier net relative to `origin` (a point of the patch: rounding then scales with
 // the patch, not with the distance of the model from the coordinate origin).
-CellNet cell_net(const std::vector<PatchLeaf>& leaves, const LeafIndex& index, double u0, double u1, double v0,
+CellNet cell_net(const PatchLeaves& leaves, const LeafIndex& index, double u0, double u1, double v0,
                  double v1, const Point3& origin) {
   static const Collocation C;
   Point3 s[4][4];
@@ -238,7 +238,7 @@ KnotVector make_knots(const std::vector<double>& values, const std::vector<doubl
 namespace {
 
 // Knots (distinct values, ends included) -> poles by blossoming a cell of each pole's support.
-void fill_poles(const std::vector<PatchLeaf>& leaves, const LeafIndex& index, const std::vector<double>& ku,
+void fill_poles(const PatchLeaves& leaves, const LeafIndex& index, const std::vector<double>& ku,
                 const std::vector<double>& kv, const std::vector<double>& double_u, const std::vector<double>& double_v,
                 NurbsPatch& patch) {
   patch.knots_u = make_knots(ku, double_u);
@@ -310,7 +310,7 @@ double leaf_error_with(const PatchLeaf& leaf, const PatchEvaluator& eval) {
 
 double leaf_error(const PatchLeaf& leaf, const NurbsPatch& patch) { return leaf_error_with(leaf, PatchEvaluator(patch)); }
 
-AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::vector<double>& double_u,
+AssemblyStats assemble_patch(const PatchLeaves& leaves, const std::vector<double>& double_u,
                              const std::vector<double>& double_v, double tolerance, double check,
                              NurbsPatch& patch) {
   AssemblyStats stats;

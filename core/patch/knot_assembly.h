@@ -20,7 +20,7 @@ namespace subd2nurbs {
 /// Point location in a quadtree of pieces.
 class LeafIndex {
  public:
-  explicit LeafIndex(const std::vector<PatchLeaf>& leaves);
+  explicit LeafIndex(const PatchLeaves& leaves);
   /// The piece containing (u, v); on a piece boundary, the one on the side of larger u and v.
   int locate(double u, double v) const;
 
@@ -40,7 +40,7 @@ Point3 eval_leaf(const PatchLeaf& leaf, double u, double v, const Point3& origin
 /// derivative across it between the pieces on either side, as a position at the pieces' scale
 /// (|jump| h^3 / 6, h the smaller piece's size). A knot whose jump is rounding noise is a
 /// candidate for removal.
-std::map<double, double> knot_line_jumps(const std::vector<PatchLeaf>& leaves, const LeafIndex& index, bool across_u);
+std::map<double, double> knot_line_jumps(const PatchLeaves& leaves, const LeafIndex& index, bool across_u);
 
 /// Largest distance between the patch and the piece at 4 x 4 parameters inside the piece (two
 /// bicubics equal there are the same polynomial).
@@ -54,7 +54,7 @@ struct AssemblyStats {
 /// `double_v` get multiplicity 2; a simple knot is removed when its knot_line_jumps value is
 /// at most `tolerance` (model units) and the patch without it still reproduces every piece
 /// within `check` (leaf_error).
-AssemblyStats assemble_patch(const std::vector<PatchLeaf>& leaves, const std::vector<double>& double_u,
+AssemblyStats assemble_patch(const PatchLeaves& leaves, const std::vector<double>& double_u,
                              const std::vector<double>& double_v, double tolerance, double check,
                              NurbsPatch& patch);
 

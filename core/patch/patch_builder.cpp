@@ -217,10 +217,10 @@ struct SubQuad {
 };
 
 /// The leaves of coarse face F (a quad), refining locally where they are not yet one bicubic.
-std::vector<PatchLeaf> leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a,
+PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a,
                                  const FanResults& fans, int& deepest) {
   const PolyMesh& ma = la.mesh;
-  std::vector<PatchLeaf> leaves;
+  PatchLeaves leaves;
   auto emit_regular = [&](const LevelView& L, int c, const SubQuad& q, int level) {
     const int f = L.m.corner_face(c), r = rotation_in_face(L.m, c);
     Point3 net[16];
@@ -443,15 +443,17 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   fans.zone_of_corner.assign(ma.num_faces(), {-1, -1, -1, -1});
   fans.rays.assign(static_cast<size_t>(2) * ma.num_edges(), RayRecord{});
   {
+    // The level with its semi-sharp tags decayed (a copy only when it has any).
+    const bool any_semi = std::any_of(la.edge_sharpness.begin(), la.edge_sharpness.end(), semi) ||
+                          std::any_of(la.vertex_sharpness.begin(), la.vertex_sharpness.end(), semi);
     SubdivLevel decayed;
-    decayed.mesh = ma;
-    decayed.options = la.options;
-    decayed.face_hole = la.face_hole;
-    decayed.edge_sharpness = la.edge_sharpness;
-    decayed.vertex_sharpness = la.vertex_sharpness;
-    for (float& s : decayed.edge_sharpness) if (semi(s)) s = 0.0f;
-    for (float& s : decayed.vertex_sharpness) if (semi(s)) s = 0.0f;
-    const LevelView D{decayed, decayed.mesh, xa};
+    if (any_semi) {
+      decayed = la;
+      for (float& s : decayed.edge_sharpness) if (semi(s)) s = 0.0f;
+      for (float& s : decayed.vertex_sharpness) if (semi(s)) s = 0.0f;
+    }
+    const SubdivLevel& dl = any_semi ? decayed : la;
+    const LevelView D{dl, dl.mesh, xa};
     std::vector<int> candidates;
     for (int v = 0; v < ma.num_vertices(); ++v)
       if (ma.vertex_face_count(v) > 0 && !fans_at(D, v).empty()) candidates.push_back(v);
@@ -488,7 +490,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   const double knot_tolerance = tolerances::kKnotRemoval * model_size;
   const double same_surface = tolerances::kSameSurface * model_size;
   struct FacePatch {
-    std::vector<PatchLeaf> leaves;
+    PatchLeaves leaves;
     NurbsPatch patch;
     int deepest = 0;
     int removed_knots = 0;
@@ -547,7 +549,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   for (int F = 0; F < ma.num_faces(); ++F) {
     if (la.face_hole[F] || capped_a[F]) continue;
     FacePatch& fpatch = face_patches[F];
-    std::vector<PatchLeaf> leaves = std::move(fpatch.leaves);
+    PatchLeaves leaves = std::move(fpatch.leaves);
     NurbsPatch patch = std::move(fpatch.patch);
     const bool pccm = patch.kind == PatchKind::Pccm;
     info.level = std::max(info.level, fpatch.deepest);

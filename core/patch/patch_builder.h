@@ -31,6 +31,7 @@
 #include "core/polar/polar_cap.h"
 #include "core/polar/polar_structure.h"
 #include "core/refine/refiner.h"
+#include "core/util/small_vector.h"
 
 namespace subd2nurbs {
 
@@ -123,6 +124,8 @@ struct PatchLeaf {
   bool zone = false;  ///< a Construction Q piece (else the exact limit, a regular bicubic)
   std::array<Point3, 16> net{};  ///< index i * 4 + j, i along u
 };
+/// A patch's pieces; most coarse quads are one bicubic, kept inline (small_vector.h).
+using PatchLeaves = SmallVector<PatchLeaf, 1>;
 
 /// The local piece of the level a fan was built on, kept for the deviation measurement: the
 /// faces within 5 rings of the vertex at level k_v, with the Bezier nets (face frame) of the
@@ -142,7 +145,7 @@ struct PatchBuild {
   std::vector<Point3> cage_positions;    ///< control points of level 0
   std::vector<Point3> coarse_positions;  ///< control points of level a
   std::vector<int> coarse_face;          ///< per patch: its level-a face, -1 for a polar cap
-  std::vector<std::vector<PatchLeaf>> leaves;  ///< per patch: its pieces (empty for a polar cap)
+  std::vector<PatchLeaves> leaves;  ///< per patch: its pieces (empty for a polar cap)
   std::vector<FanPiece> fan_pieces;      ///< one per irregular vertex with fans
   std::vector<int> vertex_extra;         ///< per level-a vertex: the extra levels its fans were asked for
   std::vector<int> patch_deepest;        ///< per patch: the deepest level of its pieces (a for a cap)

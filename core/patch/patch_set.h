@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "core/util/point3.h"
+#include "core/util/small_vector.h"
 
 namespace subd2nurbs {
 
@@ -48,8 +49,9 @@ enum class Continuity : unsigned char {
 const char* to_string(Continuity c);
 
 struct KnotVector {
-  std::vector<double> knots;  ///< strictly increasing distinct values
-  std::vector<int> mults;     ///< multiplicity of each value; ends have degree + 1
+  // Inline room for a single span's {0, 1} and a few more (small_vector.h says why).
+  SmallVector<double, 4> knots;  ///< strictly increasing distinct values
+  SmallVector<int, 4> mults;     ///< multiplicity of each value; ends have degree + 1
   bool periodic = false;
 
   int num_poles(int degree) const;  ///< sum(mults) - degree - 1 (clamped)
@@ -79,9 +81,9 @@ struct NurbsPatch {
   int degree_u = 3, degree_v = 3;
   KnotVector knots_u, knots_v;
   int num_poles_u = 0, num_poles_v = 0;
-  std::vector<Point3> poles;    ///< num_poles_u * num_poles_v, index i * num_poles_v + j
-  std::vector<double> weights;  ///< empty: all 1
-  std::vector<int> base_faces;  ///< cage faces this patch comes from
+  SmallVector<Point3, 16> poles;  ///< num_poles_u * num_poles_v, index i * num_poles_v + j
+  std::vector<double> weights;    ///< empty: all 1
+  SmallVector<int, 2> base_faces; ///< cage faces this patch comes from
   std::vector<PatchCell> cells; ///< a packed patch's quads; empty for a patch of one quad or a cap
 
   std::array<int, 4> corners{{-1, -1, -1, -1}};  ///< PatchSet::corners index per patch corner
@@ -107,8 +109,8 @@ struct BoundaryCurve {
   int corner0 = -1, corner1 = -1;  ///< PatchSet::corners indices (equal for a closed curve)
   int degree = 3;
   KnotVector knots;
-  std::vector<Point3> poles;
-  std::vector<CurveUse> uses;  ///< one (open boundary) or two patches
+  SmallVector<Point3, 4> poles;
+  SmallVector<CurveUse, 2> uses;  ///< one (open boundary) or two patches (more for a split side)
   Continuity continuity = Continuity::Boundary;
 };
 

@@ -146,7 +146,8 @@ py::array_t<double> points_array(const std::vector<Point3>& points) {
   return a;
 }
 
-py::array_t<int> int_array(const std::vector<int>& v) {
+template <class Ints>
+py::array_t<int> int_array(const Ints& v) {
   py::array_t<int> a(static_cast<py::ssize_t>(v.size()));
   std::copy(v.begin(), v.end(), a.mutable_data());
   return a;
@@ -314,7 +315,7 @@ py::dict patch_dict(const NurbsPatch& p) {
     std::copy(p.weights.begin(), p.weights.end(), w.mutable_data());
     d["weights"] = w;
   }
-  d["base_faces"] = p.base_faces;
+  d["base_faces"] = std::vector<int>(p.base_faces.begin(), p.base_faces.end());  // a list
   if (p.cells.empty()) {
     d["cells"] = py::none();
   } else {  // a packed face: one row (base_face, coarse_face, u, v, rotation) per coarse quad

@@ -189,7 +189,8 @@ void expect_ints(const Json& j, const T& xs, const std::string& where) {
   ASSERT_EQ(j.items.size(), xs.size()) << where;
   for (size_t i = 0; i < xs.size(); ++i) expect_int(j[i], xs[i], where + "[" + std::to_string(i) + "]");
 }
-void expect_points(const Json& j, const std::vector<Point3>& ps, const std::string& where) {
+template <class Points>
+void expect_points(const Json& j, const Points& ps, const std::string& where) {
   ASSERT_EQ(j.type, Json::Array) << where;
   ASSERT_EQ(j.items.size(), ps.size()) << where;
   for (size_t i = 0; i < ps.size(); ++i) {
@@ -266,7 +267,7 @@ void expect_round_trip(const PatchSet& ps, const Json& j) {
   for (size_t c = 0; c < ps.corners.size(); ++c) {
     const Json& jc = j["corners"][c];
     EXPECT_EQ(jc.key_names(), (std::vector<std::string>{"position", "base_vertex"}));
-    expect_points(Json{Json::Array, false, 0, "", {jc["position"]}, {}}, {ps.corners[c].position},
+    expect_points(Json{Json::Array, false, 0, "", {jc["position"]}, {}}, std::vector<Point3>{ps.corners[c].position},
                   "corner " + std::to_string(c));
     expect_int(jc["base_vertex"], ps.corners[c].base_vertex, "corner " + std::to_string(c));
   }
