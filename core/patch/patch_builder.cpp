@@ -483,19 +483,23 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     }
   }
 
-  // Coarse quads: leaves, then knots.
+  // Coarse quads: leaves, then knots. Each is built straight into its patch slot; holes and
+  // polar cap faces make no patch.
   PatchSet& ps = out.set;
   std::vector<int> corner_of_vertex(ma.num_vertices(), -1);
   std::vector<int> curve_of_edge(ma.num_edges(), -1);
   const double knot_tolerance = tolerances::kKnotRemoval * model_size;
   const double same_surface = tolerances::kSameSurface * model_size;
-  struct FacePatch {
-    PatchLeaves leaves;
-    NurbsPatch patch;
-    int deepest = 0;
-    int removed_knots = 0;
-  };
-  std::vector<FacePatch> face_patches(ma.num_faces());
+  std::vector<int> patch_of_face(ma.num_faces(), -1);
+  for (int F = 0, next = 0; F < ma.num_faces(); ++F)
+    if (!la.face_hole[F] && !capped_a[F]) patch_of_face[F] = next++;
+  const size_t num_quads = static_cast<size_t>(std::count_if(patch_of_face.begin(), patch_of_face.end(), [](int p) { return p >= 0; }));
+  ps.patches.reserve(num_quads + info.caps.size());
+  ps.patches.resize(num_quads);
+  out.leaves.resize(num_quads);
+  out.patch_deepest.assign(num_quads, a);
+  out.patch_removed_knots.assign(num_quads, 0);
+  out.coarse_face.resize(num_quads);
   // A previous build of the same cage: its patch per coarse quad, where the quad's corners kept
   // their extra levels.
   const PatchBuild* reuse = options.reuse;
@@ -506,24 +510,30 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       if (reuse->coarse_face[pi] >= 0) reuse_patch[reuse->coarse_face[pi]] = static_cast<int>(pi);
   }
   parallel_for(ma.num_faces(), [&](int F) {
-    if (la.face_hole[F] || capped_a[F]) return;
-    FacePatch& fpatch = face_patches[F];
+    const int pi = patch_of_face[F];
+    if (pi < 0) return;
+    NurbsPatch& patch = ps.patches[pi];
+    PatchLeaves& leaves = out.leaves[pi];
+    out.coarse_face[pi] = F;
+    const int base_face = a == 0 ? F : base.mesh.corner_face(F);  // level-1 face F = child of corner F
     if (!reuse_patch.empty() && reuse_patch[F] >= 0) {
       bool same = true;
       for (int h = ma.face_begin(F); h < ma.face_end(F); ++h)
         same = same && reuse->vertex_extra[ma.corner_vertex(h)] == out.vertex_extra[ma.corner_vertex(h)];
       if (same) {
-        const int pi = reuse_patch[F];
-        fpatch.leaves = reuse->leaves[pi];
-        fpatch.patch = reuse->set.patches[pi];
-        fpatch.patch.base_faces.clear();
-        fpatch.deepest = reuse->patch_deepest[pi];
-        fpatch.removed_knots = reuse->patch_removed_knots[pi];
+        const int ri = reuse_patch[F];
+        leaves = reuse->leaves[ri];
+        patch = reuse->set.patches[ri];
+        patch.base_faces = {base_face};
+        out.patch_deepest[pi] = reuse->patch_deepest[ri];
+        out.patch_removed_knots[pi] = reuse->patch_removed_knots[ri];
         return;
       }
     }
-    fpatch.deepest = a;
-    fpatch.leaves = leaves_of(la, xa, F, a, fans, fpatch.deepest);
+    patch.base_faces = {base_face};
+    int deepest = a;
+    leaves = leaves_of(la, xa, F, a, fans, deepest);
+    out.patch_deepest[pi] = deepest;
     // Zone lines: h and 2h from every corner with a zone.
     std::vector<double> du, dv;
     bool pccm = false;
@@ -538,31 +548,21 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
         dv.push_back(hi_v ? 1 - t : t);
       }
     }
-    fpatch.patch.kind = pccm ? PatchKind::Pccm : PatchKind::RegularBSpline;
-    fpatch.removed_knots = assemble_patch(fpatch.leaves, du, dv, knot_tolerance, same_surface, fpatch.patch).removed_knots;
+    patch.kind = pccm ? PatchKind::Pccm : PatchKind::RegularBSpline;
+    out.patch_removed_knots[pi] = assemble_patch(leaves, du, dv, knot_tolerance, same_surface, patch).removed_knots;
   });
-  ps.patches.reserve(ma.num_faces() + info.caps.size());
   ps.curves.reserve(ma.num_edges() + info.caps.size());
   ps.corners.reserve(ma.num_vertices() + info.caps.size());
-  for (auto* v : {&out.coarse_face, &out.patch_deepest, &out.patch_removed_knots}) v->reserve(ma.num_faces());
-  out.leaves.reserve(ma.num_faces());
+  for (auto* v : {&out.coarse_face, &out.patch_deepest, &out.patch_removed_knots}) v->reserve(num_quads + info.caps.size());
+  out.leaves.reserve(num_quads + info.caps.size());
   for (int F = 0; F < ma.num_faces(); ++F) {
-    if (la.face_hole[F] || capped_a[F]) continue;
-    FacePatch& fpatch = face_patches[F];
-    PatchLeaves leaves = std::move(fpatch.leaves);
-    NurbsPatch patch = std::move(fpatch.patch);
-    const bool pccm = patch.kind == PatchKind::Pccm;
-    info.level = std::max(info.level, fpatch.deepest);
-    info.removed_knots += fpatch.removed_knots;
-    info.leaves += static_cast<long long>(leaves.size());
-    patch.base_faces.push_back(a == 0 ? F : base.mesh.corner_face(F));  // level-1 face F = child of corner F
-    (pccm ? info.pccm_patches : info.regular_patches)++;
-    out.coarse_face.push_back(F);
-    out.leaves.push_back(std::move(leaves));
-    out.patch_deepest.push_back(fpatch.deepest);
-    out.patch_removed_knots.push_back(fpatch.removed_knots);
-
-    const int pi = static_cast<int>(ps.patches.size());
+    const int pi = patch_of_face[F];
+    if (pi < 0) continue;
+    NurbsPatch& patch = ps.patches[pi];
+    info.level = std::max(info.level, out.patch_deepest[pi]);
+    info.removed_knots += out.patch_removed_knots[pi];
+    info.leaves += static_cast<long long>(out.leaves[pi].size());
+    (patch.kind == PatchKind::Pccm ? info.pccm_patches : info.regular_patches)++;
     // Corners and boundary curves.
     for (int i = 0; i < 4; ++i) {
       const int va_i = ma.corner_vertex(ma.face_begin(F) + i);
@@ -601,7 +601,6 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
       patch.curves[side] = curve_of_edge[e];
       patch.curve_reversed[side] = ps.curves[curve_of_edge[e]].uses.back().reversed;
     }
-    ps.patches.push_back(std::move(patch));
   }
 
   // Polar caps, after their neighbours: the boundary curves exist by now.

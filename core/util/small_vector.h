@@ -39,7 +39,7 @@ class SmallVector {
   using reference = T&;
   using const_reference = const T&;
 
-  SmallVector() = default;
+  SmallVector() noexcept {}  // user-provided: the inline room is left uninitialised, not zeroed
   SmallVector(std::initializer_list<T> values) { assign(values.begin(), values.end()); }
   explicit SmallVector(size_type n, const T& value = T()) { assign(n, value); }
   template <class It, class = typename std::iterator_traits<It>::iterator_category>
@@ -89,7 +89,7 @@ class SmallVector {
     T* grown = static_cast<T*>(std::malloc(n * sizeof(T)));
     if (!grown) throw std::bad_alloc();
     if (size_) std::memcpy(static_cast<void*>(grown), data_, size_ * sizeof(T));
-    if (data_ != inline_) std::free(data_);
+    if (data_ != inline_data()) std::free(data_);
     data_ = grown;
     capacity_ = n;
   }
@@ -97,7 +97,7 @@ class SmallVector {
   void resize(size_type n, const T& value = T()) {
     const T copy = value;  // value may live in this vector
     reserve(n);
-    for (size_type i = size_; i < n; ++i) data_[i] = copy;
+    for (size_type i = size_; i < n; ++i) new (data_ + i) T(copy);
     size_ = n;
   }
   void assign(size_type n, const T& value) {
@@ -115,10 +115,10 @@ class SmallVector {
     if (size_ == capacity_) {
       const T copy = value;  // value may live in this vector
       reserve(2 * capacity_);
-      data_[size_++] = copy;
+      new (data_ + size_++) T(copy);
       return;
     }
-    data_[size_++] = value;
+    new (data_ + size_++) T(value);
   }
   template <class... Args>
   T& emplace_back(Args&&... args) {
@@ -131,7 +131,7 @@ class SmallVector {
     const T copy = value;
     if (size_ == capacity_) reserve(2 * capacity_);
     std::memmove(static_cast<void*>(data_ + at + 1), data_ + at, (size_ - at) * sizeof(T));
-    data_[at] = copy;
+    new (data_ + at) T(copy);
     ++size_;
     return data_ + at;
   }
@@ -164,31 +164,36 @@ class SmallVector {
     return i;
   }
   void release() {
-    if (data_ != inline_) std::free(data_);
-    data_ = inline_;
+    if (data_ != inline_data()) std::free(data_);
+    data_ = inline_data();
     size_ = 0;
     capacity_ = N;
   }
   // Takes other's elements and leaves it empty (inline elements are copied).
   void take(SmallVector& other) {
-    if (other.data_ == other.inline_) {
-      std::memcpy(static_cast<void*>(inline_), other.inline_, other.size_ * sizeof(T));
-      data_ = inline_;
+    if (other.data_ == other.inline_data()) {
+      std::memcpy(static_cast<void*>(inline_data()), other.inline_data(), other.size_ * sizeof(T));
+      data_ = inline_data();
       capacity_ = N;
     } else {
       data_ = other.data_;
       capacity_ = other.capacity_;
-      other.data_ = other.inline_;
+      other.data_ = other.inline_data();
       other.capacity_ = N;
     }
     size_ = other.size_;
     other.size_ = 0;
   }
 
-  T* data_ = inline_;
+  T* inline_data() { return reinterpret_cast<T*>(room_); }
+  const T* inline_data() const { return reinterpret_cast<const T*>(room_); }
+
+  // Raw bytes, so that an empty SmallVector constructs no element (T's default constructor may
+  // zero a whole Bezier net); elements are created by copy where they are added.
+  alignas(T) unsigned char room_[N * sizeof(T)];
+  T* data_ = inline_data();
   size_type size_ = 0;
   size_type capacity_ = N;
-  T inline_[N];
 };
 
 }  // namespace subd2nurbs
