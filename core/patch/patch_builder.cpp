@@ -117,7 +117,12 @@ VertexFans build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, i
   VertexFans out;
   const PolyMesh& ma = la.mesh;
   std::vector<int> follow;
-  LocalMesh piece = cut_out(la, xa, face_rings(ma, {v}, kFanRings));
+  // The fan is built on the kFanRings rings around v at its level. A piece that is refined
+  // again needs one ring less: a child face within 5 rings of v lies in a parent face within
+  // 3 rings, whose child points take only the stars of that face's vertices (4 rings; for
+  // Chaikin creases, the edges at those vertices, inside the same 4 rings).
+  auto rings_at = [&](int l) { return l < min_level ? kFanRings - 1 : kFanRings; };
+  LocalMesh piece = cut_out(la, xa, face_rings(ma, {v}, rings_at(a)));
   auto local_vertex = [&](const LocalMesh& p) {
     for (int u = 0; u < p.level.mesh.num_vertices(); ++u)
       if (p.origin_vertex[u] == v && p.level.mesh.vertex_face_count(u) == ma.vertex_face_count(v)) return u;
@@ -128,7 +133,7 @@ VertexFans build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, i
   while (level < min_level || semi_sharp_near(piece.level, lv, kFanClear)) {
     if (level - a >= kMaxDepth) throw std::logic_error("patch builder: semi-sharp tags do not decay at vertex " + std::to_string(v));
     const LocalMesh refined = refine_piece(piece);
-    piece = recut(refined, {lv}, kFanRings, follow);  // lv: vertex-child keeps its index
+    piece = recut(refined, {lv}, rings_at(level + 1), follow);  // lv: vertex-child keeps its index
     lv = local_vertex(piece);
     ++level;
   }
@@ -296,13 +301,23 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
       }
     }
     if (split.empty()) break;
-    // Refine the piece and keep the 2-ring of the children.
+    // Keep the 2-ring of the sub-quads to split (the first piece is that ring already), then
+    // refine it: the children's 1-rings, all that their nets and tags read, are exact.
+    if (level > a) {
+      follow.clear();
+      std::vector<int> split_faces;
+      for (const SubQuad& q : split) {
+        follow.push_back(q.corner);
+        split_faces.push_back(piece.level.mesh.corner_face(q.corner));
+      }
+      piece = recut(piece, vertices_of(piece.level.mesh, split_faces), 2, follow);
+      for (size_t i = 0; i < split.size(); ++i) split[i].corner = follow[i];
+    }
     const PolyMesh& mp = piece.level.mesh;
-    const LocalMesh refined = refine_piece(piece);
+    LocalMesh refined = refine_piece(piece);
     const PolyMesh& mc = refined.level.mesh;
     const int dx[4] = {0, 1, 1, 0}, dy[4] = {0, 0, 1, 1};
     std::vector<SubQuad> children;
-    follow.clear();
     for (const SubQuad& q : split) {
       const int P = mp.corner_face(q.corner), r = rotation_in_face(mp, q.corner);
       const double h = q.size / 2;
@@ -310,13 +325,9 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
         const int child_face = mp.face_begin(P) + (r + j) % mp.face_size(P);
         const int child_corner = mc.face_begin(child_face) + (4 - j) % 4;
         children.push_back({child_corner, q.u0 + dx[j] * h, q.v0 + dy[j] * h, h});
-        follow.push_back(child_corner);
       }
     }
-    std::vector<int> child_faces;
-    for (int c : follow) child_faces.push_back(mc.corner_face(c));
-    piece = recut(refined, vertices_of(mc, child_faces), 2, follow);
-    for (size_t i = 0; i < children.size(); ++i) children[i].corner = follow[i];
+    piece = std::move(refined);
     active.swap(children);
   }
   return leaves;
