@@ -95,8 +95,8 @@ LocalMesh cut_out(const SubdivLevel& level, const std::vector<Point3>& x, const 
         for (int j = 0; j < n; ++j)
           if (around[j] < 0) { start = (j + 1) % n; break; }
       int current = -1;
-      for (int j = 0; j < n; ++j) {
-        const int lc = around[(start + j) % n];
+      for (int j = 0, at = start; j < n; ++j, at = at + 1 == n ? 0 : at + 1) {  // no division per step
+        const int lc = around[at];
         if (lc < 0) { current = -1; continue; }
         if (current < 0) current = new_vertex(v);
         vertex_of_corner[lc] = current;
