@@ -155,8 +155,10 @@ if convert:
   the cage's arrays to the finished `PatchSet`: one bicubic B-spline per coarse quad with only
   the knots its surface needs (16 poles for a regular quad, nested knots towards an
   extraordinary corner), plus the shared corners and boundary curves. Nothing is refined
-  whole: each fan's 5 rings are refined locally to level 2, and each quad at an extraordinary
-  vertex walks its quadtree of pieces (docs/patches.md). **poles**: of the whole PatchSet.
+  whole: each fan's rings around its vertex are refined locally to level 2 (4 rings while
+  refining, 5 at its level), and each quad at an extraordinary vertex walks its quadtree of
+  pieces (docs/patches.md). A regular quad's patch and its curves are stored inline, with no
+  heap block of their own (core/util/small_vector.h). **poles**: of the whole PatchSet.
 - **of which from_input**: validating the cage and building its connectivity and tags alone.
 - **OpenSubdiv adaptive patch table**: what OpenSubdiv does to get its own patches of the same
   limit surface: `TopologyRefinerFactory::Create` + `RefineAdaptive` (isolation level 2, the same
