@@ -74,23 +74,23 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x, 
   return best;
 }
 
-/// A surface's values at a quad's sample grid (x_i, x_j), out[i * n + j]. of_s[i] and of_t[j]
+/// A surface's values at a quad's sample grid (s_i, t_j), out[i * nt + j]. of_s[i] and of_t[j]
 /// are the surface parameters that follow the quad's s and t: the first and second one, or,
 /// `turned` (a quarter turn between the quad and the surface), the second and first.
-/// grid(us, vs, o) fills o[a * n + b] with the values at (us[a], vs[b]).
+/// grid(us, nu, vs, nv, o) fills o[a * nv + b] with the values at (us[a], vs[b]).
 template <class T, class Grid>
 void on_quad_grid(bool turned, const std::vector<double>& of_s, const std::vector<double>& of_t, Grid&& grid,
                   std::vector<T>& out) {
-  const size_t n = of_s.size();
-  out.resize(n * n);
+  const int ns = static_cast<int>(of_s.size()), nt = static_cast<int>(of_t.size());
+  out.resize(static_cast<size_t>(ns) * nt);
   if (!turned) {
-    grid(of_s.data(), of_t.data(), out.data());
+    grid(of_s.data(), ns, of_t.data(), nt, out.data());
     return;
   }
-  std::vector<T> by_t(out.size());  // by_t[j * n + i]: (t_j, s_i)
-  grid(of_t.data(), of_s.data(), by_t.data());
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = 0; j < n; ++j) out[i * n + j] = by_t[j * n + i];
+  std::vector<T> by_t(out.size());  // by_t[j * ns + i]: (t_j, s_i)
+  grid(of_t.data(), nt, of_s.data(), ns, by_t.data());
+  for (int i = 0; i < ns; ++i)
+    for (int j = 0; j < nt; ++j) out[static_cast<size_t>(i) * nt + j] = by_t[static_cast<size_t>(j) * ns + i];
 }
 
 /// The surfaces measured: the quad patches themselves, or the exported faces holding them,
@@ -111,28 +111,30 @@ class MeasuredSurfaces {
     place_parameters(place, s, t, u, v);
     return faces_[static_cast<size_t>(place.patch)].derivs(u, v, order);
   }
-  /// The surface's points at quad patch `pi`'s parameters (x_i, x_j), out[i * n + j], from one
+  /// The surface's points at quad patch `pi`'s grid (s_i, t_j), out[i * t.size() + j], from one
   /// grid evaluation (one basis evaluation per parameter instead of two per point). A quad's
   /// cell in an exported face is turned by quarter turns, so the image of the grid is a grid.
-  void points(int pi, const std::vector<double>& x, std::vector<Point3>& out) const {
-    const int n = static_cast<int>(x.size());
+  void points(int pi, const SampleGrid& g, std::vector<Point3>& out) const {
     const PatchEvaluator* face = &faces_[static_cast<size_t>(pi)];
     bool turned = false;
-    std::vector<double> of_s = x, of_t = x;
+    std::vector<double> of_s = g.s, of_t = g.t;
     if (exported_) {
       const PatchPlace& place = exported_->place[static_cast<size_t>(pi)];
       face = &faces_[static_cast<size_t>(place.patch)];
       turned = (place.rotation & 1) != 0;  // s runs along v, t along u
-      for (int i = 0; i < n; ++i) {
-        double u, v;
-        place_parameters(place, x[i], x[0], u, v);
+      double u, v;
+      for (size_t i = 0; i < g.s.size(); ++i) {
+        place_parameters(place, g.s[i], g.t[0], u, v);
         of_s[i] = turned ? v : u;
-        place_parameters(place, x[0], x[i], u, v);
-        of_t[i] = turned ? u : v;
+      }
+      for (size_t j = 0; j < g.t.size(); ++j) {
+        place_parameters(place, g.s[0], g.t[j], u, v);
+        of_t[j] = turned ? u : v;
       }
     }
     on_quad_grid(turned, of_s, of_t,
-                 [&](const double* us, const double* vs, Point3* o) { face->grid(us, n, vs, n, o); }, out);
+                 [&](const double* us, int nu, const double* vs, int nv, Point3* o) { face->grid(us, nu, vs, nv, o); },
+                 out);
   }
 
  private:
@@ -140,27 +142,23 @@ class MeasuredSurfaces {
   std::vector<PatchEvaluator> faces_;
 };
 
-/// The limit at quad patch `pi`'s parameters (x_i, x_j), out[i * n + j], through
+/// The limit at quad patch `pi`'s grid (s_i, t_j), out[i * t.size() + j], through
 /// LimitEvaluator::evaluate_grid: patch_to_limit turns and scales a quad's parameters, so each
 /// limit parameter follows one of s and t.
-void limit_grid(const PatchBuild& b, const LimitEvaluator& limit, int pi, const std::vector<double>& x,
+void limit_grid(const PatchBuild& b, const LimitEvaluator& limit, int pi, const SampleGrid& g,
                 std::vector<LimitSample>& out) {
-  const int n = static_cast<int>(x.size());
-  std::vector<LimitParam> s_line(static_cast<size_t>(n)), t_line(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    s_line[i] = patch_to_limit(b, pi, x[i], x[0]);
-    t_line[i] = patch_to_limit(b, pi, x[0], x[i]);
-  }
+  const size_t ns = g.s.size(), nt = g.t.size();
+  std::vector<LimitParam> s_line(ns), t_line(nt);
+  for (size_t i = 0; i < ns; ++i) s_line[i] = patch_to_limit(b, pi, g.s[i], g.t[0]);
+  for (size_t j = 0; j < nt; ++j) t_line[j] = patch_to_limit(b, pi, g.s[0], g.t[j]);
   const bool turned = s_line[1].u == s_line[0].u;  // u follows t, v follows s
-  std::vector<double> of_s(static_cast<size_t>(n)), of_t(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    of_s[i] = turned ? s_line[i].v : s_line[i].u;
-    of_t[i] = turned ? t_line[i].u : t_line[i].v;
-  }
+  std::vector<double> of_s(ns), of_t(nt);
+  for (size_t i = 0; i < ns; ++i) of_s[i] = turned ? s_line[i].v : s_line[i].u;
+  for (size_t j = 0; j < nt; ++j) of_t[j] = turned ? t_line[j].u : t_line[j].v;
   const LimitParam& at = s_line[0];
   on_quad_grid(turned, of_s, of_t,
-               [&](const double* us, const double* vs, LimitSample* o) {
-                 limit.evaluate_grid(at.face, at.sub, us, n, vs, n, o);
+               [&](const double* us, int nu, const double* vs, int nv, LimitSample* o) {
+                 limit.evaluate_grid(at.face, at.sub, us, nu, vs, nv, o);
                },
                out);
 }
@@ -194,10 +192,10 @@ double limit_distance(const PatchBuild& b, const LimitEvaluator& limit, int patc
   return closest_distance(limit, lp, x, tolerances::kSameSurface * b.set.model_size);
 }
 
-std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b, int patch, int n) {
-  std::vector<std::array<double, 2>> out;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) out.push_back({static_cast<double>(i) / (n - 1), static_cast<double>(j) / (n - 1)});
+std::vector<SampleGrid> quality_sample_grids(const PatchBuild& b, int patch, int n) {
+  std::vector<SampleGrid> out(1);
+  for (int i = 0; i < n; ++i) out[0].s.push_back(static_cast<double>(i) / (n - 1));
+  out[0].t = out[0].s;
   const NurbsPatch& p = b.set.patches.at(static_cast<size_t>(patch));
   if (p.kind != PatchKind::Pccm) return out;
   // Construction Q changes the surface only in the level-k quads next to an irregular corner,
@@ -209,15 +207,25 @@ std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b
   const double w[4] = {0.2, 0.45, 0.7, 0.95};
   for (int m = 1; m <= depth; ++m) {
     const double h = std::ldexp(1.0, -m);
-    for (double x : w)
-      for (double y : w) {
-        const double a = h * x, c = h * y;
-        out.push_back({a, c});
-        out.push_back({1 - a, c});
-        out.push_back({1 - a, 1 - c});
-        out.push_back({a, 1 - c});
-      }
+    std::vector<double> low, high;  // h w from the corner at 0, and from the corner at 1
+    for (double x : w) {
+      low.push_back(h * x);
+      high.push_back(1 - h * x);
+    }
+    // Corners (0,0), (1,0), (1,1), (0,1).
+    out.push_back({low, low});
+    out.push_back({high, low});
+    out.push_back({high, high});
+    out.push_back({low, high});
   }
+  return out;
+}
+
+std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b, int patch, int n) {
+  std::vector<std::array<double, 2>> out;
+  for (const SampleGrid& g : quality_sample_grids(b, patch, n))
+    for (double s : g.s)
+      for (double t : g.t) out.push_back({s, t});
   return out;
 }
 
@@ -253,41 +261,35 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       out.clear();
       const NurbsPatch& patch = ps.patches[pi];
       if (patch.kind == PatchKind::PolarCap) return;
-      // quality_sample_parameters starts with the n x n grid x_i = i / (n - 1), (x_i, x_j) at
-      // i * n + j: its points come from one grid evaluation, the others one by one.
-      const std::vector<std::array<double, 2>> params = quality_sample_parameters(b, pi, n);
-      thread_local std::vector<double> x;
+      // Each grid of samples (quality_sample_grids) is one grid evaluation of the surface and
+      // one of the limit, in the order of quality_sample_parameters.
       thread_local std::vector<Point3> grid;
       thread_local std::vector<LimitSample> limit_samples;
-      x.resize(static_cast<size_t>(n));
-      for (int k = 0; k < n; ++k) x[k] = params[static_cast<size_t>(k)][1];
-      measured_surface.points(pi, x, grid);
-      limit_grid(b, limit, pi, x, limit_samples);
-      out.reserve(params.size());
-      LimitSample other;
-      for (size_t k = 0; k < params.size(); ++k) {
-        const std::array<double, 2>& st = params[k];
-        Evaluated& e = out.emplace_back();
-        DeviationSample& d = e.d;
-        d.patch = pi;
-        d.s = st[0];
-        d.t = st[1];
-        d.limit = patch_to_limit(b, d.patch, d.s, d.t);
-        d.point = k < grid.size() ? grid[k] : measured_surface.at(pi, d.s, d.t, 0).p;
-        if (k >= limit_samples.size()) other = limit.evaluate(d.limit.face, d.limit.sub, d.limit.u, d.limit.v);
-        const LimitSample& L = k < limit_samples.size() ? limit_samples[k] : other;
-        e.limit_point = L.p;
-        e.curvature = L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2);
-        e.k1 = L.k1;
-        e.k2 = L.k2;
-        e.mean = L.mean;
-        e.gauss = L.gauss;
-        d.parametric = norm(sub(d.point, L.p));
-        // The closest-point distance is at most the same-parameter one; searching for it only
-        // pays where the patch is not the limit itself (Construction Q reparametrizes).
-        d.distance = d.parametric > same_surface
-                         ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface))
-                         : d.parametric;
+      for (const SampleGrid& g : quality_sample_grids(b, pi, n)) {
+        measured_surface.points(pi, g, grid);
+        limit_grid(b, limit, pi, g, limit_samples);
+        for (size_t k = 0; k < grid.size(); ++k) {
+          Evaluated& e = out.emplace_back();
+          DeviationSample& d = e.d;
+          d.patch = pi;
+          d.s = g.s[k / g.t.size()];
+          d.t = g.t[k % g.t.size()];
+          d.limit = patch_to_limit(b, d.patch, d.s, d.t);
+          d.point = grid[k];
+          const LimitSample& L = limit_samples[k];
+          e.limit_point = L.p;
+          e.curvature = L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2);
+          e.k1 = L.k1;
+          e.k2 = L.k2;
+          e.mean = L.mean;
+          e.gauss = L.gauss;
+          d.parametric = norm(sub(d.point, L.p));
+          // The closest-point distance is at most the same-parameter one; searching for it only
+          // pays where the patch is not the limit itself (Construction Q reparametrizes).
+          d.distance = d.parametric > same_surface
+                           ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface))
+                           : d.parametric;
+        }
       }
     });
     for (int i = 0; i < count; ++i) {

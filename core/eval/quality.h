@@ -84,9 +84,16 @@ struct QualityReport {
 /// same parameters within the same face (an upper bound of the true distance).
 double limit_distance(const PatchBuild& build, const LimitEvaluator& limit, int patch, double s, double t);
 
-/// The parameters measure_quality samples on a patch: the n x n grid (endpoints included), and
-/// on patches at irregular vertices (PatchKind::Pccm) 16 more per corner and level, halving
+/// A tensor grid of a quad patch's parameters: the samples (s[i], t[j]), in the order i * t.size() + j.
+struct SampleGrid {
+  std::vector<double> s, t;
+};
+
+/// The grids measure_quality samples on a patch: the n x n grid (endpoints included), and on
+/// patches at irregular vertices (PatchKind::Pccm) a 4 x 4 grid per corner and level, halving
 /// towards each corner down to the level-k zone where Construction Q differs from the limit.
+std::vector<SampleGrid> quality_sample_grids(const PatchBuild& build, int patch, int n);
+/// The same samples as a list of (s, t), grid after grid.
 std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& build, int patch, int n);
 
 /// Samples every patch (quality_sample_parameters) (n = samples_per_side, endpoints included) against the
