@@ -222,8 +222,8 @@ struct SubQuad {
 };
 
 /// The leaves of coarse face F (a quad), refining locally where they are not yet one bicubic.
-PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a,
-                                 const FanResults& fans, int& deepest) {
+PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a, const FanResults& fans,
+                      int& deepest) {
   const PolyMesh& ma = la.mesh;
   PatchLeaves leaves;
   auto emit_regular = [&](const LevelView& L, int c, const SubQuad& q, int level) {
@@ -502,9 +502,9 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   const double knot_tolerance = tolerances::kKnotRemoval * model_size;
   const double same_surface = tolerances::kSameSurface * model_size;
   std::vector<int> patch_of_face(ma.num_faces(), -1);
-  for (int F = 0, next = 0; F < ma.num_faces(); ++F)
-    if (!la.face_hole[F] && !capped_a[F]) patch_of_face[F] = next++;
-  const size_t num_quads = static_cast<size_t>(std::count_if(patch_of_face.begin(), patch_of_face.end(), [](int p) { return p >= 0; }));
+  size_t num_quads = 0;
+  for (int F = 0; F < ma.num_faces(); ++F)
+    if (!la.face_hole[F] && !capped_a[F]) patch_of_face[F] = static_cast<int>(num_quads++);
   ps.patches.reserve(num_quads + info.caps.size());
   ps.patches.resize(num_quads);
   out.leaves.resize(num_quads);
