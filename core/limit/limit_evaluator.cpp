@@ -14,6 +14,7 @@
 #include "core/mesh/marks.h"
 #include "core/util/bicubic.h"
 #include "core/util/constants.h"
+#include "core/util/parallel.h"
 
 namespace subd2nurbs {
 
@@ -341,18 +342,22 @@ void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, cons
 // ---------------------------------------------------------------------------------------------
 // Per-face evaluation data (cached for base faces)
 
+/// A Stam face's data (prepare: one extraordinary corner).
+struct StamData {
+  std::shared_ptr<const StamEigen> eig;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> ring;  // ring points in sector order
+  Eigen::Matrix<double, Eigen::Dynamic, 3> chat;  // V^-1 ring
+  Eigen::Matrix<double, 7, 3> outer = Eigen::Matrix<double, 7, 3>::Zero();  // outer points
+  Point3 limit{};  // limit position of the EV; ring, chat and outer are relative to it
+};
+
 struct Prepared {
   LimitMethod method = LimitMethod::Refined;  // Regular, Stam, SemiSharp, or Refined (= not prepared)
   std::array<Point3, 16> grid{};              // Regular, SemiSharp: the grid's points, index 4a + b
   int across = 0;                             // SemiSharp: crease lines crossed along s (0) or t (1)
   std::array<double, 2> sharpness{};          // SemiSharp: of the lines at 0 and 1 of that parameter
   int corner = 0;                             // Stam: the EV's corner of the face
-  std::shared_ptr<const StamEigen> eig;
-  Eigen::Matrix<double, Eigen::Dynamic, 3> ring;  // Stam: ring points in sector order
-  Eigen::Matrix<double, Eigen::Dynamic, 3> chat;  // V^-1 ring
-  Eigen::Matrix<double, 7, 3> outer = Eigen::Matrix<double, 7, 3>::Zero();  // Stam: outer points
-  Point3 limit{};                                 // Stam: limit position of the EV; ring, chat
-                                                  // and outer are relative to it
+  std::shared_ptr<const StamData> stam;       // Stam: the eigenbasis data (apart: few faces need it)
 };
 
 /// A quad whose 4x4 grid is regular (its corners interior, valence 4, untagged, between quads)
@@ -456,16 +461,18 @@ Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
   if (s0 < 0) throw std::logic_error("limit: face corner not in its vertex fan");
   out.method = LimitMethod::Stam;
   out.corner = ev;
-  out.eig = stam_eigen(n);
-  out.ring.resize(2 * n + 1, 3);
-  for (int c = 0; c < 3; ++c) out.ring(0, c) = P[v][c];
+  auto stam = std::make_shared<StamData>();
+  StamData& st = *stam;
+  st.eig = stam_eigen(n);
+  st.ring.resize(2 * n + 1, 3);
+  for (int c = 0; c < 3; ++c) st.ring(0, c) = P[v][c];
   for (int r = 0; r < n; ++r) {
     const int cr = fan[(s0 + r) % n];
     const Point3& e = P[m.to_vertex(cr)];
     const Point3& d = P[m.to_vertex(m.next(cr))];
     for (int c = 0; c < 3; ++c) {
-      out.ring(1 + r, c) = e[c];
-      out.ring(1 + n + r, c) = d[c];
+      st.ring(1 + r, c) = e[c];
+      st.ring(1 + n + r, c) = d[c];
     }
   }
   static const int kOuter[7][2] = {{2, -1}, {2, 0}, {2, 1}, {2, 2}, {1, 2}, {0, 2}, {-1, 2}};
@@ -473,26 +480,27 @@ Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
     int i, j;
     corner_to_grid(ev, kOuter[o][0], kOuter[o][1], i, j);
     if (!g.has(i, j)) throw std::logic_error("limit: Stam configuration incomplete");
-    for (int c = 0; c < 3; ++c) out.outer(o, c) = g.at(i, j)[c];
+    for (int c = 0; c < 3; ++c) st.outer(o, c) = g.at(i, j)[c];
   }
   // Work relative to the EV's limit point and drop the eigenvalue-1 component exactly: the
   // derivatives are scaled by 2^m (m up to ~1000 for tiny u, v), and a rounding-level constant
   // left in the points would be amplified by that.
-  const std::vector<double>& w = out.eig->limit_weights;
+  const std::vector<double>& w = st.eig->limit_weights;
   for (int i = 0; i < 2 * n + 1; ++i)
-    for (int c = 0; c < 3; ++c) out.limit[c] += w[i] * out.ring(i, c);
+    for (int c = 0; c < 3; ++c) st.limit[c] += w[i] * st.ring(i, c);
   for (int c = 0; c < 3; ++c) {
-    out.ring.col(c).array() -= out.limit[c];
-    out.outer.col(c).array() -= out.limit[c];
+    st.ring.col(c).array() -= st.limit[c];
+    st.outer.col(c).array() -= st.limit[c];
   }
-  out.chat = out.eig->Vinv * out.ring;
-  out.chat.row(0).setZero();  // stam_eigen puts eigenvalue 1 first
+  st.chat = st.eig->Vinv * st.ring;
+  st.chat.row(0).setZero();  // stam_eigen puts eigenvalue 1 first
+  out.stam = std::move(stam);
   return out;
 }
 
 /// Stam evaluation at corner-frame (a, b) != (0, 0); derivatives w.r.t. (a, b).
 Derivs stam_eval(const Prepared& pr, double a, double b) {
-  const StamEigen& E = *pr.eig;
+  const StamEigen& E = *pr.stam->eig;
   const double mx = std::max(a, b);
   int e;
   std::frexp(mx, &e);
@@ -511,10 +519,10 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
   buffer.resize(static_cast<size_t>(3) * K);
   double* cj = buffer.data();  // cj[3 * i + c]
   for (int i = 0; i < K; ++i)
-    for (int c = 0; c < 3; ++c) cj[3 * i + c] = pr.chat(i, c);
+    for (int c = 0; c < 3; ++c) cj[3 * i + c] = pr.stam->chat(i, c);
   double o[7][3], next[7][3];
   for (int r = 0; r < 7; ++r)
-    for (int c = 0; c < 3; ++c) o[r][c] = pr.outer(r, c);
+    for (int c = 0; c < 3; ++c) o[r][c] = pr.stam->outer(r, c);
   for (int j = 0; j + 1 < mlev; ++j) {
     for (int r = 0; r < 7; ++r) {
       double acc[3] = {0, 0, 0};
@@ -562,7 +570,7 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
     Pt[r] = {acc[0], acc[1], acc[2]};
   }
   Derivs d = bspline16(Pt.data(), x, y);
-  for (int k = 0; k < 3; ++k) d.p[k] += pr.limit[k];
+  for (int k = 0; k < 3; ++k) d.p[k] += pr.stam->limit[k];
   const double s1 = std::ldexp(1.0, mlev), s2 = s1 * s1;
   for (int k = 0; k < 3; ++k) {
     d.ds[k] *= s1; d.dt[k] *= s1;
@@ -573,7 +581,8 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
 
 /// At the extraordinary vertex itself: limit position and edge-ray tangents (docs/math.md 2.2, 9.4).
 Derivs stam_at_vertex(const Prepared& pr) {
-  const int n = pr.eig->n;
+  const StamData& st = *pr.stam;
+  const int n = st.eig->n;
   Derivs d;
   const double cn = std::cos(2 * kPi / n);
   const double An = 1 + cn + std::cos(kPi / n) * std::sqrt(2 * (9 + cn));
@@ -581,11 +590,11 @@ Derivs stam_at_vertex(const Prepared& pr) {
   for (int r = 0; r < n; ++r) {
     const double th = 2 * kPi * r / n, th1 = 2 * kPi * (r + 1) / n;
     for (int c = 0; c < 3; ++c) {
-      T1[c] += An * std::cos(th) * pr.ring(1 + r, c) + (std::cos(th) + std::cos(th1)) * pr.ring(1 + n + r, c);
-      T2[c] += An * std::sin(th) * pr.ring(1 + r, c) + (std::sin(th) + std::sin(th1)) * pr.ring(1 + n + r, c);
+      T1[c] += An * std::cos(th) * st.ring(1 + r, c) + (std::cos(th) + std::cos(th1)) * st.ring(1 + n + r, c);
+      T2[c] += An * std::sin(th) * st.ring(1 + r, c) + (std::sin(th) + std::sin(th1)) * st.ring(1 + n + r, c);
     }
   }
-  d.p = pr.limit;
+  d.p = st.limit;
   const double ca = std::cos(2 * kPi / n), sa = std::sin(2 * kPi / n), sc = 1.0 / (3 * n);
   for (int c = 0; c < 3; ++c) {
     d.ds[c] = sc * T1[c];
@@ -595,6 +604,20 @@ Derivs stam_at_vertex(const Prepared& pr) {
 }
 
 void finish_sample_local(LimitSample& o);
+
+/// A sample from its position and derivatives, finished (finish_sample).
+LimitSample finished_sample(const Point3& p, const Point3& du, const Point3& dv, const Point3& duu,
+                            const Point3& duv, const Point3& dvv) {
+  LimitSample s;
+  s.p = p;
+  s.du = du;
+  s.dv = dv;
+  s.duu = duu;
+  s.duv = duv;
+  s.dvv = dvv;
+  finish_sample_local(s);
+  return s;
+}
 
 /// Next to a valence-3 vertex the derivatives vanish like (2 lambda)^m and underflow for
 /// u, v below about 1e-250: then the normal is the vertex's limit normal (its limit).
@@ -932,15 +955,7 @@ void finish_sample_local(LimitSample& o) { finish_sample(o); }
 }  // namespace
 
 LimitSample sample_from_derivatives(const SurfaceDerivs& d) {
-  LimitSample s;
-  s.p = d.p;
-  s.du = d.du;
-  s.dv = d.dv;
-  s.duu = d.duu;
-  s.duv = d.duv;
-  s.dvv = d.dvv;
-  finish_sample(s);
-  return s;
+  return finished_sample(d.p, d.du, d.dv, d.duu, d.duv, d.dvv);
 }
 
 void finish_sample(LimitSample& o) {
@@ -954,12 +969,13 @@ void finish_sample(LimitSample& o) {
     o.k1 = o.k2 = o.mean = o.gauss = std::numeric_limits<double>::quiet_NaN();
     return;
   }
-  for (int c = 0; c < 3; ++c) o.normal[c] = n[c] / len;
+  const double inv_len = 1 / len;
+  for (int c = 0; c < 3; ++c) o.normal[c] = n[c] * inv_len;
   const double E = dot(a, a), F = dot(a, b), G = dot(b, b);
   const double Ls = dot(o.duu, o.normal), Ms = dot(o.duv, o.normal), Ns = dot(o.dvv, o.normal);
-  const double det = E * G - F * F;
-  o.gauss = (Ls * Ns - Ms * Ms) / det;
-  o.mean = (E * Ns - 2 * F * Ms + G * Ls) / (2 * det);
+  const double inv_det = 1 / (E * G - F * F);
+  o.gauss = (Ls * Ns - Ms * Ms) * inv_det;
+  o.mean = (E * Ns - 2 * F * Ms + G * Ls) * (0.5 * inv_det);
   const double disc = std::sqrt(std::max(0.0, o.mean * o.mean - o.gauss));
   o.k1 = o.mean + disc;
   o.k2 = o.mean - disc;
@@ -986,28 +1002,45 @@ LimitEvaluator::LimitEvaluator(SubdivLevel base, std::vector<Point3> positions)
     throw std::invalid_argument("LimitEvaluator: one position per vertex expected");
   face_ptex_.resize(m.num_faces());
   face_cache_.assign(m.num_faces(), -1);
-  int stored = 0;
+  std::vector<int> cached;  // the faces with a cache entry, in face order
   for (int f = 0; f < m.num_faces(); ++f) {
     face_ptex_[f] = static_cast<int>(ptex_face_.size());
     const int size = m.face_size(f);
     for (int i = 0; i < (size == 4 ? 1 : size); ++i) ptex_face_.push_back(f);
     if (base_.face_hole[f]) continue;
-    FaceCache fc;
-    if (size == 4) fc.prepared = prepare(base_, positions_, f);
-    if (fc.prepared.method == LimitMethod::Refined) {
+    face_cache_[f] = static_cast<int>(cached.size());
+    cached.push_back(f);
+  }
+  // Faces are prepared in parallel, a block at a time; the refined levels kept (at most
+  // kMaxStoredLevels, the first in face order) are chosen after each block.
+  cache_.resize(cached.size());
+  constexpr int kBlock = 4096;
+  int stored = 0;
+  for (size_t first = 0; first < cached.size(); first += kBlock) {
+    const int count = static_cast<int>(std::min<size_t>(kBlock, cached.size() - first));
+    parallel_for(count, [&](int i) {
+      const int f = cached[first + i];
+      FaceCache& fc = cache_[first + i];
+      const int size = m.face_size(f);
+      if (size == 4) fc.prepared = prepare(base_, positions_, f);
+      if (fc.prepared.method != LimitMethod::Refined) return;
       auto lvl = std::make_shared<LocalLevel>(refine_local(base_, positions_, f, fc.first_child));
       bool all = true;
       for (int k = 0; k < size; ++k) {
         fc.children.push_back(prepare(lvl->level, lvl->pos, fc.first_child + k));
         all = all && fc.children.back().method != LimitMethod::Refined;
       }
-      if (!all && stored < kMaxStoredLevels) {
-        fc.level1 = std::move(lvl);
+      if (!all) fc.level1 = std::move(lvl);
+    });
+    for (int i = 0; i < count; ++i) {
+      FaceCache& fc = cache_[first + i];
+      if (!fc.level1) continue;
+      if (stored < kMaxStoredLevels) {
         ++stored;
+      } else {
+        fc.level1.reset();
       }
     }
-    face_cache_[f] = static_cast<int>(cache_.size());
-    cache_.push_back(std::move(fc));
   }
 }
 
@@ -1086,11 +1119,16 @@ void LimitEvaluator::evaluate_grid(int f, int sub, const double* us, int nu, con
         axpy(d.dst, Dt[j], R[1][j]);
         axpy(d.dtt, DDt[j], R[0][j]);
       }
-      LimitSample& o = out[a * nv + b];
-      o = to_ptex(d, Affine{});
-      finish_sample(o);
+      // The ptex parameters are the face's own (to_ptex with the identity).
+      out[a * nv + b] = finished_sample(d.p, d.ds, d.dt, d.dss, d.dst, d.dtt);
     }
   }
+}
+
+bool LimitEvaluator::is_polynomial(int f, int sub) const {
+  if (f < 0 || f >= static_cast<int>(face_cache_.size()) || sub != 0 || base_.face_hole[f]) return false;
+  const int c = face_cache_[f];
+  return c >= 0 && cache_[c].children.empty() && cache_[c].prepared.method == LimitMethod::Regular;
 }
 
 LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMethod* method) const {

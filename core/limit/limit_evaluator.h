@@ -82,6 +82,9 @@ class LimitEvaluator {
   /// the same values up to rounding. On a face of case 1 or 2' the bicubic sum is contracted
   /// along u once per us[a]; elsewhere the points are evaluated one by one.
   void evaluate_grid(int face, int sub, const double* us, int nu, const double* vs, int nv, LimitSample* out) const;
+  /// True where the limit over the whole (sub-)face is one bicubic polynomial of (u, v): a
+  /// quad of case 1 (a regular patch). False elsewhere, also where it may be one after all.
+  bool is_polynomial(int face, int sub) const;
 
  private:
   struct FaceCache;

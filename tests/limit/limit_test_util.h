@@ -36,6 +36,21 @@ inline std::vector<Point3> positions_of(const MeshInput& in) {
   return std::vector<Point3>(in.positions.begin(), in.positions.end());
 }
 
+/// A corpus shape's exact limit, with the cage's positions and bounding-box diagonal.
+struct ShapeLimit {
+  std::vector<Point3> pos;
+  LimitEvaluator limit;
+  double diag;
+};
+
+inline ShapeLimit shape_limit(const std::string& name) {
+  const LoadedCage cage = read_obj(limit_corpus_path(name));
+  std::vector<Point3> pos = positions_of(cage.input);
+  const double diag = diagonal(pos);
+  LimitEvaluator limit(SubdivLevel::from_input(cage.input), pos);
+  return {std::move(pos), std::move(limit), diag};
+}
+
 constexpr int kRings = 3;  // quads per sector side
 
 /// A wavy disc: an interior vertex of valence n, each sector a kRings x kRings grid of quads.

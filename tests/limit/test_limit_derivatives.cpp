@@ -96,10 +96,9 @@ TEST(LimitDerivatives, GridEvaluationIsPointEvaluation) {
   for (const char* shape : {"catmark_torus", "catmark_pawn", "catmark_helmet", "catmark_gregory_test6",
                             "catmark_nonquads", "catmark_single_crease"}) {
     SCOPED_TRACE(shape);
-    const LoadedCage cage = read_obj(limit_corpus_path(shape));
-    const std::vector<Point3> pos = positions_of(cage.input);
-    const LimitEvaluator limit(SubdivLevel::from_input(cage.input), pos);
-    const double diag = diagonal(pos);
+    const ShapeLimit loaded = shape_limit(shape);
+    const LimitEvaluator& limit = loaded.limit;
+    const double diag = loaded.diag;
     const PolyMesh& m = limit.base().mesh;
     for (int f = 0; f < m.num_faces(); ++f) {
       if (limit.base().face_hole[f]) continue;
@@ -122,6 +121,67 @@ TEST(LimitDerivatives, GridEvaluationIsPointEvaluation) {
       }
     }
   }
+}
+
+// is_polynomial's claim, checked by interpolation: on every face it accepts, the bicubic
+// Lagrange interpolant of the limit at the 16 nodes {0, 1/3, 2/3, 1}^2 is the limit at random
+// points. On a face with an extraordinary corner it is not (the check can fail), and such faces
+// are refused.
+TEST(LimitEvaluator, PolynomialFacesAreOneBicubic) {
+  const double nodes[4] = {0.0, 1.0 / 3, 2.0 / 3, 1.0};
+  const auto lagrange = [&](double x, double l[4]) {
+    for (int i = 0; i < 4; ++i) {
+      l[i] = 1;
+      for (int j = 0; j < 4; ++j)
+        if (j != i) l[i] *= (x - nodes[j]) / (nodes[i] - nodes[j]);
+    }
+  };
+  const auto interpolant = [&](const LimitEvaluator& limit, int f, double u, double v) {
+    double lu[4], lv[4];
+    lagrange(u, lu);
+    lagrange(v, lv);
+    Point3 x{};
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const Point3 p = limit.evaluate(f, 0, nodes[a], nodes[b]).p;
+        for (int k = 0; k < 3; ++k) x[k] += lu[a] * lv[b] * p[k];
+      }
+    return x;
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  double worst_refused = 0;
+  for (const char* shape : {"catmark_torus", "catmark_pawn", "catmark_helmet", "catmark_single_crease",
+                            "catmark_cube_creases0", "catmark_nonquads"}) {
+    SCOPED_TRACE(shape);
+    const ShapeLimit cage = shape_limit(shape);
+    const PolyMesh& m = cage.limit.base().mesh;
+    int accepted = 0;
+    for (int f = 0; f < m.num_faces(); ++f) {
+      for (int k = 1; k < m.face_size(f); ++k) EXPECT_FALSE(cage.limit.is_polynomial(f, k));
+      if (!cage.limit.is_polynomial(f, 0)) {
+        if (m.face_size(f) == 4 && !cage.limit.base().face_hole[f]) {
+          const double u = unit(rng) * 0.3, v = unit(rng) * 0.3;  // near corner 0
+          const double off = dist(interpolant(cage.limit, f, u, v), cage.limit.evaluate(f, 0, u, v).p);
+          worst_refused = std::max(worst_refused, off / cage.diag);
+        }
+        continue;
+      }
+      ++accepted;
+      for (int r = 0; r < 3; ++r) {
+        const double u = unit(rng), v = unit(rng);
+        ASSERT_LT(dist(interpolant(cage.limit, f, u, v), cage.limit.evaluate(f, 0, u, v).p), 1e-12 * cage.diag)
+            << "face " << f;
+      }
+    }
+    if (std::string(shape) == "catmark_torus") {
+      EXPECT_EQ(accepted, m.num_faces());
+    }
+    if (std::string(shape) == "catmark_pawn") {
+      EXPECT_GT(accepted, m.num_faces() / 2);
+    }
+  }
+  EXPECT_GT(worst_refused, 1e-6) << "no refused face differs from its interpolant: the check cannot fail";
 }
 
 TEST(LimitCurvature, SphereLikeSignConvention) {
