@@ -16,6 +16,7 @@ struct QuadricFit {
   bool ok = false;      ///< false: fewer than 8 neighbours or a rank-deficient system
   Point3 normal{};      ///< unit, on the side of `tentative_normal`
   double K = 0, H = 0;  ///< Gaussian and mean curvature; a sphere with outward normal has K = 1/R^2, H = -1/R
+  bool direct = false;  ///< solved by the normal equations directly (else by a QR; quadric_fit.cpp)
 };
 
 /// `tentative_normal` orients the result (and picks the fixed coefficient).

@@ -68,6 +68,34 @@ TEST(QuadricFit, MathChecksSphereSaddleCylinder) {
   EXPECT_FALSE(fit_quadric({0, 0, 0}, lines, {0, 0, 1}).ok);
 }
 
+// Points exactly on a paraboloid z = (x^2 + xy + 3 y^2) / 4 (dyadic coordinates: the data has
+// no rounding): the least-squares residual is 0 and the fit is the paraboloid, so its curvature
+// at the origin is known in closed form (H = (q_xx + q_yy) / 2 = 1, K = q_xx q_yy - q_xy^2 =
+// 11/16), however fine the ring. Fine rings are badly conditioned (the quadric terms shrink with
+// the spacing); most are still solved directly (normal equations, quadric_fit.cpp), the finest
+// by the QR, and all stay exact to 1e-13 relative.
+TEST(QuadricFit, DirectSolveIsExactOnQuadricPointsDownToFineRings) {
+  const double H = 1, K = 11.0 / 16;
+  int direct = 0, qr = 0;
+  for (int e = 2; e <= 14; ++e) {  // 2^-15 is refused: s_min / s_max <= 1e-9
+    const double h = std::ldexp(1.0, -e);
+    std::vector<Point3> nb;  // a sheared 5 x 5 grid of spacing h, as a vertex's 2-ring
+    for (int i = -2; i <= 2; ++i)
+      for (int j = -2; j <= 2; ++j)
+        if (i != 0 || j != 0) {
+          const double x = i * h + j * h / 8, y = j * h;
+          nb.push_back({x, y, (x * x + x * y + 3 * y * y) / 4});
+        }
+    const QuadricFit f = fit_quadric({0, 0, 0}, nb, {0, 0, 1});
+    ASSERT_TRUE(f.ok) << "h = 2^-" << e;
+    EXPECT_NEAR(f.H, H, 1e-13) << "h = 2^-" << e;
+    EXPECT_NEAR(f.K, K, 1e-13) << "h = 2^-" << e;
+    (f.direct ? direct : qr)++;
+  }
+  EXPECT_GE(direct, 8);  // both paths are measured
+  EXPECT_GE(qr, 2);
+}
+
 TEST(QuadricFit, RefusedExactlyWhereTheSystemIsRankDeficient) {
   // A saddle's two rings flattened towards the plane z = 0 by a factor e: the fit's system
   // loses rank as e -> 0 (the columns z^2, yz, zx vanish). The oracle is the definition: the
