@@ -41,7 +41,7 @@ void write_quality(JsonWriter& w, const QualityReport& q, double size, int inden
   w.begin_object(indent + 2, indent);
   w.members("samples_per_side", q.samples_per_side, "polar_patches_skipped", q.polar_patches);
   w.key("deviation").begin_object();
-  w.members("samples", q.deviation_samples, "max", q.deviation_max);
+  w.members("samples", q.deviation_samples, "polynomial_patches", q.polynomial_patches, "max", q.deviation_max);
   relative(w.key("max_rel"), q.deviation_max, size);
   w.members("mean", q.deviation_mean, "parametric_max", q.parametric_max, "parametric_mean", q.parametric_mean);
   write_sample(w.key("where"), q.worst);

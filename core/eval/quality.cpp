@@ -74,23 +74,37 @@ double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x, 
   return best;
 }
 
+/// Parameters along one side of a sample grid.
+using Parameters = SmallVector<double, 16>;
+
 /// A surface's values at a quad's sample grid (s_i, t_j), out[i * nt + j]. of_s[i] and of_t[j]
 /// are the surface parameters that follow the quad's s and t: the first and second one, or,
 /// `turned` (a quarter turn between the quad and the surface), the second and first.
 /// grid(us, nu, vs, nv, o) fills o[a * nv + b] with the values at (us[a], vs[b]).
 template <class T, class Grid>
-void on_quad_grid(bool turned, const std::vector<double>& of_s, const std::vector<double>& of_t, Grid&& grid,
-                  std::vector<T>& out) {
+void on_quad_grid(bool turned, const Parameters& of_s, const Parameters& of_t, Grid&& grid, std::vector<T>& out) {
   const int ns = static_cast<int>(of_s.size()), nt = static_cast<int>(of_t.size());
   out.resize(static_cast<size_t>(ns) * nt);
   if (!turned) {
     grid(of_s.data(), ns, of_t.data(), nt, out.data());
     return;
   }
-  std::vector<T> by_t(out.size());  // by_t[j * ns + i]: (t_j, s_i)
+  thread_local std::vector<T> by_t;  // by_t[j * ns + i]: (t_j, s_i)
+  by_t.resize(out.size());
   grid(of_t.data(), nt, of_s.data(), ns, by_t.data());
   for (int i = 0; i < ns; ++i)
     for (int j = 0; j < nt; ++j) out[static_cast<size_t>(i) * nt + j] = by_t[static_cast<size_t>(j) * ns + i];
+}
+
+/// True where `face` over the cell [u, u+1] x [v, v+1] is one polynomial of degree <= 3 in
+/// each parameter: not rational, no knot strictly inside the cell.
+bool polynomial_cell(const NurbsPatch& face, int u, int v) {
+  if (!face.weights.empty() || face.degree_u > 3 || face.degree_v > 3) return false;
+  const auto knot_inside = [](const KnotVector& kv, double lo) {  // knots are increasing
+    const double* next = std::upper_bound(kv.knots.begin(), kv.knots.end(), lo);
+    return next != kv.knots.end() && *next < lo + 1;
+  };
+  return !knot_inside(face.knots_u, u) && !knot_inside(face.knots_v, v);
 }
 
 /// The surfaces measured: the quad patches themselves, or the exported faces holding them,
@@ -117,7 +131,7 @@ class MeasuredSurfaces {
   void points(int pi, const SampleGrid& g, std::vector<Point3>& out) const {
     const PatchEvaluator* face = &faces_[static_cast<size_t>(pi)];
     bool turned = false;
-    std::vector<double> of_s = g.s, of_t = g.t;
+    Parameters of_s = g.s, of_t = g.t;
     if (exported_) {
       const PatchPlace& place = exported_->place[static_cast<size_t>(pi)];
       face = &faces_[static_cast<size_t>(place.patch)];
@@ -148,20 +162,91 @@ class MeasuredSurfaces {
 void limit_grid(const PatchBuild& b, const LimitEvaluator& limit, int pi, const SampleGrid& g,
                 std::vector<LimitSample>& out) {
   const size_t ns = g.s.size(), nt = g.t.size();
-  std::vector<LimitParam> s_line(ns), t_line(nt);
-  for (size_t i = 0; i < ns; ++i) s_line[i] = patch_to_limit(b, pi, g.s[i], g.t[0]);
-  for (size_t j = 0; j < nt; ++j) t_line[j] = patch_to_limit(b, pi, g.s[0], g.t[j]);
-  const bool turned = s_line[1].u == s_line[0].u;  // u follows t, v follows s
-  std::vector<double> of_s(ns), of_t(nt);
-  for (size_t i = 0; i < ns; ++i) of_s[i] = turned ? s_line[i].v : s_line[i].u;
-  for (size_t j = 0; j < nt; ++j) of_t[j] = turned ? t_line[j].u : t_line[j].v;
-  const LimitParam& at = s_line[0];
+  const LimitParam at = patch_to_limit(b, pi, g.s[0], g.t[0]);
+  const bool turned = patch_to_limit(b, pi, g.s[1], g.t[0]).u == at.u;  // u follows t, v follows s
+  Parameters of_s, of_t;
+  for (size_t i = 0; i < ns; ++i) {
+    const LimitParam l = patch_to_limit(b, pi, g.s[i], g.t[0]);
+    of_s.push_back(turned ? l.v : l.u);
+  }
+  for (size_t j = 0; j < nt; ++j) {
+    const LimitParam l = patch_to_limit(b, pi, g.s[0], g.t[j]);
+    of_t.push_back(turned ? l.u : l.v);
+  }
   on_quad_grid(turned, of_s, of_t,
                [&](const double* us, int nu, const double* vs, int nv, LimitSample* o) {
                  limit.evaluate_grid(at.face, at.sub, us, nu, vs, nv, o);
                },
                out);
 }
+
+/// Samples reduced in order: counts, sums and maxima, with the rules of the report (the worst
+/// distance is the first sample reaching it, the largest |H| the last). Merging reductions in
+/// order gives the reduction of the concatenated samples.
+struct PatchSamples {
+  bool polynomial = false;
+  int polynomial_patches = 0;
+  int samples = 0;
+  double distance_sum = 0, parametric_sum = 0, distance_max = 0, parametric_max = 0;
+  DeviationSample worst;  // patch -1: no sample yet
+  CurvatureSummary curvature;  // its means are set at the end, from the sums
+  double abs_mean_sum = 0, mean2_sum = 0;
+
+  PatchSamples() {
+    curvature.min_k = HUGE_VAL;
+    curvature.max_k = -HUGE_VAL;
+  }
+
+  void add(const DeviationSample& d, const LimitSample& L) {
+    ++samples;
+    distance_sum += d.distance;
+    parametric_sum += d.parametric;
+    parametric_max = std::max(parametric_max, d.parametric);
+    if (d.distance > distance_max || worst.patch < 0) {
+      distance_max = std::max(distance_max, d.distance);
+      if (d.distance >= distance_max) worst = d;
+    }
+    if (!(L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2))) return;
+    CurvatureSummary& c = curvature;
+    ++c.samples;
+    c.min_k = std::min(c.min_k, L.k2);
+    c.max_k = std::max(c.max_k, L.k1);
+    c.max_abs_gauss = std::max(c.max_abs_gauss, std::abs(L.gauss));
+    if (std::abs(L.mean) >= c.max_abs_mean) {
+      c.max_abs_mean = std::abs(L.mean);
+      c.where_max_abs_mean = d;
+      c.where_max_abs_mean.point = L.p;
+    }
+    abs_mean_sum += std::abs(L.mean);
+    mean2_sum += L.mean * L.mean;
+  }
+
+  void merge(const PatchSamples& o) {
+    polynomial_patches += o.polynomial_patches + (o.polynomial ? 1 : 0);
+    if (o.samples == 0) return;
+    samples += o.samples;
+    distance_sum += o.distance_sum;
+    parametric_sum += o.parametric_sum;
+    parametric_max = std::max(parametric_max, o.parametric_max);
+    if (o.distance_max > distance_max || worst.patch < 0) {
+      distance_max = std::max(distance_max, o.distance_max);
+      worst = o.worst;
+    }
+    const CurvatureSummary& oc = o.curvature;
+    if (oc.samples == 0) return;
+    CurvatureSummary& c = curvature;
+    c.samples += oc.samples;
+    c.min_k = std::min(c.min_k, oc.min_k);
+    c.max_k = std::max(c.max_k, oc.max_k);
+    c.max_abs_gauss = std::max(c.max_abs_gauss, oc.max_abs_gauss);
+    if (oc.max_abs_mean >= c.max_abs_mean) {
+      c.max_abs_mean = oc.max_abs_mean;
+      c.where_max_abs_mean = oc.where_max_abs_mean;
+    }
+    abs_mean_sum += o.abs_mean_sum;
+    mean2_sum += o.mean2_sum;
+  }
+};
 
 }  // namespace
 
@@ -192,8 +277,19 @@ double limit_distance(const PatchBuild& b, const LimitEvaluator& limit, int patc
   return closest_distance(limit, lp, x, tolerances::kSameSurface * b.set.model_size);
 }
 
-std::vector<SampleGrid> quality_sample_grids(const PatchBuild& b, int patch, int n) {
+bool sampled_as_polynomial(const PatchBuild& b, const LimitEvaluator& limit, int patch, const PackedSet* exported) {
+  const NurbsPatch& p = b.set.patches.at(static_cast<size_t>(patch));
+  if (p.kind == PatchKind::PolarCap) return false;
+  const LimitParam at = patch_to_limit(b, patch, 0.5, 0.5);
+  if (!limit.is_polynomial(at.face, at.sub)) return false;
+  if (!exported) return polynomial_cell(p, 0, 0);
+  const PatchPlace& place = exported->place.at(static_cast<size_t>(patch));
+  return polynomial_cell(exported->set.patches.at(static_cast<size_t>(place.patch)), place.u, place.v);
+}
+
+std::vector<SampleGrid> quality_sample_grids(const PatchBuild& b, int patch, int n, bool polynomial) {
   std::vector<SampleGrid> out(1);
+  if (polynomial) n = std::min(n, kPolynomialSamples);
   for (int i = 0; i < n; ++i) out[0].s.push_back(static_cast<double>(i) / (n - 1));
   out[0].t = out[0].s;
   const NurbsPatch& p = b.set.patches.at(static_cast<size_t>(patch));
@@ -221,9 +317,9 @@ std::vector<SampleGrid> quality_sample_grids(const PatchBuild& b, int patch, int
   return out;
 }
 
-std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b, int patch, int n) {
+std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b, int patch, int n, bool polynomial) {
   std::vector<std::array<double, 2>> out;
-  for (const SampleGrid& g : quality_sample_grids(b, patch, n))
+  for (const SampleGrid& g : quality_sample_grids(b, patch, n, polynomial))
     for (double s : g.s)
       for (double t : g.t) out.push_back({s, t});
   return out;
@@ -236,102 +332,71 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
   q.samples_per_side = n;
   const PatchSet& ps = b.set;
   q.patch_max.assign(ps.patches.size(), 0.0);
-  double sum = 0, psum = 0, hsum = 0, h2sum = 0;
-  CurvatureSummary& cs = q.curvature;
-  cs.min_k = HUGE_VAL;
-  cs.max_k = -HUGE_VAL;
-  // The limit is evaluated in parallel, a block of patches at a time; the samples are then
-  // taken in patch order, so the report does not depend on the threads.
-  struct Evaluated {
-    DeviationSample d;
-    Point3 limit_point{};                  // the limit's point at d's parameters
-    double k1 = 0, k2 = 0, mean = 0, gauss = 0;
-    bool curvature = false;                // exact derivatives and finite curvatures
-  };
+  // The patches are sampled in parallel, a block at a time, each reduced on its own in sample
+  // order (PatchSamples); the patches are then combined in patch order by the same rules, so the
+  // report does not depend on the threads.
   const int num_patches = static_cast<int>(ps.patches.size());
   const MeasuredSurfaces measured_surface(b, exported);
   const double same_surface = tolerances::kSameSurface * ps.model_size;
-  constexpr int kBlock = 256;
-  std::vector<std::vector<Evaluated>> block(kBlock);
+  constexpr int kBlock = 4096;
+  std::vector<PatchSamples> block(kBlock);
+  PatchSamples all;
   for (int first = 0; first < num_patches; first += kBlock) {
     const int count = std::min(kBlock, num_patches - first);
     parallel_for(count, [&](int i) {
       const int pi = first + i;
-      std::vector<Evaluated>& out = block[i];
-      out.clear();
-      const NurbsPatch& patch = ps.patches[pi];
-      if (patch.kind == PatchKind::PolarCap) return;
+      PatchSamples& out = block[i];
+      out = PatchSamples{};
+      if (ps.patches[pi].kind == PatchKind::PolarCap) return;
       // Each grid of samples (quality_sample_grids) is one grid evaluation of the surface and
       // one of the limit, in the order of quality_sample_parameters.
       thread_local std::vector<Point3> grid;
       thread_local std::vector<LimitSample> limit_samples;
-      for (const SampleGrid& g : quality_sample_grids(b, pi, n)) {
+      out.polynomial = sampled_as_polynomial(b, limit, pi, exported);
+      for (const SampleGrid& g : quality_sample_grids(b, pi, n, out.polynomial)) {
         measured_surface.points(pi, g, grid);
         limit_grid(b, limit, pi, g, limit_samples);
         for (size_t k = 0; k < grid.size(); ++k) {
-          Evaluated& e = out.emplace_back();
-          DeviationSample& d = e.d;
+          DeviationSample d;
           d.patch = pi;
           d.s = g.s[k / g.t.size()];
           d.t = g.t[k % g.t.size()];
-          d.limit = patch_to_limit(b, d.patch, d.s, d.t);
           d.point = grid[k];
           const LimitSample& L = limit_samples[k];
-          e.limit_point = L.p;
-          e.curvature = L.exact_derivatives && std::isfinite(L.k1) && std::isfinite(L.k2);
-          e.k1 = L.k1;
-          e.k2 = L.k2;
-          e.mean = L.mean;
-          e.gauss = L.gauss;
           d.parametric = norm(sub(d.point, L.p));
           // The closest-point distance is at most the same-parameter one; searching for it only
           // pays where the patch is not the limit itself (Construction Q reparametrizes).
+          d.limit = patch_to_limit(b, d.patch, d.s, d.t);
           d.distance = d.parametric > same_surface
                            ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface))
                            : d.parametric;
+          out.add(d, L);
         }
       }
     });
     for (int i = 0; i < count; ++i) {
-      const int pi = first + i;
-      if (ps.patches[pi].kind == PatchKind::PolarCap) {  // Bi-cubic polar, not Catmull-Clark: not measured
+      if (ps.patches[first + i].kind == PatchKind::PolarCap) {  // Bi-cubic polar, not Catmull-Clark: not measured
         ++q.polar_patches;
         continue;
       }
-      for (const Evaluated& e : block[i]) {
-        const DeviationSample& d = e.d;
-        ++q.deviation_samples;
-        sum += d.distance;
-        psum += d.parametric;
-        q.parametric_max = std::max(q.parametric_max, d.parametric);
-        q.patch_max[pi] = std::max(q.patch_max[pi], d.distance);
-        if (d.distance > q.deviation_max || q.worst.patch < 0) {
-          q.deviation_max = std::max(q.deviation_max, d.distance);
-          if (d.distance >= q.deviation_max) q.worst = d;
-        }
-        if (e.curvature) {
-          ++cs.samples;
-          cs.min_k = std::min(cs.min_k, e.k2);
-          cs.max_k = std::max(cs.max_k, e.k1);
-          cs.max_abs_gauss = std::max(cs.max_abs_gauss, std::abs(e.gauss));
-          if (std::abs(e.mean) >= cs.max_abs_mean) {
-            cs.max_abs_mean = std::abs(e.mean);
-            cs.where_max_abs_mean = d;
-            cs.where_max_abs_mean.point = e.limit_point;
-          }
-          hsum += std::abs(e.mean);
-          h2sum += e.mean * e.mean;
-        }
-      }
+      q.patch_max[first + i] = block[i].distance_max;
+      all.merge(block[i]);
     }
   }
+  q.polynomial_patches = all.polynomial_patches;
+  q.deviation_samples = all.samples;
+  q.deviation_max = all.distance_max;
+  q.parametric_max = all.parametric_max;
+  q.worst = all.worst;
   if (q.deviation_samples > 0) {
-    q.deviation_mean = sum / q.deviation_samples;
-    q.parametric_mean = psum / q.deviation_samples;
+    q.deviation_mean = all.distance_sum / q.deviation_samples;
+    q.parametric_mean = all.parametric_sum / q.deviation_samples;
   }
+  CurvatureSummary& cs = q.curvature;
+  cs = all.curvature;
   if (cs.samples > 0) {
-    cs.mean_abs_mean = hsum / cs.samples;
-    cs.rms_mean = std::sqrt(h2sum / cs.samples);
+    cs.mean_abs_mean = all.abs_mean_sum / cs.samples;
+    cs.rms_mean = std::sqrt(all.mean2_sum / cs.samples);
   } else {
     cs.min_k = cs.max_k = 0;
   }

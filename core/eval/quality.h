@@ -11,6 +11,7 @@
 #include "core/limit/limit_evaluator.h"
 #include "core/patch/packing.h"
 #include "core/patch/patch_builder.h"
+#include "core/util/small_vector.h"
 
 namespace subd2nurbs {
 
@@ -59,6 +60,9 @@ struct CurvatureSummary {
 struct QualityReport {
   int samples_per_side = 0;
   int deviation_samples = 0;
+  /// Patches sampled on the kPolynomialSamples^2 grid only (sampled_as_polynomial): there the
+  /// largest distance over the whole quad is at most kPolynomialBound times the sampled one.
+  int polynomial_patches = 0;
   double deviation_max = 0, deviation_mean = 0;        ///< closest-point distance
   double parametric_max = 0, parametric_mean = 0;      ///< same-parameter distance
   DeviationSample worst;                               ///< largest closest-point distance
@@ -86,17 +90,34 @@ double limit_distance(const PatchBuild& build, const LimitEvaluator& limit, int 
 
 /// A tensor grid of a quad patch's parameters: the samples (s[i], t[j]), in the order i * t.size() + j.
 struct SampleGrid {
-  std::vector<double> s, t;
+  SmallVector<double, 16> s, t;  // inline up to 16 per side (no allocation per patch)
 };
 
-/// The grids measure_quality samples on a patch: the n x n grid (endpoints included), and on
-/// patches at irregular vertices (PatchKind::Pccm) a 4 x 4 grid per corner and level, halving
-/// towards each corner down to the level-k zone where Construction Q differs from the limit.
-std::vector<SampleGrid> quality_sample_grids(const PatchBuild& build, int patch, int n);
-/// The same samples as a list of (s, t), grid after grid.
-std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& build, int patch, int n);
+/// Where the measured surface and the limit are one bicubic polynomial each over a quad, their
+/// difference is one too, and its values at the 4 x 4 grid {0, 1/3, 2/3, 1}^2 determine it
+/// (tensor-product Lagrange interpolation): its largest norm over the quad is at most
+/// Lambda^2 times the largest at the grid, Lambda = 1.63113... the Lebesgue constant of 4
+/// equally spaced nodes (docs/math.md 11.2).
+constexpr int kPolynomialSamples = 4;
+constexpr double kPolynomialBound = 2.6606;  // 1.631130309^2, rounded up
 
-/// Samples every patch (quality_sample_parameters) (n = samples_per_side, endpoints included) against the
+/// True where quad patch `patch` is sampled as a polynomial: the limit over its face is one
+/// bicubic (LimitEvaluator::is_polynomial) and so is the surface measured there: the patch, or
+/// with `exported` the exported face's cell holding it (not rational, no knot inside the cell).
+bool sampled_as_polynomial(const PatchBuild& build, const LimitEvaluator& limit, int patch,
+                           const PackedSet* exported);
+
+/// The grids measure_quality samples on a patch: the n x n grid (endpoints included; at most
+/// kPolynomialSamples per side where `polynomial`, see sampled_as_polynomial), and on patches
+/// at irregular vertices (PatchKind::Pccm) a 4 x 4 grid per corner and level, halving towards
+/// each corner down to the level-k zone where Construction Q differs from the limit.
+std::vector<SampleGrid> quality_sample_grids(const PatchBuild& build, int patch, int n, bool polynomial);
+/// The same samples as a list of (s, t), grid after grid.
+std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& build, int patch, int n,
+                                                             bool polynomial);
+
+/// Samples every patch (quality_sample_parameters) (n = samples_per_side, endpoints included;
+/// polynomial patches on kPolynomialSamples per side) against the
 /// exact limit, and every shared curve (from `continuity`) on both sides. With `exported`, the
 /// surface measured is exported->set (packed faces): each sample of a coarse quad is taken on
 /// the face holding it (PatchPlace), and `continuity` is over exported->set's curves.

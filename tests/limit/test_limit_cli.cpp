@@ -135,7 +135,8 @@ TEST(CheckCli, WritesTheQualityReportAndUsesTheDocumentedExitCodes) {
       "import json,sys; r=json.load(open(sys.argv[1])); q=r['quality']; d=q['deviation'];"
       "assert r['format']=='subd2nurbs-quality' and r['version']==1;"
       "assert 0 < d['max'] < 0.05*r['model_size'] and d['max'] <= d['parametric_max'];"
-      "assert d['samples']>=r['patches']*q['samples_per_side']**2 and len(q['patch_max'])==r['patches'];"
+      "n=q['samples_per_side']; k=d['polynomial_patches'];"
+      "assert d['samples']>=k*min(n,4)**2+(r['patches']-k)*n**2 and len(q['patch_max'])==r['patches'];"
       "assert q['edges_summary']['crease']==0 and len(q['edges'])==q['edges_summary']['smooth'];"
       "assert q['curvature']['max_k'] < 0";
   EXPECT_EQ(std::system(("python3 -c " + quote(py) + " " + quote(dir.file("q.json"))).c_str()), 0);

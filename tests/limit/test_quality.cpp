@@ -84,7 +84,9 @@ TEST_P(QualityVsOcct, DeviationAndNormalJumpsAgreeWithTheReadBackStep) {
   // Every quad's samples, on the read-back face that holds it.
   double occt_parametric_max = 0;
   for (size_t qi = 0; qi < c.result.build.set.patches.size(); ++qi)
-    for (const auto& st : quality_sample_parameters(c.result.build, static_cast<int>(qi), n)) {
+    for (const auto& st : quality_sample_parameters(
+             c.result.build, static_cast<int>(qi), n,
+             sampled_as_polynomial(c.result.build, limit, static_cast<int>(qi), &out))) {
       double u, v;
       place_parameters(out.place[qi], st[0], st[1], u, v);
       const gp_Pnt x = surfaces[face_of[out.place[qi].patch]]->Value(u, v);
@@ -142,6 +144,48 @@ TEST(Quality, RegularPatchesAreTheLimitAndCreasesAreExpected) {
     for (const EdgeQuality& e : q.edges)
       if (std::string(e.expected) == "crease") crease_jump = std::max(crease_jump, e.limit_normal_jump_deg);
     EXPECT_GT(crease_jump, 1.0);
+  }
+}
+
+// Where the patch and the limit are one bicubic each over a quad, the report samples the 4 x 4
+// grid {0, 1/3, 2/3, 1}^2 only (docs/math.md 11.2). Oracle: a dense evaluation of a patch with a
+// moved pole (100 x 100 points, the nodes among them); its largest distance lies between the
+// sampled one and kPolynomialBound times it. Every regular quad of the torus (all vertices of
+// valence 4) is sampled so.
+TEST(Quality, PolynomialQuadsAreCertifiedByTheirSixteenNodes) {
+  Converted c = convert_shape("catmark_torus");
+  const LimitEvaluator limit(c.base, c.pos);
+  PatchBuild& build = c.result.build;
+  const int patches = static_cast<int>(build.set.patches.size());
+  const double size = build.set.model_size;
+  for (const PackedSet* exported : std::initializer_list<const PackedSet*>{nullptr, &c.result.exported}) {
+    const QualityReport q = measure_quality(build, limit, c.result.continuity, 9, exported);
+    EXPECT_EQ(q.polynomial_patches, patches);
+    EXPECT_EQ(q.deviation_samples, patches * kPolynomialSamples * kPolynomialSamples);
+  }
+  const int moved = 5;
+  NurbsPatch& p = build.set.patches[moved];
+  ASSERT_EQ(p.num_poles_u, 4);
+  ASSERT_EQ(p.num_poles_v, 4);
+  for (const auto& ij : {std::array<int, 2>{0, 3}, std::array<int, 2>{1, 2}, std::array<int, 2>{2, 2}}) {
+    const Point3 before = p.pole(ij[0], ij[1]);
+    p.pole(ij[0], ij[1])[2] += 1e-3 * size;
+    const QualityReport q = measure_quality(build, limit, c.result.continuity, 9, nullptr);
+    EXPECT_EQ(q.polynomial_patches, patches);
+    double dense = 0;
+    for (int i = 0; i <= 99; ++i)  // steps of 1/99: the nodes k/3 among them
+      for (int j = 0; j <= 99; ++j) {
+        const double s = i / 99.0, t = j / 99.0;
+        const LimitParam lp = patch_to_limit(build, moved, s, t);
+        const Point3 y = evaluate(p, s, t).p;
+        const Point3 L = limit.evaluate(lp.face, lp.sub, lp.u, lp.v).p;
+        dense = std::max(dense, std::sqrt((y[0] - L[0]) * (y[0] - L[0]) + (y[1] - L[1]) * (y[1] - L[1]) +
+                                          (y[2] - L[2]) * (y[2] - L[2])));
+      }
+    p.pole(ij[0], ij[1]) = before;
+    EXPECT_GT(q.parametric_max, 0.01 * 1e-3 * size);
+    EXPECT_LE(q.parametric_max, dense * (1 + 1e-12));
+    EXPECT_LE(dense, kPolynomialBound * q.parametric_max) << "pole " << ij[0] << ", " << ij[1];
   }
 }
 
