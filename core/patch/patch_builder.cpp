@@ -42,7 +42,8 @@ using frames::step_y;
 /// extra levels for a tolerance are bounded by the caller; this only guards against a bug.
 constexpr int kMaxDepth = 30;
 
-constexpr int kFanRings = 5;   ///< faces kept around a fan's vertex while refining
+constexpr int kFanRings = 5;     ///< faces kept around a fan's vertex at its level
+constexpr int kRefineRings = 3;  ///< faces kept around it on a level refined again
 constexpr int kFanClear = 3;   ///< rings around it that must be free of semi-sharp tags
 
 bool semi(float s) { return s > 0.0f && s < static_cast<float>(kInfiniteSharpness); }
@@ -118,10 +119,13 @@ VertexFans build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, i
   const PolyMesh& ma = la.mesh;
   std::vector<int> follow;
   // The fan is built on the kFanRings rings around v at its level. A piece that is refined
-  // again needs one ring less: a child face within 5 rings of v lies in a parent face within
-  // 3 rings, whose child points take only the stars of that face's vertices (4 rings; for
-  // Chaikin creases, the edges at those vertices, inside the same 4 rings).
-  auto rings_at = [&](int l) { return l < min_level ? kFanRings - 1 : kFanRings; };
+  // again needs only kRefineRings = 3 rings: every point of its children within 5 rings of v is
+  // exact. Such a child point is the point of a face within 3 rings, of an edge with an end
+  // within 2 rings, or of a vertex within 2 rings, and reads only those faces (for Chaikin
+  // creases, the edges at that end or vertex, inside the same faces). The points of the 3-ring's
+  // outer vertices and of the edges between them, wrong as the piece ends there, are children
+  // 6 rings out, which no later step reads; the last piece is cut to kFanRings.
+  auto rings_at = [&](int l) { return l < min_level ? kRefineRings : kFanRings; };
   LocalMesh piece = cut_out(la, xa, face_rings(ma, {v}, rings_at(a)));
   auto local_vertex = [&](const LocalMesh& p) {
     for (int u = 0; u < p.level.mesh.num_vertices(); ++u)
