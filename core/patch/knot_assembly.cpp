@@ -160,10 +160,44 @@ struct Collocation {
   }
 };
 
+// Blossom weights of the three arguments on the 4 Bezier points of [lo, hi].
+void blossom_weights(const double* args, double lo, double hi, double w[4]);
+
 // The cell's Bezier net relative to `origin` (a point of the patch: rounding then scales with
 // the patch, not with the distance of the model from the coordinate origin).
 CellNet cell_net(const PatchLeaves& leaves, const LeafIndex& index, double u0, double u1, double v0,
                  double v1, const Point3& origin) {
+  // A cell inside one piece (the usual case: cells are no larger than the pieces near a fan) is
+  // that piece restricted to the cell: Bezier point (i, j) of [a0, a1] x [b0, b1] in the piece's
+  // own parameters is its blossom at (a0^(3-i) a1^i; b0^(3-j) b1^j).
+  const PatchLeaf& leaf = leaves[index.locate((u0 + u1) / 2, (v0 + v1) / 2)];
+  if (u0 >= leaf.u0 && u1 <= leaf.u0 + leaf.size && v0 >= leaf.v0 && v1 <= leaf.v0 + leaf.size) {
+    double Ru[4][4], Rv[4][4];
+    const double a[2] = {(u0 - leaf.u0) / leaf.size, (u1 - leaf.u0) / leaf.size};
+    const double b[2] = {(v0 - leaf.v0) / leaf.size, (v1 - leaf.v0) / leaf.size};
+    for (int i = 0; i < 4; ++i) {
+      const double au[3] = {a[i > 2], a[i > 1], a[i > 0]}, bv[3] = {b[i > 2], b[i > 1], b[i > 0]};
+      blossom_weights(au, 0, 1, Ru[i]);
+      blossom_weights(bv, 0, 1, Rv[i]);
+    }
+    Point3 t[4][4];  // t[i][w] = sum_q Ru[i][q] (net[q][w] - origin)
+    for (int i = 0; i < 4; ++i)
+      for (int w = 0; w < 4; ++w) {
+        t[i][w] = {0, 0, 0};
+        for (int q = 0; q < 4; ++q)
+          for (int d = 0; d < 3; ++d) t[i][w][d] += Ru[i][q] * (leaf.net[q * 4 + w][d] - origin[d]);
+      }
+    CellNet out;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        Point3 p{0, 0, 0};
+        for (int w = 0; w < 4; ++w)
+          for (int d = 0; d < 3; ++d) p[d] += Rv[j][w] * t[i][w][d];
+        out.b[i * 4 + j] = p;
+      }
+    return out;
+  }
+  // Otherwise the cell's polynomial from 4 x 4 values: b = C^-1 s C^-T.
   static const Collocation C;
   Point3 s[4][4];
   for (int a = 0; a < 4; ++a)
@@ -171,7 +205,6 @@ CellNet cell_net(const PatchLeaves& leaves, const LeafIndex& index, double u0, d
       const double u = u0 + kNodes[a] * (u1 - u0), v = v0 + kNodes[b] * (v1 - v0);
       s[a][b] = eval_leaf(leaves[index.locate(u, v)], u, v, origin);
     }
-  // b = C^-1 s C^-T
   Point3 t[4][4];
   for (int i = 0; i < 4; ++i)
     for (int b = 0; b < 4; ++b) {
