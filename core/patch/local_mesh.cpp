@@ -67,12 +67,22 @@ LocalMesh cut_out(const SubdivLevel& level, const std::vector<Point3>& x, const 
     return i < 0 ? -1 : first_corner[i] + (h - m.face_begin(f));
   };
 
-  // One local vertex per run of consecutive chosen faces around each source vertex.
-  std::vector<int> vertex_of_corner(first_corner[nf], -1);  // piece corner -> local vertex
+  // One local vertex per run of consecutive chosen faces around each source vertex. The runs
+  // are also the local vertices' fans, in the source's fan order (each next corner is
+  // twin(prev(corner))): a run starts where the source fan leaves the piece, which is the
+  // local boundary, and a closed fan starts at its smallest local corner, as PolyMesh::build
+  // orders them; so the mesh is assembled directly, without PolyMesh::build's search.
+  const int nc = first_corner[nf];
+  std::vector<int> vertex_of_corner(nc, -1);  // piece corner -> local vertex
   LocalMesh out;
-  out.x.reserve(first_corner[nf]);
-  out.origin_vertex.reserve(first_corner[nf]);
-  out.level.vertex_sharpness.reserve(first_corner[nf]);
+  out.x.reserve(nc);
+  out.origin_vertex.reserve(nc);
+  out.level.vertex_sharpness.reserve(nc);
+  PolyMesh& lm = out.level.mesh;
+  auto& vertex_offsets = PolyMeshAssembler::vertex_offsets(lm);
+  auto& vertex_corners = PolyMeshAssembler::vertex_corners(lm);
+  vertex_offsets.assign(1, 0);
+  vertex_corners.reserve(nc);
   auto new_vertex = [&](int v) {
     out.x.push_back(x[v]);
     out.origin_vertex.push_back(origin_vertex.empty() ? v : origin_vertex[v]);
@@ -87,36 +97,78 @@ LocalMesh cut_out(const SubdivLevel& level, const std::vector<Point3>& x, const 
       const int* c = m.vertex_corners(v);
       const int n = m.vertex_face_count(v);
       around.resize(n);
-      for (int j = 0; j < n; ++j) around[j] = local_corner(c[j]);
+      bool closed = !m.is_boundary_vertex(v);
+      for (int j = 0; j < n; ++j) {
+        around[j] = local_corner(c[j]);
+        closed = closed && around[j] >= 0;
+      }
       // Start after a corner outside the piece (or at the fan's start for a boundary vertex
       // or a vertex whose faces are all inside).
       int start = 0;
       if (!m.is_boundary_vertex(v))
         for (int j = 0; j < n; ++j)
           if (around[j] < 0) { start = (j + 1) % n; break; }
+      if (closed) start = static_cast<int>(std::min_element(around.begin(), around.end()) - around.begin());
       int current = -1;
       for (int j = 0, at = start; j < n; ++j, at = at + 1 == n ? 0 : at + 1) {  // no division per step
         const int lc = around[at];
-        if (lc < 0) { current = -1; continue; }
-        if (current < 0) current = new_vertex(v);
+        if (lc < 0) {
+          current = -1;
+          continue;
+        }
+        if (current < 0) {
+          current = new_vertex(v);
+          vertex_offsets.push_back(static_cast<int>(vertex_corners.size()));
+        }
         vertex_of_corner[lc] = current;
+        vertex_corners.push_back(lc);
+        vertex_offsets.back() = static_cast<int>(vertex_corners.size());
       }
     }
 
-  std::vector<int> sizes(nf);
-  out.source_corner.resize(first_corner[nf]);
+  // Faces, twins (a source twin inside the piece), and edges numbered in order of first
+  // appearance (as PolyMesh::build numbers them).
+  out.source_corner.resize(nc);
   out.origin_face.resize(nf);
   out.level.face_hole.resize(nf);
+  PolyMeshAssembler::num_vertices(lm) = static_cast<int>(out.x.size());
+  auto& face_offsets = PolyMeshAssembler::face_offsets(lm);
+  face_offsets.assign(first_corner.begin(), first_corner.end());
+  PolyMeshAssembler::corner_vertex(lm).assign(vertex_of_corner.begin(), vertex_of_corner.end());
+  bool quads = true;
   for (int i = 0; i < nf; ++i) {
     const int f = faces[i];
-    sizes[i] = m.face_size(f);
+    quads = quads && m.face_size(f) == 4;
     for (int k = first_corner[i]; k < first_corner[i + 1]; ++k) out.source_corner[k] = m.face_begin(f) + (k - first_corner[i]);
     out.origin_face[i] = origin_face.empty() ? f : origin_face[f];
     out.level.face_hole[i] = level.face_hole[f];
   }
-  out.level.mesh = PolyMesh::build(static_cast<int>(out.x.size()), sizes, vertex_of_corner);
+  PolyMeshAssembler::all_quads(lm) = quads;
+  auto& corner_face = PolyMeshAssembler::corner_face(lm);
+  corner_face.clear();
+  if (!quads) {
+    corner_face.resize(nc);
+    for (int i = 0; i < nf; ++i)
+      for (int k = first_corner[i]; k < first_corner[i + 1]; ++k) corner_face[k] = i;
+  }
+  auto& twin = PolyMeshAssembler::twin(lm);
+  twin.resize(nc);
+  for (int k = 0; k < nc; ++k) {
+    const int t = m.twin(out.source_corner[k]);
+    twin[k] = t < 0 ? -1 : local_corner(t);
+  }
+  auto& corner_edge = PolyMeshAssembler::corner_edge(lm);
+  auto& edge_corner = PolyMeshAssembler::edge_corner(lm);
+  corner_edge.assign(nc, -1);
+  edge_corner.clear();
+  edge_corner.reserve(nc / 2 + 8);
+  for (int k = 0; k < nc; ++k) {
+    if (corner_edge[k] >= 0) continue;
+    corner_edge[k] = static_cast<int>(edge_corner.size());
+    if (twin[k] >= 0) corner_edge[twin[k]] = corner_edge[k];
+    edge_corner.push_back(k);
+  }
   out.level.options = level.options;
-  const PolyMesh& lm = out.level.mesh;
   out.level.edge_sharpness.assign(lm.num_edges(), 0.0f);
   for (int e = 0; e < lm.num_edges(); ++e) {
     const int src_edge = m.corner_edge(out.source_corner[lm.edge_corner(e)]);

@@ -76,6 +76,67 @@ TEST(LocalRefinement, CutOutTwoRingsRefineLikeTheWholeCage) {
   }
 }
 
+// cut_out assembles the piece's connectivity from the source's (twins, fans) instead of
+// searching for it. Oracle: PolyMesh::build of the piece's own face list, compared array by
+// array, on rings around vertices and on scattered face sets (vertices split into several runs,
+// n-gons, boundaries, and pieces of pieces).
+TEST(CutOut, ConnectivityIsPolyMeshBuildOfItsFaces) {
+  auto same = [](const PolyMesh& a, const PolyMesh& b) {
+    if (a.num_vertices() != b.num_vertices() || a.num_faces() != b.num_faces() || a.num_edges() != b.num_edges() ||
+        a.num_corners() != b.num_corners() || a.all_quads() != b.all_quads())
+      return false;
+    for (int h = 0; h < a.num_corners(); ++h)
+      if (a.corner_vertex(h) != b.corner_vertex(h) || a.corner_face(h) != b.corner_face(h) ||
+          a.corner_edge(h) != b.corner_edge(h) || a.twin(h) != b.twin(h))
+        return false;
+    for (int e = 0; e < a.num_edges(); ++e)
+      if (a.edge_corner(e) != b.edge_corner(e)) return false;
+    for (int v = 0; v < a.num_vertices(); ++v) {
+      if (a.vertex_face_count(v) != b.vertex_face_count(v)) return false;
+      for (int i = 0; i < a.vertex_face_count(v); ++i)
+        if (a.vertex_corners(v)[i] != b.vertex_corners(v)[i]) return false;
+    }
+    return true;
+  };
+  auto rebuilt = [](const PolyMesh& p) {
+    std::vector<int> sizes, indices;
+    for (int f = 0; f < p.num_faces(); ++f) {
+      sizes.push_back(p.face_size(f));
+      for (int h = p.face_begin(f); h < p.face_end(f); ++h) indices.push_back(p.corner_vertex(h));
+    }
+    return PolyMesh::build(p.num_vertices(), sizes, indices);
+  };
+  int pieces = 0, split_vertices = 0;
+  for (const char* name : {"catmark_nonquads", "catmark_edgecorner", "catmark_helmet", "catmark_bishop",
+                           "catmark_xord_interior"}) {
+    SCOPED_TRACE(name);
+    const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj");
+    const SubdivLevel base = SubdivLevel::from_input(cage.input);
+    const std::vector<Point3> x0(cage.input.positions.begin(), cage.input.positions.end());
+    const PolyMesh& m = base.mesh;
+    for (int v = 0; v < m.num_vertices(); v += 3) {
+      if (m.is_unused_vertex(v)) continue;
+      // Rings around v, and every other face of its 2-ring (scattered: vertices split).
+      std::vector<int> scattered;
+      const std::vector<int> ring2 = face_rings(m, {v}, 2);
+      for (size_t i = 0; i < ring2.size(); i += 2) scattered.push_back(ring2[i]);
+      for (const std::vector<int>& faces : {face_rings(m, {v}, 1), ring2, face_rings(m, {v}, 3), scattered}) {
+        const LocalMesh piece = cut_out(base, x0, faces);
+        ASSERT_TRUE(same(piece.level.mesh, rebuilt(piece.level.mesh))) << "vertex " << v;
+        ++pieces;
+        split_vertices += piece.level.mesh.num_vertices() - static_cast<int>(vertices_of(m, faces).size());
+        // A piece of the piece, after a refinement.
+        const LocalMesh refined = refine_piece(piece);
+        const std::vector<int> inner = face_rings(refined.level.mesh, {0}, 2);
+        const LocalMesh again = cut_out(refined, inner);
+        ASSERT_TRUE(same(again.level.mesh, rebuilt(again.level.mesh))) << "vertex " << v << ", refined";
+      }
+    }
+  }
+  EXPECT_GT(pieces, 100);
+  EXPECT_GT(split_vertices, 0);  // the scattered sets did split vertices into runs
+}
+
 // A bicubic polynomial (Bezier net on [0,1]^2) restricted to [u0, u0 + s] x [v0, v0 + s].
 PatchLeaf sub_leaf(const std::array<Point3, 16>& net, double u0, double v0, double s) {
   PatchLeaf l;
