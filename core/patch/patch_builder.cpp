@@ -43,7 +43,7 @@ using frames::step_y;
 constexpr int kMaxDepth = 30;
 
 constexpr int kFanRings = 5;     ///< faces kept around a fan's vertex at its level
-constexpr int kRefineRings = 3;  ///< faces kept around it on a level refined again
+constexpr int kRefineRings = 3;  ///< faces kept around it on the level refined into k_v
 constexpr int kFanClear = 3;   ///< rings around it that must be free of semi-sharp tags
 
 bool semi(float s) { return s > 0.0f && s < static_cast<float>(kInfiniteSharpness); }
@@ -118,14 +118,15 @@ VertexFans build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, i
   VertexFans out;
   const PolyMesh& ma = la.mesh;
   std::vector<int> follow;
-  // The fan is built on the kFanRings rings around v at its level. A piece that is refined
-  // again needs only kRefineRings = 3 rings: every point of its children within 5 rings of v is
-  // exact. Such a child point is the point of a face within 3 rings, of an edge with an end
-  // within 2 rings, or of a vertex within 2 rings, and reads only those faces (for Chaikin
-  // creases, the edges at that end or vertex, inside the same faces). The points of the 3-ring's
-  // outer vertices and of the edges between them, wrong as the piece ends there, are children
-  // 6 rings out, which no later step reads; the last piece is cut to kFanRings.
-  auto rings_at = [&](int l) { return l < min_level ? kRefineRings : kFanRings; };
+  // The fan is built on the kFanRings rings around v at its level. A piece of r rings that is
+  // refined gives children whose points within 2r - 1 rings of v are exact: such a child point
+  // is the point of a face within r rings, of an edge with an end within r - 1 rings, or of a
+  // vertex within r - 1 rings, and reads only faces within r (for Chaikin creases, the edges at
+  // that end or vertex, inside the same faces). The points the cut gets wrong (its outer
+  // vertices and the edges between them) are children 2r rings out, which no later step reads.
+  // So the level before k_v keeps 3 rings (5 exact rings at k_v), the levels before it 2 (3
+  // exact rings, all the next cut takes), and the last piece is cut to kFanRings.
+  auto rings_at = [&](int l) { return l + 1 < min_level ? 2 : l < min_level ? kRefineRings : kFanRings; };
   LocalMesh piece = cut_out(la, xa, face_rings(ma, {v}, rings_at(a)));
   auto local_vertex = [&](const LocalMesh& p) {
     for (int u = 0; u < p.level.mesh.num_vertices(); ++u)
