@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -16,11 +17,37 @@ inline int hardware_threads() {
   return threads;
 }
 
+/// The threads that single-threaded work running beside parallel loops has taken
+/// (ThreadReservation).
+inline std::atomic<int>& reserved_threads() {
+  static std::atomic<int> reserved{0};
+  return reserved;
+}
+
+/// Takes one hardware thread for the calling thread's own single-threaded work while it lives:
+/// parallel loops started meanwhile (on other threads) use one thread fewer, so that the two
+/// do not share a core. The count is process-wide.
+class ThreadReservation {
+ public:
+  ThreadReservation() { reserved_threads().fetch_add(1); }
+  ~ThreadReservation() { reserved_threads().fetch_sub(1); }
+  ThreadReservation(const ThreadReservation&) = delete;
+  ThreadReservation& operator=(const ThreadReservation&) = delete;
+};
+
+/// The threads a parallel loop started now may use: the hardware threads not reserved, at
+/// least 1.
+inline int available_threads() { return std::max(1, hardware_threads() - reserved_threads().load()); }
+
 /// Calls fn(i) for i in [0, n) on up to hardware_threads() threads, items handed out in runs of
 /// consecutive indices (about 16 runs per thread, at most 64 items each): one atomic step per run, and
 /// neighbouring slots written by one thread. fn must only write to its own item's slot. The
 /// first exception thrown is rethrown once every thread has stopped. Results are independent of
 /// the thread count.
+///
+/// Only available_threads() of them take runs at any time: while other work holds a
+/// ThreadReservation, the helper threads beyond that wait (waking every millisecond), and they
+/// join in as soon as the reservation ends. The calling thread always works.
 template <class Fn>
 void parallel_for(int n, Fn&& fn) {
   const int threads = std::min(hardware_threads(), std::max(1, n / 16));
@@ -32,8 +59,15 @@ void parallel_for(int n, Fn&& fn) {
   std::atomic<int> next{0};
   std::exception_ptr error;
   std::mutex error_mutex;
-  auto work = [&] {
-    for (int begin = next.fetch_add(run); begin < n; begin = next.fetch_add(run)) {
+  auto work = [&](int thread) {
+    for (;;) {
+      if (thread >= available_threads()) {  // this helper's core is reserved meanwhile
+        if (next.load() >= n) return;
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        continue;
+      }
+      const int begin = next.fetch_add(run);
+      if (begin >= n) return;
       const int end = std::min(n, begin + run);
       try {
         for (int i = begin; i < end; ++i) fn(i);
@@ -45,8 +79,8 @@ void parallel_for(int n, Fn&& fn) {
     }
   };
   std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+  work(0);
   for (std::thread& t : pool) t.join();
   if (error) std::rethrow_exception(error);
 }
