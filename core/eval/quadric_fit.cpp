@@ -242,15 +242,17 @@ VertexFitError vertex_fit_error(const LimitEvaluator& limit, const std::vector<P
     const int f = m.corner_face(c[i]);
     if (m.face_size(f) != 4 || L.face_hole[f] || L.edge_sharpness[m.corner_edge(c[i])] != 0.0f) return r;
   }
-  // 2-ring: every vertex of every face touching a vertex of v's faces, v itself left out.
-  // `seen[x] == stamp` marks x as taken for this call (one array per thread, never cleared:
-  // every call has a new stamp).
+  // 2-ring: every vertex of every face touching a vertex of v's faces, v itself left out. Each
+  // such face is taken once (`face_seen`), each vertex once (`seen`): the arrays hold the stamp
+  // of the call that last took the element (one pair per thread, never cleared: every call has
+  // a new stamp).
   thread_local std::vector<int> ring2;
-  thread_local std::vector<std::uint64_t> seen;
+  thread_local std::vector<std::uint64_t> seen, face_seen;
   thread_local std::uint64_t stamp = 0;
   ++stamp;
   ring2.clear();
   if (seen.size() < static_cast<size_t>(m.num_vertices())) seen.resize(static_cast<size_t>(m.num_vertices()), 0);
+  if (face_seen.size() < static_cast<size_t>(m.num_faces())) face_seen.resize(static_cast<size_t>(m.num_faces()), 0);
   seen[v] = stamp;
   for (int i = 0; i < n; ++i) {
     const int f = m.corner_face(c[i]);
@@ -259,6 +261,8 @@ VertexFitError vertex_fit_error(const LimitEvaluator& limit, const std::vector<P
       const int* wc = m.vertex_corners(w);
       for (int j = 0; j < m.vertex_face_count(w); ++j) {
         const int g = m.corner_face(wc[j]);
+        if (face_seen[g] == stamp) continue;
+        face_seen[g] = stamp;
         for (int b = m.face_begin(g); b < m.face_begin(g) + m.face_size(g); ++b) {
           const int x = m.corner_vertex(b);
           if (seen[x] != stamp) {
