@@ -248,6 +248,33 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   };
   DiagnosticPrinter diagnostics(err, options.quiet);
   callbacks.diagnostic = std::ref(diagnostics);
+  // Outputs: all staged in temporary files first, renamed over their names only when every
+  // one of them is ready. The output file is staged as soon as the B-rep is built, while the
+  // quality stage (--report) still runs beside it.
+  std::vector<StagedFile> staged;
+  callbacks.after_brep = [&](ConversionResult& r) {
+    if (kind == OutputKind::Json) {
+      const auto t0 = Clock::now();
+      progress.stage("writing " + options.output);
+      const std::string text = patch_set_to_json(r.exported.set);
+      staged.emplace_back(options.output);
+      staged.back().write([&](std::ostream& out) { out << text; });
+      r.ms.write = ms_since(t0);
+      return;
+    }
+    if (!r.brep.valid) {
+      std::string message = r.brep.check_message;
+      while (!message.empty() && message.back() == '\n') message.pop_back();
+      throw occt::ExportError("check", -1, "the B-rep is not valid, nothing was written:\n" + message);
+    }
+    const auto t0 = Clock::now();
+    progress.stage("writing " + options.output);
+    const occt::Format format = kind == OutputKind::Step   ? occt::Format::Step
+                                : kind == OutputKind::Iges ? occt::Format::Iges
+                                                           : occt::Format::Brep;
+    staged.push_back(occt::stage_shape(r.brep.shape, options.output, format, schema));
+    r.ms.write = ms_since(t0);
+  };
   ConversionResult c;
   try {
     c = pipeline::convert(base, positions, settings, callbacks, std::move(load_warnings));
@@ -262,31 +289,6 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   c.output.format = output_kind_name(kind);
   if (kind == OutputKind::Step) c.output.step_schema = occt::to_string(schema);
   c.ms.load = load_ms;
-
-  // Outputs: all staged in temporary files first, renamed over their names only when every
-  // one of them is ready.
-  std::vector<StagedFile> staged;
-  if (kind == OutputKind::Json) {
-    t = Clock::now();
-    progress.stage("writing " + options.output);
-    const std::string text = patch_set_to_json(c.exported.set);
-    staged.emplace_back(options.output);
-    staged.back().write([&](std::ostream& out) { out << text; });
-    c.ms.write = ms_since(t);
-  } else {
-    if (!c.brep.valid) {
-      std::string message = c.brep.check_message;
-      while (!message.empty() && message.back() == '\n') message.pop_back();
-      throw occt::ExportError("check", -1, "the B-rep is not valid, nothing was written:\n" + message);
-    }
-    t = Clock::now();
-    progress.stage("writing " + options.output);
-    const occt::Format format = kind == OutputKind::Step   ? occt::Format::Step
-                                : kind == OutputKind::Iges ? occt::Format::Iges
-                                                           : occt::Format::Brep;
-    staged.push_back(occt::stage_shape(c.brep.shape, options.output, format, schema));
-    c.ms.write = ms_since(t);
-  }
 
   if (!options.report.empty()) {
     if (!options.quiet) print_quality_summary(err, *c.quality, c.build.set.model_size);

@@ -1,11 +1,14 @@
 #include "converter/pipeline/conversion.h"
 
 #include "core/eval/nurbs_eval.h"
+#include "core/util/parallel.h"
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <future>
+#include <optional>
 #include <utility>
 
 namespace subd2nurbs::pipeline {
@@ -449,20 +452,40 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                 " pole(s); the patches are built from that level-1 cage",
             -1, "", ""});
 
-  if (settings.build_brep) {
-    t = Clock::now();
-    stage(Stage::Brep, "building the B-rep");
-    c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
-    c.has_brep = true;
-    c.ms.brep = ms_since(t);
-  }
-
-  // The optional stages: their results are data in the result.
+  // The optional quality stage reads the patches, the exported faces and the continuity, which
+  // nothing changes from here on. OCCT's stages (and the caller's after_brep, e.g. writing the
+  // file) run on one core, so the quality stage runs beside them on a thread of its own; its
+  // result is taken once they are done. (Declared after `c`: an exception unwinds through the
+  // future's destructor, which waits for the thread, before `c` goes.)
+  std::future<std::pair<QualityReport, double>> quality;
   if (settings.quality_samples) {
-    t = Clock::now();
     stage(Stage::Quality, "measuring against the exact limit surface");
-    c.quality = measure_quality(base, c, *settings.quality_samples);
-    c.ms.quality = ms_since(t);
+    quality = std::async(std::launch::async, [&base, &c, samples = *settings.quality_samples] {
+      const auto t0 = Clock::now();
+      QualityReport q = measure_quality(base, c, samples);
+      return std::make_pair(std::move(q), ms_since(t0));
+    });
+  }
+  {
+    // This thread's core is OCCT's (and after_brep's) meanwhile: the quality stage's parallel
+    // loops started meanwhile leave it to them.
+    std::optional<ThreadReservation> occt_core;
+    if (quality.valid()) occt_core.emplace();
+    if (settings.build_brep) {
+      t = Clock::now();
+      stage(Stage::Brep, "building the B-rep");
+      c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
+      c.has_brep = true;
+      c.ms.brep = ms_since(t);
+    }
+    if (progress.after_brep) progress.after_brep(c);
+  }
+  if (quality.valid()) {
+    t = Clock::now();
+    std::pair<QualityReport, double> measured = quality.get();
+    c.ms.quality_wait = ms_since(t);
+    c.quality = std::move(measured.first);
+    c.ms.quality = measured.second;
   }
   if (settings.preview) {
     t = Clock::now();

@@ -136,6 +136,8 @@ enum class Stage { Fit, Patches, Deviation, Packing, Continuity, Brep, Quality, 
 const char* to_string(Stage stage);
 
 /// Progress reporting; every member may be empty.
+struct ConversionResult;
+
 struct ConversionProgress {
   /// A stage starts, with a line for people: "building patches (2 extra levels)", ...
   std::function<void(Stage stage, const std::string& text)> stage;
@@ -143,11 +145,20 @@ struct ConversionProgress {
   std::function<void(double fraction)> brep_fraction;
   /// A diagnostic, as it is found (it is also kept in ConversionResult::diagnostics).
   std::function<void(const ConversionDiagnostic& diagnostic)> diagnostic;
+  /// Called once, after the B-rep stage (whether or not it built a B-rep), on the calling
+  /// thread, while the quality stage (ConversionSettings::quality_samples) may still run on a
+  /// thread of its own: work for the core that OCCT's single-threaded stages leave idle, such
+  /// as writing the output file. It may read the result and set `ms.write`; it must not change
+  /// anything else before convert returns. An exception it throws ends the conversion.
+  std::function<void(ConversionResult& result)> after_brep;
 };
 
 struct Timings {
   double load = 0, fit = 0, patches = 0, packing = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
   double quality = 0, preview = 0;  ///< the optional stages (the report gives quality as "quality_ms")
+  /// The quality stage runs beside the B-rep stage and ConversionProgress::after_brep: the wall
+  /// time convert waited for it once those were done (what the stage added to the conversion).
+  double quality_wait = 0;
 };
 
 /// What the fit did (FitMode::Interpolate), in model units.

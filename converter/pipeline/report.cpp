@@ -268,6 +268,7 @@ std::string report_json(const ConversionResult& c) {
   if (c.quality) {  // the quality stage's section and its own time, beside timings_ms
     write_quality(w.key("quality"), *c.quality, size, 2);
     w.key("quality_ms").number(ms.quality);
+    w.key("quality_wait_ms").number(ms.quality_wait);
   }
   w.end_object();
   return w.take() + "\n";

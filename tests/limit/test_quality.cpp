@@ -337,11 +337,22 @@ TEST(QualityStage, IsTheStandaloneMeasureAndItsSectionIsInTheReport) {
   std::vector<std::string> stages;
   pipeline::ConversionProgress progress;
   progress.stage = [&](pipeline::Stage s, const std::string&) { stages.push_back(pipeline::to_string(s)); };
+  // The quality stage starts before the B-rep and runs beside it and after_brep (called once,
+  // after the B-rep, before the result has its quality); the preview comes last.
+  int after_brep_calls = 0;
+  progress.after_brep = [&](pipeline::ConversionResult& result) {
+    ++after_brep_calls;
+    EXPECT_TRUE(result.has_brep);
+    EXPECT_FALSE(result.quality);
+    stages.push_back("after_brep");
+  };
   pipeline::ConversionResult r = pipeline::convert(c.base, c.pos, settings, progress);
   ASSERT_TRUE(r.quality && r.preview);
-  ASSERT_GE(stages.size(), 2u);
-  EXPECT_EQ(stages[stages.size() - 2], "quality");
-  EXPECT_EQ(stages.back(), "preview");
+  EXPECT_EQ(after_brep_calls, 1);
+  ASSERT_GE(stages.size(), 4u);
+  const std::vector<std::string> last(stages.end() - 4, stages.end());
+  EXPECT_EQ(last, (std::vector<std::string>{"quality", "brep", "after_brep", "preview"}));
+  EXPECT_GE(r.ms.quality_wait, 0);
 
   const LimitEvaluator limit(c.base, c.pos);
   const QualityReport q = measure_quality(r.build, limit, r.continuity, 5, &r.exported);
