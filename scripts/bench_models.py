@@ -3,11 +3,15 @@
 
 Usage: scripts/bench_models.py SUBD2NURBS CORPUS_DIR REPS > table.md
 
-Each model is converted REPS times (`convert X -o X.step --report r.json`, the defaults) under
-/usr/bin/time; the table gives the median wall time and peak RSS, the STEP size, the faces and
-the poles (from the report), the report's own timings, and the quality report's time over the
-conversion's (quality_ms / the sum of timings_ms). Generated cages, written to a
-temporary directory: a regular 100 000-quad torus (500 x 200) and the triangle mesh of
+Each model is converted REPS times with the report (`convert X -o X.step --report r.json`, the
+defaults) and REPS times without it, alternating, under /usr/bin/time, and checked REPS times
+(`check X --json q.json`). The table gives the median wall time and peak RSS with the report,
+the STEP size, the faces and the poles (from the report), the patches' and the quality stage's
+own times, and what the report costs against the conversion: the wall time `--report` adds
+(median with it minus median without it, over the median without it; the quality stage runs
+beside OCCT's B-rep and STEP writing, which use one core), and `check`'s quality stage (it has
+no B-rep to run beside) over the median conversion without the report. Generated cages, written
+to a temporary directory: a regular 100 000-quad torus (500 x 200) and the triangle mesh of
 catmark_car (every face split into triangles, as a game asset or a scan would give it).
 """
 import json
@@ -46,18 +50,34 @@ def triangulated_obj(src, dst):
                     g.write("f %s %s %s\n" % (ids[0], ids[k], ids[k + 1]))
 
 
-def run(cli, obj, out_dir):
-    step = os.path.join(out_dir, "out.step")
-    report = os.path.join(out_dir, "r.json")
+def timed(cmd, out_dir):
+    """Runs cmd under /usr/bin/time: (wall s, peak RSS MB)."""
     timing = os.path.join(out_dir, "time.txt")
-    cmd = ["/usr/bin/time", "-f", "%e %M", "-o", timing, cli, "convert", obj, "-o", step,
-           "--report", report, "-q"]
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(["/usr/bin/time", "-f", "%e %M", "-o", timing] + cmd, check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(timing) as f:
         wall, rss_kb = f.read().split()[-2:]
-    with open(report) as f:
-        r = json.load(f)
-    return float(wall), int(rss_kb) / 1024.0, os.path.getsize(step) / 1e6, r
+    return float(wall), int(rss_kb) / 1024.0
+
+
+def run(cli, obj, out_dir, report=True):
+    """convert obj to STEP (with --report): wall, RSS, STEP MB, the report (or None)."""
+    step = os.path.join(out_dir, "out.step")
+    path = os.path.join(out_dir, "r.json")
+    wall, rss = timed([cli, "convert", obj, "-o", step, "-q"] + (["--report", path] if report else []), out_dir)
+    r = None
+    if report:
+        with open(path) as f:
+            r = json.load(f)
+    return wall, rss, os.path.getsize(step) / 1e6, r
+
+
+def check_quality_s(cli, obj, out_dir):
+    """check obj: its quality stage's time (s)."""
+    path = os.path.join(out_dir, "q.json")
+    timed([cli, "check", obj, "--json", path, "-q"], out_dir)
+    with open(path) as f:
+        return json.load(f)["quality_ms"] / 1000.0
 
 
 def main():
@@ -74,28 +94,31 @@ def main():
                   ("catmark_helmet", os.path.join(corpus, "catmark_helmet.obj")),
                   ("catmark_car as triangles", car_tris),
                   ("100 000-quad regular torus", torus)]
-        print("| model (cage faces) | wall, median (s) | peak RSS, median (MB) | STEP (MB) | B-rep faces | poles | poles per face | of the wall: patches / quality report (s) | report / conversion, median |")
-        print("|---|---|---|---|---|---|---|---|---|")
+        print("| model (cage faces) | wall, median (s) | peak RSS, median (MB) | STEP (MB) | B-rep faces | poles | poles per face | patches / quality stage (s) | wall without --report (s) | --report adds (of that wall) | check's quality stage / conversion |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|")
         for label, obj in models:
             with open(obj) as f:
                 faces = sum(1 for line in f if line.startswith("f "))
-            runs = [run(cli, obj, tmp) for _ in range(reps)]
+            runs, plain, checks = [], [], []
+            for _ in range(reps):  # alternating, so that the machine's drift hits all alike
+                runs.append(run(cli, obj, tmp))
+                plain.append(run(cli, obj, tmp, report=False)[0])
+                checks.append(check_quality_s(cli, obj, tmp))
             wall = statistics.median(x[0] for x in runs)
             rss = statistics.median(x[1] for x in runs)
+            without = statistics.median(plain)
             size, r = runs[-1][2], runs[-1][3]
             ms = r["timings_ms"]
-            quality_s = r.get("quality_ms", 0.0) / 1000.0
+            quality_s = statistics.median(x[3].get("quality_ms", 0.0) for x in runs) / 1000.0
             # The B-rep's faces and their poles (packed faces by default; the quad patches
             # before packing are r["patches"]).
             poles = r["faces"]["poles"]
             nfaces = r["brep"]["faces"]
-            # The report's cost against the conversion's: quality_ms over the sum of the
-            # conversion's phases (timings_ms: reading, patches, packing, B-rep, writing), per run.
-            ratio = statistics.median(x[3].get("quality_ms", 0.0) / sum(x[3]["timings_ms"].values()) for x in runs)
-            print("| %s (%d) | %.2f | %.0f | %.1f | %d | %d | %.1f | %.2f / %.2f | %.3f |"
+            added = (wall - without) / without
+            check_ratio = statistics.median(checks) / without
+            print("| %s (%d) | %.2f | %.0f | %.1f | %d | %d | %.1f | %.2f / %.2f | %.2f | %+.3f | %.3f |"
                   % (label, faces, wall, rss, size, nfaces, poles, poles / nfaces,
-                     ms["patches"] / 1000.0, quality_s, ratio))
-
+                     ms["patches"] / 1000.0, quality_s, without, added, check_ratio))
 
 if __name__ == "__main__":
     main()
