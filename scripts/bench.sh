@@ -6,7 +6,8 @@
 #                  patch tables), PatchSet -> B-rep (and BRepCheck alone), STEP (ours vs OCCT's
 #                  plain STEPControl_Writer)
 #   bench_models   real models through the command line (scripts/bench_models.py): wall time,
-#                  peak RSS, STEP size, faces and poles; 3 runs each (MODEL_REPS)
+#                  peak RSS, STEP size, faces and poles, what --report and check cost; 3 runs
+#                  each with and without --report, and of check (MODEL_REPS)
 #   bench_packing  packed faces against one face per quad (scripts/bench_packing.py): wall time,
 #                  peak RSS, STEP size, faces, edges, poles; 3 runs each (PACK_REPS)
 #   bench_fit.py   convert --fit interpolate against a plain convert, 10k- and 100k-quad tori
