@@ -410,6 +410,35 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   }
   const PatchBuildInfo& info = c.build.info;
 
+  // The optional quality stage runs on a thread of its own from here on, beside the other
+  // stages: first what depends on the cage alone (the exact limit, the quadric fits at the
+  // cage's vertices) while the patches are packed and measured, then, once `surfaces_ready`
+  // says the patches, the exported faces and the continuity are final (nothing changes them
+  // after that), the patches against the limit while OCCT builds the B-rep and the caller
+  // writes the file (after_brep). Packing, the B-rep and writing use one core; this thread
+  // holds a ThreadReservation meanwhile, so that every parallel loop (the stage's, and this
+  // thread's own) uses one thread fewer and the two never share a core.
+  //
+  // Declared in this order so that an exception unwinds safely: the reservation goes first,
+  // then the promise (broken, it ends the stage's wait with an exception), then the future,
+  // whose destructor waits for the stage's thread, all before `c`.
+  std::future<std::pair<QualityReport, double>> quality;
+  std::promise<void> surfaces_ready;
+  std::optional<ThreadReservation> main_core;
+  if (settings.quality_samples) {
+    stage(Stage::Quality, "measuring against the exact limit surface (beside the next stages)");
+    quality = std::async(std::launch::async,
+                         [&base, &c, samples = *settings.quality_samples, ready = surfaces_ready.get_future()]() mutable {
+                           const auto t0 = Clock::now();
+                           const LimitEvaluator limit(base, c.cage);
+                           const VertexCurvatureComparison quadric = compare_vertex_curvature(limit);
+                           ready.get();
+                           QualityReport q = measure_quality(c.build, limit, c.continuity, samples, &c.exported, quadric);
+                           return std::make_pair(std::move(q), ms_since(t0));
+                         });
+    main_core.emplace();
+  }
+
   // Faces: regular regions packed into one surface each, or one face per quad.
   auto t = Clock::now();
   c.faces = settings.faces;
@@ -430,6 +459,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   stage(Stage::Continuity, "measuring continuity");
   c.continuity = measure_continuity(c.exported.set, kContinuitySamples);
   c.ms.continuity = ms_since(t);
+  surfaces_ready.set_value();
   if (!tolerance_given) measure_deviation_now();
   collect_fans(c);
   measure_caps(c);
@@ -452,34 +482,15 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                 " pole(s); the patches are built from that level-1 cage",
             -1, "", ""});
 
-  // The optional quality stage reads the patches, the exported faces and the continuity, which
-  // nothing changes from here on. OCCT's stages (and the caller's after_brep, e.g. writing the
-  // file) run on one core, so the quality stage runs beside them on a thread of its own; its
-  // result is taken once they are done. (Declared after `c`: an exception unwinds through the
-  // future's destructor, which waits for the thread, before `c` goes.)
-  std::future<std::pair<QualityReport, double>> quality;
-  if (settings.quality_samples) {
-    stage(Stage::Quality, "measuring against the exact limit surface");
-    quality = std::async(std::launch::async, [&base, &c, samples = *settings.quality_samples] {
-      const auto t0 = Clock::now();
-      QualityReport q = measure_quality(base, c, samples);
-      return std::make_pair(std::move(q), ms_since(t0));
-    });
+  if (settings.build_brep) {
+    t = Clock::now();
+    stage(Stage::Brep, "building the B-rep");
+    c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
+    c.has_brep = true;
+    c.ms.brep = ms_since(t);
   }
-  {
-    // This thread's core is OCCT's (and after_brep's) meanwhile: the quality stage's parallel
-    // loops started meanwhile leave it to them.
-    std::optional<ThreadReservation> occt_core;
-    if (quality.valid()) occt_core.emplace();
-    if (settings.build_brep) {
-      t = Clock::now();
-      stage(Stage::Brep, "building the B-rep");
-      c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
-      c.has_brep = true;
-      c.ms.brep = ms_since(t);
-    }
-    if (progress.after_brep) progress.after_brep(c);
-  }
+  if (progress.after_brep) progress.after_brep(c);
+  main_core.reset();  // from here this thread waits: the stage's loops may take every core
   if (quality.valid()) {
     t = Clock::now();
     std::pair<QualityReport, double> measured = quality.get();

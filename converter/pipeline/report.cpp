@@ -285,7 +285,7 @@ std::string quality_report_json(const ConversionResult& c) {
   w.key("faces").begin_object();
   w.members("mode", to_string(c.faces), "total", static_cast<long long>(c.exported.set.patches.size()));
   w.end_object();
-  w.key("quality_ms").number(c.ms.quality);
+  w.members("quality_ms", c.ms.quality, "quality_wait_ms", c.ms.quality_wait);
   write_quality(w.key("quality"), *c.quality, size, 2);
   w.end_object();
   return w.take() + "\n";

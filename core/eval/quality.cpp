@@ -327,6 +327,11 @@ std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b
 
 QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
                               const ContinuityReport& continuity, int n, const PackedSet* exported) {
+  return measure_quality(b, limit, continuity, n, exported, compare_vertex_curvature(limit));
+}
+
+QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit, const ContinuityReport& continuity,
+                              int n, const PackedSet* exported, const VertexCurvatureComparison& quadric) {
   if (n < 2) throw std::invalid_argument("measure_quality: at least 2 samples per side");
   QualityReport q;
   q.samples_per_side = n;
@@ -467,7 +472,7 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit,
       ++q.class_mismatches;
     q.edges.push_back(e);
   }
-  q.quadric = compare_vertex_curvature(limit);
+  q.quadric = quadric;
   return q;
 }
 

@@ -124,5 +124,11 @@ std::vector<std::array<double, 2>> quality_sample_parameters(const PatchBuild& b
 QualityReport measure_quality(const PatchBuild& build, const LimitEvaluator& limit,
                               const ContinuityReport& continuity, int samples_per_side = 9,
                               const PackedSet* exported = nullptr);
+/// As above, with the cage's quadric-fit comparison (QualityReport::quadric) already made: it
+/// depends on the limit alone (compare_vertex_curvature(limit)), so the pipeline makes it
+/// while the patches are still being packed.
+QualityReport measure_quality(const PatchBuild& build, const LimitEvaluator& limit,
+                              const ContinuityReport& continuity, int samples_per_side,
+                              const PackedSet* exported, const VertexCurvatureComparison& quadric);
 
 }  // namespace subd2nurbs

@@ -11,7 +11,9 @@
 #include <TopoDS_Face.hxx>
 #include <gp_Pnt.hxx>
 
+#include <algorithm>
 #include <cstring>
+#include <stdexcept>
 
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
@@ -337,8 +339,9 @@ TEST(QualityStage, IsTheStandaloneMeasureAndItsSectionIsInTheReport) {
   std::vector<std::string> stages;
   pipeline::ConversionProgress progress;
   progress.stage = [&](pipeline::Stage s, const std::string&) { stages.push_back(pipeline::to_string(s)); };
-  // The quality stage starts before the B-rep and runs beside it and after_brep (called once,
-  // after the B-rep, before the result has its quality); the preview comes last.
+  // The quality stage starts once the patches are final, before packing, and runs beside
+  // packing, the measures, the B-rep and after_brep (called once, after the B-rep, before the
+  // result has its quality); the preview comes last.
   int after_brep_calls = 0;
   progress.after_brep = [&](pipeline::ConversionResult& result) {
     ++after_brep_calls;
@@ -349,9 +352,12 @@ TEST(QualityStage, IsTheStandaloneMeasureAndItsSectionIsInTheReport) {
   pipeline::ConversionResult r = pipeline::convert(c.base, c.pos, settings, progress);
   ASSERT_TRUE(r.quality && r.preview);
   EXPECT_EQ(after_brep_calls, 1);
+  const auto index = [&](const std::string& name) { return std::find(stages.begin(), stages.end(), name) - stages.begin(); };
   ASSERT_GE(stages.size(), 4u);
-  const std::vector<std::string> last(stages.end() - 4, stages.end());
-  EXPECT_EQ(last, (std::vector<std::string>{"quality", "brep", "after_brep", "preview"}));
+  EXPECT_LT(index("quality"), index("packing"));
+  EXPECT_LT(index("packing"), index("brep"));
+  const std::vector<std::string> last(stages.end() - 3, stages.end());
+  EXPECT_EQ(last, (std::vector<std::string>{"brep", "after_brep", "preview"}));
   EXPECT_GE(r.ms.quality_wait, 0);
 
   const LimitEvaluator limit(c.base, c.pos);
@@ -379,6 +385,31 @@ TEST(QualityStage, IsTheStandaloneMeasureAndItsSectionIsInTheReport) {
   const size_t from = at + key.size(), to = report.find(",\n  \"quality_ms\"", at);
   EXPECT_EQ(check.substr(in_check + key.size(), check.size() - 3 - in_check - key.size()),
             report.substr(from, to - from));
+}
+
+// The quality stage runs on a thread of its own from before packing to after the B-rep: an
+// exception on the conversion's thread at any point of that (here from the progress callback
+// or from after_brep) comes out of convert, with the stage's thread stopped, never a hang.
+TEST(QualityStage, ExceptionsBesideItEndTheConversion) {
+  Converted c = convert_shape("catmark_cube_creases0");
+  for (const char* where : {"packing", "continuity", "brep", "after_brep"}) {
+    pipeline::ConversionSettings settings;
+    settings.level = 0;
+    settings.quality_samples = 5;
+    pipeline::ConversionProgress progress;
+    progress.stage = [&](pipeline::Stage s, const std::string&) {
+      if (pipeline::to_string(s) == std::string(where)) throw std::runtime_error(where);
+    };
+    progress.after_brep = [&](pipeline::ConversionResult&) {
+      if (std::string(where) == "after_brep") throw std::runtime_error(where);
+    };
+    try {
+      pipeline::convert(c.base, c.pos, settings, progress);
+      ADD_FAILURE() << "no exception from " << where;
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), where);
+    }
+  }
 }
 
 TEST(QualityStage, SamplesFollowTheirRules) {
