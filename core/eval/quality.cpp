@@ -43,11 +43,13 @@ Point3 limit_normal(const LimitEvaluator& L, const LimitParam& p) {
 /// Level-a face of a patch.
 int coarse_face(const PatchBuild& b, int patch) { return b.coarse_face.at(static_cast<size_t>(patch)); }
 
-/// Closest point on the limit surface near `start` (Gauss-Newton in the start's face,
-/// parameters clamped to [0,1]^2). The search stops once a step would move the point by less
-/// than `stop` (model units): the distance cannot drop by more than that.
-double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x, double stop) {
-  LimitPoint q = L.evaluate_point(p.face, p.sub, p.u, p.v);
+/// Closest point on the limit surface near `p` (Gauss-Newton in p's face, parameters clamped
+/// to [0,1]^2). The search stops once a step would move the point by less than `stop` (model
+/// units): the distance cannot drop by more than that. `at_p`: the limit at p when the caller
+/// has it already.
+double closest_distance(const LimitEvaluator& L, LimitParam p, const Point3& x, double stop,
+                        const LimitSample* at_p = nullptr) {
+  LimitPoint q = at_p ? LimitPoint{at_p->p, at_p->du, at_p->dv} : L.evaluate_point(p.face, p.sub, p.u, p.v);
   double best = norm(sub(q.p, x));
   for (int it = 0; it < 12 && best > 0; ++it) {
     const Point3 r = sub(q.p, x);
@@ -157,28 +159,40 @@ class MeasuredSurfaces {
 };
 
 /// The limit at quad patch `pi`'s grid (s_i, t_j), out[i * t.size() + j], through
-/// LimitEvaluator::evaluate_grid: patch_to_limit turns and scales a quad's parameters, so each
-/// limit parameter follows one of s and t.
-void limit_grid(const PatchBuild& b, const LimitEvaluator& limit, int pi, const SampleGrid& g,
-                std::vector<LimitSample>& out) {
-  const size_t ns = g.s.size(), nt = g.t.size();
-  const LimitParam at = patch_to_limit(b, pi, g.s[0], g.t[0]);
-  const bool turned = patch_to_limit(b, pi, g.s[1], g.t[0]).u == at.u;  // u follows t, v follows s
+/// Where a quad's sample grid (s_i, t_j) lies on the limit: patch_to_limit turns and scales a
+/// quad's parameters, so each limit parameter follows one of s and t.
+struct LimitGrid {
+  LimitParam at;        ///< the face, sub-face and parameters of (s_0, t_0)
+  bool turned = false;  ///< u follows t, v follows s
   Parameters of_s, of_t;
-  for (size_t i = 0; i < ns; ++i) {
-    const LimitParam l = patch_to_limit(b, pi, g.s[i], g.t[0]);
-    of_s.push_back(turned ? l.v : l.u);
+
+  LimitGrid(const PatchBuild& b, int pi, const SampleGrid& g) : at(patch_to_limit(b, pi, g.s[0], g.t[0])) {
+    turned = patch_to_limit(b, pi, g.s[1], g.t[0]).u == at.u;
+    for (double s : g.s) {
+      const LimitParam l = patch_to_limit(b, pi, s, g.t[0]);
+      of_s.push_back(turned ? l.v : l.u);
+    }
+    for (double t : g.t) {
+      const LimitParam l = patch_to_limit(b, pi, g.s[0], t);
+      of_t.push_back(turned ? l.u : l.v);
+    }
   }
-  for (size_t j = 0; j < nt; ++j) {
-    const LimitParam l = patch_to_limit(b, pi, g.s[0], g.t[j]);
-    of_t.push_back(turned ? l.u : l.v);
+  /// The limit parameters of sample (s_i, t_j): patch_to_limit(b, pi, s_i, t_j).
+  LimitParam param(size_t i, size_t j) const {
+    LimitParam l = at;
+    l.u = turned ? of_t[j] : of_s[i];
+    l.v = turned ? of_s[i] : of_t[j];
+    return l;
   }
-  on_quad_grid(turned, of_s, of_t,
-               [&](const double* us, int nu, const double* vs, int nv, LimitSample* o) {
-                 limit.evaluate_grid(at.face, at.sub, us, nu, vs, nv, o);
-               },
-               out);
-}
+  /// The limit at the grid, out[i * t.size() + j] at param(i, j) (LimitEvaluator::evaluate_grid).
+  void evaluate(const LimitEvaluator& limit, std::vector<LimitSample>& out) const {
+    on_quad_grid(turned, of_s, of_t,
+                 [&](const double* us, int nu, const double* vs, int nv, LimitSample* o) {
+                   limit.evaluate_grid(at.face, at.sub, us, nu, vs, nv, o);
+                 },
+                 out);
+  }
+};
 
 /// Samples reduced in order: counts, sums and maxima, with the rules of the report (the worst
 /// distance is the first sample reaching it, the largest |H| the last). Merging reductions in
@@ -360,7 +374,8 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit, 
       out.polynomial = sampled_as_polynomial(b, limit, pi, exported);
       for (const SampleGrid& g : quality_sample_grids(b, pi, n, out.polynomial)) {
         measured_surface.points(pi, g, grid);
-        limit_grid(b, limit, pi, g, limit_samples);
+        const LimitGrid on_limit(b, pi, g);
+        on_limit.evaluate(limit, limit_samples);
         for (size_t k = 0; k < grid.size(); ++k) {
           DeviationSample d;
           d.patch = pi;
@@ -370,10 +385,11 @@ QualityReport measure_quality(const PatchBuild& b, const LimitEvaluator& limit, 
           const LimitSample& L = limit_samples[k];
           d.parametric = norm(sub(d.point, L.p));
           // The closest-point distance is at most the same-parameter one; searching for it only
-          // pays where the patch is not the limit itself (Construction Q reparametrizes).
-          d.limit = patch_to_limit(b, d.patch, d.s, d.t);
+          // pays where the patch is not the limit itself (Construction Q reparametrizes). It
+          // starts from the limit sample at the same parameters.
+          d.limit = on_limit.param(k / g.t.size(), k % g.t.size());
           d.distance = d.parametric > same_surface
-                           ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface))
+                           ? std::min(d.parametric, closest_distance(limit, d.limit, d.point, same_surface, &L))
                            : d.parametric;
           out.add(d, L);
         }
