@@ -12,6 +12,7 @@
 
 #include "core/limit/stam_eigen.h"
 #include "core/mesh/marks.h"
+#include "core/refine/quad_grid.h"
 #include "core/util/bicubic.h"
 #include "core/util/constants.h"
 #include "core/util/parallel.h"
@@ -69,15 +70,6 @@ Affine child_map(int k) {
   Affine a = corner_frame(k);
   a.m00 *= 2; a.m01 *= 2; a.m10 *= 2; a.m11 *= 2; a.c0 *= 2; a.c1 *= 2;
   return a;
-}
-/// Face grid point (i, j) of corner-k-frame point (a, b).
-void corner_to_grid(int k, int a, int b, int& i, int& j) {
-  switch (k & 3) {
-    case 0: i = a; j = b; return;
-    case 1: i = 1 - b; j = a; return;
-    case 2: i = 1 - a; j = 1 - b; return;
-    default: i = b; j = 1 - a; return;
-  }
 }
 
 void axpy(Point3& y, double a, const Point3& x) {
@@ -268,75 +260,11 @@ CornerKind classify_corner(const SubdivLevel& L, int h) {
   return infinite(L.edge_sharpness[other]) ? CornerKind::CreaseSide : CornerKind::Other;
 }
 
-// ---------------------------------------------------------------------------------------------
-// The 4x4 grid of a quad (face grid coordinates i, j in -1..2; index (i+1)*4 + (j+1))
-
-struct Grid {
-  Point3 P[16];
-  bool have[16] = {};
-  int vertex[16] = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};  ///< -1: phantom
-  Point3& at(int i, int j) { return P[(i + 1) * 4 + (j + 1)]; }
-  bool& has(int i, int j) { return have[(i + 1) * 4 + (j + 1)]; }
-  int& vertex_at(int i, int j) { return vertex[(i + 1) * 4 + (j + 1)]; }
-  void set(int i, int j, const Point3& p) { at(i, j) = p; has(i, j) = true; }
-};
-
-/// Gathers real points: the face, the rows across smooth sides, the diagonal points at
-/// corners of kind Regular; then phantom points (docs/math.md 6.2) across infinitely sharp sides.
-void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, const CornerKind kind[4],
-                 Grid& g) {
-  const PolyMesh& m = L.mesh;
-  const int h0 = m.face_begin(f);
-  const int hk[4] = {h0, h0 + 1, h0 + 2, h0 + 3};
-  auto put = [&](int k, int a, int b, int vertex) {
-    int i, j;
-    corner_to_grid(k, a, b, i, j);
-    g.set(i, j, P[vertex]);
-    g.vertex_at(i, j) = vertex;
-  };
-  // Semi-sharp sides occur only in prepare_semi_sharp's grids: real points across them.
-  bool sharp_side[4];
-  for (int k = 0; k < 4; ++k) {
-    const int h = hk[k];
-    put(k, 0, 0, m.corner_vertex(h));
-    sharp_side[k] = infinite(L.edge_sharpness[m.corner_edge(h)]);
-    if (sharp_side[k]) continue;
-    const int t = m.twin(h);  // across side k: quad (to, from, x, y)
-    put(k, 0, -1, m.to_vertex(m.next(t)));
-    put(k, 1, -1, m.corner_vertex(m.prev(t)));
-    if (kind[k] == CornerKind::Regular) {
-      const int q = m.twin(m.next(t));
-      put(k, -1, -1, m.corner_vertex(m.prev(q)));
-    }
-  }
-  // Side k of the face in grid terms: 0 is j = -1 (v = 0), 1 is i = 2, 2 is j = 2, 3 is i = -1.
-  // Phantoms across sharp u-sides (i = -1 / i = 2) first, then v-sides for every i.
-  if (sharp_side[3] || sharp_side[1]) {
-    for (int j = -1; j <= 2; ++j) {
-      if (sharp_side[3] && g.has(0, j) && g.has(1, j)) {
-        Point3 q;
-        for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(0, j)[c] - g.at(1, j)[c];
-        g.set(-1, j, q);
-      }
-      if (sharp_side[1] && g.has(1, j) && g.has(0, j)) {
-        Point3 q;
-        for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(1, j)[c] - g.at(0, j)[c];
-        g.set(2, j, q);
-      }
-    }
-  }
-  for (int i = -1; i <= 2; ++i) {
-    if (sharp_side[0] && g.has(i, 0) && g.has(i, 1)) {
-      Point3 q;
-      for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(i, 0)[c] - g.at(i, 1)[c];
-      g.set(i, -1, q);
-    }
-    if (sharp_side[2] && g.has(i, 1) && g.has(i, 0)) {
-      Point3 q;
-      for (int c = 0; c < 3; ++c) q[c] = 2 * g.at(i, 1)[c] - g.at(i, 0)[c];
-      g.set(i, 2, q);
-    }
-  }
+/// Quad f's grid (gather_quad_grid) with the diagonal points of the Regular corners.
+void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, const CornerKind kind[4], QuadGrid& g) {
+  const bool diagonal[4] = {kind[0] == CornerKind::Regular, kind[1] == CornerKind::Regular,
+                            kind[2] == CornerKind::Regular, kind[3] == CornerKind::Regular};
+  gather_quad_grid(L, P, f, diagonal, g);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -379,7 +307,7 @@ Prepared prepare_semi_sharp(const SubdivLevel& L, const std::vector<Point3>& P, 
       if (m.face_size(m.corner_face(c[i])) != 4) return out;
     kind[k] = CornerKind::Regular;
   }
-  Grid g;
+  QuadGrid g;
   gather_grid(L, P, f, kind, g);
   for (int i = 0; i < 16; ++i)
     if (g.vertex[i] < 0) return out;  // a phantom: an infinitely sharp side
@@ -440,7 +368,7 @@ Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
   }
   if (bad > 0) return prepare_semi_sharp(L, P, f);
   if (ev == 4) return out;
-  Grid g;
+  QuadGrid g;
   gather_grid(L, P, f, kind, g);
   if (ev < 0) {
     for (int i = 0; i < 16; ++i)
