@@ -209,12 +209,6 @@ void validate(const ConversionSettings& settings) {
   if (settings.preview) check_samples("preview_samples", settings.preview->samples);
 }
 
-QualityReport measure_quality(const SubdivLevel& base, const ConversionResult& c, int samples) {
-  check_samples("samples", samples);
-  const LimitEvaluator limit(base, c.cage);
-  return measure_quality(c.build, limit, c.continuity, samples, &c.exported);
-}
-
 PreviewMesh build_preview(const SubdivLevel& base, const ConversionResult& c, const PreviewSettings& preview) {
   check_samples("preview_samples", preview.samples);
   std::optional<LimitEvaluator> limit;  // the deviation colouring measures against the exact limit

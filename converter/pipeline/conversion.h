@@ -273,9 +273,6 @@ PreviewColor preview_color(const std::string& name);
 /// Samples per patch side of a preview or a quality measure: 2 .. 64. \throw SettingsError (`setting`)
 void check_samples(const std::string& setting, int samples);
 
-/// The quality stage on its own: `result`'s patches (build, continuity, exported faces)
-/// against the exact limit of the cage it converted (`base` with result.cage).
-QualityReport measure_quality(const SubdivLevel& base, const ConversionResult& result, int samples_per_side);
 /// The preview stage on its own, e.g. for a result converted without it (the FreeCAD colour map
 /// of a NURBS object's last conversion). \throw SettingsError ("preview_samples")
 PreviewMesh build_preview(const SubdivLevel& base, const ConversionResult& result, const PreviewSettings& preview);
