@@ -21,9 +21,7 @@ struct LevelView {
   const PolyMesh& m;
   const std::vector<Point3>& x;
 
-  bool sharp(int e) const {
-    return m.is_boundary_edge(e) || level.edge_sharpness[e] >= kInfiniteSharpness;
-  }
+  bool sharp(int e) const { return level.infinitely_sharp(e); }
   // The ray along corner c's edge, leaving corner_vertex(c).
   bool sharp_ray_out(int c) const { return sharp(m.corner_edge(c)); }
   // The ray along prev(c)'s edge, i.e. the other edge of c's face at corner_vertex(c).

@@ -23,9 +23,8 @@ void gather_quad_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f,
   bool sharp_side[4];
   for (int k = 0; k < 4; ++k) {
     const int h = h0 + k;
-    const int e = m.corner_edge(h);
     put(k, 0, 0, m.corner_vertex(h));
-    sharp_side[k] = m.is_boundary_edge(e) || L.edge_sharpness[e] >= static_cast<float>(kInfiniteSharpness);
+    sharp_side[k] = L.infinitely_sharp(m.corner_edge(h));
     if (sharp_side[k]) continue;
     const int t = m.twin(h);  // across side k: quad (to, from, x, y)
     put(k, 0, -1, m.to_vertex(m.next(t)));

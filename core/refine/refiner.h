@@ -36,6 +36,11 @@ struct SubdivLevel {
 
   /// Largest finite (semi-sharp) sharpness on any edge or vertex, 0 if none.
   double max_semi_sharpness() const;
+  /// True if edge e is infinitely sharp: tagged so, or a boundary edge of this mesh (tagged so
+  /// on a level, untagged on a local piece cut out of one).
+  bool infinitely_sharp(int e) const {
+    return mesh.is_boundary_edge(e) || edge_sharpness[e] >= kInfiniteSharpness;
+  }
 };
 
 /// True if base-level tagging (SubdivLevel::from_input) makes v infinitely sharp by itself,
