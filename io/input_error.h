@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/mesh/errors.h"
+#include "core/util/error.h"
 #include "io/input_file.h"
 
 namespace subd2nurbs {
@@ -15,11 +16,11 @@ namespace subd2nurbs {
 /// An input file could not be read, or its content is not a valid cage.
 /// what() is "FILE:LINE: message", or "FILE: message" when no single line is at fault
 /// (an unreadable or empty file).
-class InputError : public std::runtime_error {
+class InputError : public Error {
  public:
   InputError(std::string file, int line, std::string message,
              std::optional<MeshErrorCode> code = std::nullopt)
-      : std::runtime_error(format(file, line, message)), file_(std::move(file)), line_(line),
+      : Error(ErrorKind::Input, format(file, line, message)), file_(std::move(file)), line_(line),
         message_(std::move(message)), code_(code) {}
 
   const std::string& file() const { return file_; }
@@ -48,10 +49,10 @@ class InputError : public std::runtime_error {
 };
 
 /// An output file could not be written. what() is "FILE: message".
-class WriteError : public std::runtime_error {
+class WriteError : public Error {
  public:
   WriteError(std::string file, std::string message)
-      : std::runtime_error(printable(file) + ": " + message), file_(std::move(file)),
+      : Error(ErrorKind::Write, printable(file) + ": " + message), file_(std::move(file)),
         message_(std::move(message)) {}
 
   const std::string& file() const { return file_; }

@@ -19,28 +19,19 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
       "Measure the conversion's patches against the exact limit surface: deviation, gaps and "
       "normal jumps per edge with the class each edge should have, curvature",
       o.mesh);
-  c->add_option("--level", o.level,
-                "Pin the refinement levels beyond the minimum (as convert --level; default: the "
-                "levels convert's default tolerance chooses)")
-      ->each([&o](const std::string&) { o.level_given = true; });
-  c->add_option("--faces", o.faces,
-                "The faces measured: packed (default, as convert exports them) or per-quad; every sample "
-                "of a coarse quad is taken on the face that holds it");
   c->add_option("--json", o.json, "Write the quality report as JSON");
-  c->add_option("--samples", o.samples, "Samples per patch side (default 9)");
   c->add_flag("-q,--quiet", o.quiet, "No progress, notes or summary (warnings are still printed)");
-  add_limit_options(*c, o.limits, "the faces of the refined mesh the patches are built from (as convert)");
+  add_setting_options(*c, pipeline::kCheckCommand, o.settings);
   return c;
 }
 
 void run_check(const CheckOptions& o, std::ostream& err) {
-  pipeline::ConversionSettings settings;  // the same patches as convert without options
-  if (o.level_given) settings.level = o.level;
-  settings.build_brep = false;
-  settings.faces = pipeline::face_mode(o.faces);
-  settings.limits = resource_limits(o.limits);
-  settings.quality_samples = o.samples;  // the quality stage is what check is for
-  pipeline::validate(settings);
+  // The same patches as convert with the same settings, no B-rep; the quality stage is what
+  // check is for.
+  SettingValues given = o.settings;
+  given.emplace_back("brep", false);
+  pipeline::ConversionSettings settings = pipeline::make_settings(given).conversion;
+  if (!settings.quality_samples) settings.quality_samples = pipeline::kReportQualitySamples;
   check_outputs(o.mesh, {{"--json", o.json}});
   if (!o.quiet) err << "subd2nurbs: reading " << o.mesh << "\n";
   const LoadedInput loaded = load_input(o.mesh);

@@ -1,4 +1,4 @@
-// `subd2nurbs check MESH [--level N] [--faces packed|per-quad] [--json R.json] [--samples N]`: the conversion's patches
+// `subd2nurbs check MESH [--level N] [--faces packed|per-quad] [--json R.json] [--samples N] ...`: the conversion's patches
 // (no B-rep) measured against the exact limit surface (core/eval/quality.h): deviation, joins
 // against the class each edge should have, curvature. Summary on stderr, JSON on request
 // (docs/formats.md, "Quality report").
@@ -17,13 +17,11 @@ namespace subd2nurbs::cli {
 
 struct CheckOptions {
   std::string mesh;
-  int level = 0;     ///< with level_given: pinned extra levels (else the default tolerance, as convert)
-  bool level_given = false;
   std::string json;  ///< output path, empty for none
-  int samples = 9;   ///< per patch side
-  std::string faces = "packed";  ///< the faces measured: packed or per-quad (as convert --faces)
   bool quiet = false;
-  LimitOptionValues limits;  ///< --max-faces, --max-memory
+  /// The settings table's options of check as given (--level, --faces, --samples, --max-faces,
+  /// --max-memory; converter/pipeline/settings.h): the same patches as convert with them.
+  SettingValues settings;
 };
 
 CLI::App* add_check_command(CLI::App& app, CheckOptions& options);

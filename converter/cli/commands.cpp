@@ -258,12 +258,57 @@ void DiagnosticPrinter::finish() {
   poles_.clear();
 }
 
+std::string error_message(const Error& e, const std::string& input) {
+  if (const auto* s = dynamic_cast<const pipeline::SettingsError*>(&e))
+    return "subd2nurbs: error: " + option_name(s->setting()) + " " + s->rule();
+  if (const auto* i = dynamic_cast<const InputError*>(&e)) return i->location() + ": error: " + i->message();
+  switch (e.kind()) {
+    case ErrorKind::Input:  // found after validation (e.g. every face a hole): about the cage as a whole
+      return printable(input) + ": error: " + e.what();
+    case ErrorKind::Write: return std::string("subd2nurbs: cannot write ") + e.what();
+    case ErrorKind::Export: return std::string("subd2nurbs: export failed: ") + e.what();
+    default: return std::string("subd2nurbs: error: ") + e.what();
+  }
+}
+
 std::string option_name(const std::string& setting) {
-  if (setting == "polar_lambda") return "--lambda";
-  if (setting == "preview") return "--color";
+  if (const pipeline::SettingRow* row = pipeline::find_setting(setting); row && !row->cli.empty()) return row->cli;
   std::string name = "--" + setting;
   std::replace(name.begin(), name.end(), '_', '-');
   return name;
+}
+
+void add_setting_options(CLI::App& app, pipeline::SettingCommand command, SettingValues& values,
+                         const std::vector<pipeline::SettingRow>& table) {
+  using pipeline::SettingType;
+  for (const pipeline::SettingRow& row : table) {
+    if (row.cli.empty() || !(row.commands & command)) continue;
+    const std::string name = row.name;
+    auto store = [&values, name](pipeline::SettingValue v) { values.emplace_back(name, std::move(v)); };
+    std::string help = row.help;
+    if (row.type != SettingType::Flag) {
+      const std::string d = std::holds_alternative<std::monostate>(row.default_value)
+                                ? row.default_text
+                                : pipeline::value_text(row, row.default_value);
+      if (!d.empty()) help += " (default: " + d + ")";
+    }
+    switch (row.type) {
+      case SettingType::Flag:
+        app.add_flag_callback(row.cli, [store] { store(true); }, help);
+        break;
+      case SettingType::Integer:
+        app.add_option_function<int>(row.cli, [store](const int& x) { store(static_cast<long long>(x)); }, help);
+        break;
+      case SettingType::Number:
+        app.add_option_function<double>(row.cli, [store](const double& x) { store(x); }, help);
+        break;
+      case SettingType::OnOff:
+      case SettingType::Word:
+      case SettingType::Size:
+        app.add_option_function<std::string>(row.cli, [store](const std::string& x) { store(x); }, help);
+        break;
+    }
+  }
 }
 
 // --- subcommands ---------------------------------------------------------------------------
@@ -344,54 +389,17 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
       ->add_option("-o,--output", convert.output,
                    "Output file: .step/.stp, .iges/.igs, .brep, or .json (the patches as JSON)")
       ->required();
-  CLI::Option* level_option =
-      convert_command
-          ->add_option("--level", convert.level,
-                       "Pin the refinement levels beyond the minimum at every fan instead of "
-                       "choosing them from the tolerance: each level shrinks the deviation near "
-                       "extraordinary vertices");
-  CLI::Option* tolerance_option =
-      convert_command
-          ->add_option("--tolerance", convert.tolerance,
-                       "Deviation from the limit surface to reach, relative to the bounding-box "
-                       "diagonal (see --absolute): each fan gets the levels it needs, at most " +
-                           std::to_string(kMaxFanExtraLevels) + " extra (default 1e-4 unless --level is given)");
-  convert_command->add_flag("--absolute", convert.absolute, "--tolerance is in model units");
-  convert_command->add_option("--polar", convert.polar,
-                              "Polar structures: on (one singular polar cap each, default) or off "
-                              "(Catmull-Clark)");
-  convert_command->add_option("--radial-steps", convert.radial_steps,
-                              "Radial BP pre-steps of a polar cap: 1 (default) or 2 (elongated shapes)");
-  convert_command->add_flag("--separate-poles", convert.separate_poles,
-                            "Poles of valence 3..5 or too close to another: one separating "
-                            "Catmull-Clark step first (docs/math.md 3.7), then polar caps");
-  convert_command->add_option("--lambda", convert.lambda,
-                              "Scale of a polar cap's projected 1-link, > 0 (default 0.75)");
-  convert_command->add_option("--faces", convert.faces,
-                              "packed (default: each regular region of quads is one B-spline face) or "
-                              "per-quad (one face per coarse quad)");
-  // The schema's rule is the converter's (pipeline::step_schema), checked by run_convert.
-  convert_command->add_option("--schema", convert.schema, "STEP schema: ap214 (default) or ap242");
   convert_command->add_option("--report", convert.report,
                               "Also write a JSON report (counts, continuity, deviation, timings)");
   convert_command->add_option("--preview", convert.preview,
-                              "Also write a GLB preview of the patches with per-vertex colours");
-  convert_command->add_option("--color", convert.preview_color,
-                              "Preview colouring: deviation (from the exact limit), curvature (mean), zebra");
-  convert_command->add_option("--preview-samples", convert.preview_samples,
-                              "Preview vertices per patch side, 2 .. 64 (default 12)");
-  convert_command->add_option("--fit", convert.fit,
-                              "approximate (default: the cage's own limit surface, which misses its "
-                              "vertices) or interpolate (solve for the cage whose limit passes through them)");
-  CLI::Option* fair_option = convert_command->add_option(
-      "--fair", convert.fair,
-      "With --fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
-      "interpolation (noisy points give a smooth surface)");
-  add_limit_options(*convert_command, convert.limits,
-                    "the polynomial pieces the patches are built from, estimated (default " +
-                        number(pipeline::kDefaultMaxConvertFaces) + ")");
+                              "Also write a GLB preview of the patches with per-vertex colours (see --color)");
+  add_setting_options(*convert_command, pipeline::kConvertCommand, convert.settings);
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress, notes or summary on stderr (warnings are still printed)");
+
+  CLI::App* settings_command = app.add_subcommand(
+      "settings", "Print every setting of convert (and check) as a Markdown table: the command line's flag, the "
+                  "Python keyword, the FreeCAD property, type, default and meaning (docs/settings.md)");
 
   LimitOptions limit;
   CLI::App* limit_command = add_limit_command(app, limit);
@@ -409,44 +417,20 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
 
   std::string current_input = info.mesh + refine.mesh + convert.mesh + limit.mesh + check.mesh;
   try {
+    if (*settings_command) out << pipeline::settings_markdown();
     if (*info_command) run_info(info, out);
     if (*refine_command) run_refine(refine, err);
     if (*limit_command) run_limit(limit, std::cin, out, err);
     if (*check_command) run_check(check, err);
     if (*fair_command) run_fair(fair, err);
     if (*convert_command) {
-      convert.level_given = level_option->count() > 0;
-      convert.tolerance_given = tolerance_option->count() > 0;
-      convert.fair_given = fair_option->count() > 0;
       convert.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       run_convert(convert, err);
     }
     return kOk;
-  } catch (const UsageError& e) {
-    err << "subd2nurbs: error: " << e.what() << "\n";
-    return kUsage;
-  } catch (const pipeline::SettingsError& e) {
-    err << "subd2nurbs: error: " << option_name(e.setting()) << " " << e.rule() << "\n";
-    return kUsage;
-  } catch (const pipeline::ResourceError& e) {
-    err << "subd2nurbs: error: " << e.what() << "\n";
-    return kUsage;
-  } catch (const InputError& e) {
-    err << e.location() << ": error: " << e.message() << "\n";
-    return kInvalidInput;
-  } catch (const InvalidMeshError& e) {
-    // Found after validation (e.g. every face a hole): about the cage as a whole.
-    err << printable(current_input) << ": error: " << e.what() << "\n";
-    return kInvalidInput;
-  } catch (const WriteError& e) {
-    err << "subd2nurbs: cannot write " << e.what() << "\n";
-    return kWriteFailure;
-  } catch (const occt::ExportError& e) {
-    err << "subd2nurbs: export failed: " << e.what() << "\n";
-    return kInternalError;
-  } catch (const FitError& e) {
-    err << "subd2nurbs: error: " << e.what() << "\n";
-    return kInvalidInput;
+  } catch (const Error& e) {
+    err << error_message(e, current_input) << "\n";
+    return pipeline::exit_code(e);
   } catch (const std::bad_alloc&) {
     err << "subd2nurbs: out of memory\n";
     return kInternalError;

@@ -10,8 +10,11 @@
 #include <vector>
 
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/errors.h"
 #include "converter/pipeline/resources.h"
+#include "converter/pipeline/settings.h"
 #include "core/refine/refiner.h"
+#include "core/util/error.h"
 #include "io/obj_reader.h"
 
 namespace CLI {
@@ -20,14 +23,15 @@ class App;
 
 namespace subd2nurbs::cli {
 
-/// Process exit codes (also listed in `subd2nurbs --help`).
-enum ExitCode : int {
-  kOk = 0,
-  kUsage = 1,          ///< bad command line: unknown option, missing argument, bad value
-  kInvalidInput = 2,   ///< the input file is unreadable, malformed or not a valid cage
-  kWriteFailure = 3,   ///< an output file could not be written
-  kInternalError = 4,  ///< a bug, an unexpected failure (e.g. out of memory), a failed export
-};
+/// Process exit codes (also listed in `subd2nurbs --help`): one per kind of error, by the
+/// pipeline's table (converter/pipeline/errors.h).
+constexpr int kOk = pipeline::kExitOk;
+constexpr int kUsage = pipeline::kExitUsage;
+constexpr int kInternalError = pipeline::kExitInternalError;
+
+/// The command line's words for an error of the family (core/util/error.h): the setting as
+/// its flag, an input error at FILE:LINE, an invalid cage found after validation at `input`.
+std::string error_message(const Error& e, const std::string& input);
 
 /// A cage read (OBJ with tags, or glTF with quad recovery: io/gltf_reader.h read_cage) and
 /// validated, with the reader's and validation's warnings formatted "FILE:LINE: warning: ...".
@@ -56,7 +60,16 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
 CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::string& description,
                            std::string& mesh);
 
-/// The --max-faces / --max-memory options of a subcommand.
+/// The settings a subcommand was given, by the names of the settings table
+/// (converter/pipeline/settings.h), in the order given.
+using SettingValues = std::vector<std::pair<std::string, pipeline::SettingValue>>;
+/// Declares an option for every row of the settings table that `command` offers (its flag, its
+/// help, a value of its type), each storing what it is given in `values`.
+/// `table`: the settings table (a test passes its own copy with a row added).
+void add_setting_options(CLI::App& app, pipeline::SettingCommand command, SettingValues& values,
+                         const std::vector<pipeline::SettingRow>& table = pipeline::settings_table());
+
+/// The --max-faces / --max-memory options of refine (its own meaning of faces: output faces).
 struct LimitOptionValues {
   std::optional<double> max_faces;  ///< not given: the default
   std::string max_memory;  ///< empty: the default; else bytes with an optional K/M/G/T suffix
@@ -82,8 +95,9 @@ class DiagnosticPrinter {
   std::vector<pipeline::ConversionDiagnostic> poles_;
 };
 
-/// The command-line spelling of a pipeline setting (pipeline::SettingsError::setting):
-/// "radial_steps" -> "--radial-steps", "polar_lambda" -> "--lambda".
+/// The command-line spelling of a pipeline setting (pipeline::SettingsError::setting): the
+/// settings table's flag ("polar_lambda" -> "--lambda"), else "--" and the name with dashes
+/// ("weight" -> "--weight", fair's own settings).
 std::string option_name(const std::string& setting);
 
 struct InfoOptions {
@@ -108,9 +122,9 @@ void run_info(const InfoOptions& options, std::ostream& out);
 void run_refine(const RefineOptions& options, std::ostream& err);
 
 /// A valid command line asking for something impossible (exit code kUsage).
-class UsageError : public std::runtime_error {
+class UsageError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit UsageError(const std::string& message) : Error(ErrorKind::Usage, message) {}
 };
 
 /// Parses the command line, runs the subcommand and returns the exit code. Never throws.

@@ -181,27 +181,16 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
         << " vertices' fans deepened, by up to " << c.tolerance.used << " levels\n";
 }
 
-/// The settings of `options`, checked by the pipeline's rules before any work.
-pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, bool build_brep) {
-  pipeline::ConversionSettings settings;
-  settings.patch.polar = pipeline::polar_mode(options.polar);
-  if (options.level_given) settings.level = options.level;
-  if (options.tolerance_given) settings.tolerance = options.tolerance;
-  settings.absolute = options.absolute;
-  settings.build_brep = build_brep;
-  settings.faces = pipeline::face_mode(options.faces);
-  settings.limits = resource_limits(options.limits);
-  settings.patch.cap.radial_steps = options.radial_steps;
-  settings.patch.cap.lambda = options.lambda;
-  settings.patch.separate_poles = options.separate_poles;
-  settings.fit.mode = pipeline::fit_mode(options.fit);
-  if (options.fair_given) settings.fit.fair_weight = options.fair;
-  // The optional stages: the quality section of the report, the preview.
-  if (!options.report.empty()) settings.quality_samples = pipeline::kReportQualitySamples;
-  pipeline::validate(settings);
-  const PreviewColor color = pipeline::preview_color(options.preview_color);
-  pipeline::check_samples("preview_samples", options.preview_samples);
-  if (!options.preview.empty()) settings.preview = pipeline::PreviewSettings{color, options.preview_samples};
+/// The settings of `options`, checked by the pipeline's rules before any work: the table's
+/// options as given; the B-rep unless the output is patch JSON; the quality stage for --report;
+/// a preview (curvature unless --color says otherwise) only with --preview.
+pipeline::Settings conversion_settings(const ConvertOptions& options, bool build_brep) {
+  SettingValues given = options.settings;
+  given.emplace_back("brep", build_brep);
+  pipeline::Settings settings = pipeline::make_settings(given);
+  if (!options.report.empty()) settings.conversion.quality_samples = pipeline::kReportQualitySamples;
+  if (options.preview.empty()) settings.preview.reset();
+  else if (!settings.preview) settings.preview = PreviewColor::Curvature;
   return settings;
 }
 
@@ -210,9 +199,10 @@ pipeline::ConversionSettings conversion_settings(const ConvertOptions& options, 
 // --- the subcommand ------------------------------------------------------------------------
 
 void run_convert(const ConvertOptions& options, std::ostream& err) {
-  const occt::StepSchema schema = pipeline::step_schema(options.schema);
   const OutputKind kind = output_kind(options.output);
-  const pipeline::ConversionSettings settings = conversion_settings(options, kind != OutputKind::Json);
+  const pipeline::Settings all = conversion_settings(options, kind != OutputKind::Json);
+  const occt::StepSchema schema = all.write.schema;
+  const pipeline::ConversionSettings settings = pipeline::conversion_settings(all);
   check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
 
   Progress progress(err, options.quiet, options.progress_tty);

@@ -14,10 +14,11 @@ using pipeline::short_number;
 StagedFile stage_preview(const ConvertOptions& o, const pipeline::ConversionResult& c, std::ostream& err) {
   if (!c.preview) throw std::logic_error("stage_preview: the conversion ran without the preview stage");
   const PreviewMesh& mesh = *c.preview;
-  if (!o.quiet) err << "subd2nurbs: writing the preview " << o.preview << " (" << o.preview_color << ")\n";
-  StagedFile file = stage_preview_glb(o.preview, mesh, o.mesh + " (" + o.preview_color + ")");
+  const std::string color = to_string(c.preview_settings.color);
+  if (!o.quiet) err << "subd2nurbs: writing the preview " << o.preview << " (" << color << ")\n";
+  StagedFile file = stage_preview_glb(o.preview, mesh, o.mesh + " (" + color + ")");
   if (!o.quiet)
-    err << "  preview    " << mesh.indices.size() / 3 << " triangles, " << o.preview_color << " from "
+    err << "  preview    " << mesh.indices.size() / 3 << " triangles, " << color << " from "
         << short_number(mesh.value_min) << " to " << short_number(mesh.value_max) << "\n";
   return file;
 }

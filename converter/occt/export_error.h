@@ -5,14 +5,16 @@
 #include <string>
 #include <utility>
 
+#include "core/util/error.h"
+
 namespace subd2nurbs::occt {
 
 /// Building or writing the B-rep failed inside OCCT (or the PatchSet could not be turned into
 /// OCCT geometry). what() is "STAGE (patch P): MESSAGE", or "STAGE: MESSAGE" when no single
 /// patch is at fault (patch == -1).
-struct ExportError : std::runtime_error {
+struct ExportError : Error {
   ExportError(std::string stage_, int patch_, std::string message_)
-      : std::runtime_error(format(stage_, patch_, message_)), stage(std::move(stage_)),
+      : Error(ErrorKind::Export, format(stage_, patch_, message_)), stage(std::move(stage_)),
         patch(patch_), message(std::move(message_)) {}
 
   std::string stage;    ///< e.g. "surface", "edge", "face", "solid", "check", "step-write"

@@ -10,6 +10,7 @@
 
 #include "converter/pipeline/settings_error.h"
 #include "core/refine/refiner.h"
+#include "core/util/error.h"
 
 namespace subd2nurbs::pipeline {
 
@@ -69,9 +70,9 @@ ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels);
 /// A refusal: the estimate exceeds a limit. A SettingsError's sibling; the message names the
 /// estimate, the limit and the overrides (--max-faces / --max-memory, Python max_faces= /
 /// max_memory=).
-class ResourceError : public std::runtime_error {
+class ResourceError : public Error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit ResourceError(const std::string& message) : Error(ErrorKind::Resources, message) {}
 };
 
 /// \throw ResourceError naming `what` ("converting at level 2", "refining to level 11")

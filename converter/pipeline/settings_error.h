@@ -5,16 +5,18 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/util/error.h"
+
 namespace subd2nurbs::pipeline {
 
 /// A setting that cannot be used: `setting` names it as the Python module spells it (level,
 /// tolerance, radial_steps, polar_lambda, fair, ...), `rule` says what it must be ("must be 1
 /// or 2"), in words every front end shows as they are; each spells the setting its own way (the
 /// CLI's flag, the workbench's property). what() is "<setting> <rule>".
-class SettingsError : public std::invalid_argument {
+class SettingsError : public Error {
  public:
   SettingsError(const std::string& setting, const std::string& rule)
-      : std::invalid_argument(setting + " " + rule), setting_(setting), rule_(rule) {}
+      : Error(ErrorKind::Settings, setting + " " + rule), setting_(setting), rule_(rule) {}
   const std::string& setting() const { return setting_; }
   const std::string& rule() const { return rule_; }
 

@@ -8,15 +8,16 @@
 #include <vector>
 
 #include "core/fit/limit_rows.h"
+#include "core/util/error.h"
 
 namespace subd2nurbs {
 
 /// The system cannot be solved reliably. `vertices` are the ones it is about (for a singular
 /// or badly conditioned system: where the near-null vector of L is largest).
-class FitError : public std::runtime_error {
+class FitError : public Error {
  public:
   FitError(const std::string& message, std::vector<int> vertices)
-      : std::runtime_error(message), vertices_(std::move(vertices)) {}
+      : Error(ErrorKind::Fit, message), vertices_(std::move(vertices)) {}
   const std::vector<int>& vertices() const { return vertices_; }
 
  private:

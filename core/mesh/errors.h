@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/util/error.h"
+
 namespace subd2nurbs {
 
 /// What kind of mesh element an error or diagnostic refers to.
@@ -31,11 +33,11 @@ const char* to_string(MeshErrorCode code);
 
 /// Thrown by validation. `element` / `index` name the offending element; `index2` is a
 /// second id where useful (the other vertex of an edge, the second face of a conflict).
-class InvalidMeshError : public std::runtime_error {
+class InvalidMeshError : public Error {
  public:
   InvalidMeshError(MeshErrorCode code, ElementKind element, long index, long index2,
                    const std::string& message)
-      : std::runtime_error(message), code_(code), element_(element), index_(index),
+      : Error(ErrorKind::Input, message), code_(code), element_(element), index_(index),
         index2_(index2) {}
   MeshErrorCode code() const { return code_; }
   ElementKind element() const { return element_; }

@@ -86,39 +86,40 @@ def make_cage(source, doc=None, name="Cage"):
     return obj
 
 
-def make_nurbs(source, level=0, tolerance=0.0, polar="Polar caps", shell=False, doc=None, name="NURBS",
-               progress=True, fit="Approximate", fair_weight=0.0, faces="Packed"):
+def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **settings):
     """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
     Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around
     high-valence vertices are kept; the object's RecoveredQuads says how many).
 
-    level: extra refinement levels (0 .. 12); tolerance > 0: choose the level for this deviation
-    (relative to the model size); polar: "Polar caps" (polar structures become singular polar
-    caps, the default as in the CLI) or "Catmull-Clark"; shell: a shell instead of a solid; fit:
-    "Approximate" (the cage's own limit surface) or "Interpolate" (the surface passes through the
-    cage's vertices), fair_weight > 0 with "Interpolate": a fair fit (least squares with the
-    thin-plate energy); faces: "Packed" (each regular region of quads is one face, the default) or
-    "PerQuad". It recomputes when the source or one of these properties changes. Raises (document unchanged) when the conversion fails."""
+    settings: the NURBS object's conversion settings by the converter's names, with the values of
+    their properties (features.SETTING_ROWS, docs/settings.md): level=1 (Level), tolerance=1e-3
+    (Tolerance; > 0 chooses the levels for this deviation), polar="Catmull-Clark" (PolarHandling,
+    default "Polar caps"), fit="Interpolate" (Fit), fair=0.1 (FairWeight, with Interpolate),
+    faces="PerQuad" (Faces, default "Packed"), max_faces, max_memory (MaxMemoryMiB). shell: a shell
+    instead of a solid. It recomputes when the source or one of its properties changes. Raises
+    (document unchanged) when the conversion fails."""
     check_occt()
     if source is None or not hasattr(source, "Document"):
         raise TypeError("make_nurbs: expected a Cage object or a Mesh::Feature")
+    prop = {row["name"]: row["property"]["name"] for row in features.SETTING_ROWS}
+    for key in settings:
+        if key not in prop:
+            raise TypeError("make_nurbs: unknown setting '%s' (the NURBS object's settings: %s)"
+                            % (key, ", ".join(prop)))
+    values = {prop[key]: value for key, value in settings.items()}
     doc = doc or source.Document
     # Convert before touching the document (errors leave it as it was); the first recompute
     # reuses the result.
     cage = features.cage_of(source)
-    result = features.convert_cage(cage, level, tolerance, polar, progress=progress, fit=fit, fair_weight=fair_weight,
-                                   faces=faces)
+    kwargs = features.settings_of(values)
+    result = features.convert_cage(cage, kwargs, progress=progress)
     with _Transaction(doc, "Convert to NURBS"):
         obj = doc.addObject("Part::FeaturePython", name)
         proxy = features.NurbsFeature(obj)
-        proxy.prepare(features.NurbsFeature.signature(cage, level, tolerance, polar, fit, fair_weight, faces), result)
+        for property_name, value in values.items():
+            setattr(obj, property_name, value)
+        proxy.prepare(features.NurbsFeature.signature(cage, features.object_settings(obj)), result)
         obj.Source = source
-        obj.Level = level
-        obj.Tolerance = tolerance
-        obj.PolarHandling = polar
-        obj.Fit = fit
-        obj.FairWeight = float(fair_weight)
-        obj.Faces = faces
         obj.OutputType = "Shell" if shell else "Solid"
         obj.ShowProgress = bool(progress)
         _show_and_recompute(obj, features.ViewProviderNurbs, "NURBS object", hide=source)

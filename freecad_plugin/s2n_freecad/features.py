@@ -24,32 +24,86 @@ def _default_first(option, default):
 BOUNDARY = _default_first("boundary", "edge-and-corner")
 CREASE_METHOD = _default_first("crease_method", "uniform")
 TRIANGLES = _default_first("triangles", "catmark")
-#: The NURBS object's choices (names for people) and the converter's name of each: polar
-#: structures as polar caps or Catmull-Clark (subd2nurbs.convert(polar="on"/"off")); the surface
-#: the cage stands for, its own limit (which misses its vertices) or the limit of the cage solved
-#: to pass through them (fit="interpolate"); faces, each regular region of quads as one B-spline
-#: face (the default, as `subd2nurbs convert --faces packed`) or one face per coarse quad. A
-#: value outside a table goes to the converter as it is, whose rule refuses it.
-CONVERTER_NAMES = {
-    "polar": {"Polar caps": "on", "Catmull-Clark": "off"},
-    "fit": {"Approximate": "approximate", "Interpolate": "interpolate"},
-    "faces": {"Packed": "packed", "PerQuad": "per-quad"},
-}
-POLAR = list(CONVERTER_NAMES["polar"])
-FIT = list(CONVERTER_NAMES["fit"])
-FACES = list(CONVERTER_NAMES["faces"])
 OUTPUT = ["Solid", "Shell"]
+
+#: The NURBS object's settings: the rows of the converter's settings table that have a FreeCAD
+#: property (subd2nurbs.SETTINGS, docs/settings.md). setup() creates a property per row and
+#: settings_of() reads them back, so that a row added to the table is a property here without
+#: any other edit. A row's property "choices" are (shown, converter's name) pairs, the default
+#: first: an enumeration whose words are for people; the converter's rule checks the name (a
+#: value outside the table goes to the converter as it is, which refuses it).
+SETTING_ROWS = tuple(row for row in subd2nurbs.SETTINGS if row["property"])
+
+_PROPERTY_KIND = {"flag": "App::PropertyBool", "on-off": "App::PropertyBool", "integer": "App::PropertyInteger",
+                  "number": "App::PropertyFloat", "size": "App::PropertyFloat", "word": "App::PropertyEnumeration"}
+
+
+def _property_kind(row):
+    return "App::PropertyEnumeration" if row["property"]["choices"] else _PROPERTY_KIND[row["type"]]
+
+
+def _property_choices(row):
+    """An enumeration's choices, the default first; None for other properties."""
+    p = row["property"]
+    if p["choices"]:
+        return [shown for shown, name in p["choices"]]
+    if row["type"] == "word":
+        return [row["default"]] + [n for n in row["choices"] if n != row["default"]]
+    return None
+
+
+def add_setting_properties(obj):
+    """One property per row of SETTING_ROWS (those the object has are kept); a new one starts at
+    the setting's default (0 where 0 means the default)."""
+    for row in SETTING_ROWS:
+        p = row["property"]
+        if _add(obj, _property_kind(row), p["name"], p["group"], p["tooltip"], choices=_property_choices(row)):
+            if row["default"] is not None and _property_choices(row) is None and not p["zero_is_default"]:
+                setattr(obj, p["name"], row["default"] / p["scale"] if p["scale"] != 1 else row["default"])
+
+
+def settings_of(values):
+    """subd2nurbs.convert's keywords for property values given by property name (those missing
+    are left to the converter): enumerations mapped onto the converter's names, 0 left out where
+    it means the default, numbers scaled (MaxMemoryMiB to bytes). Level is ignored when Tolerance
+    is given (the two properties' documented meaning)."""
+    kwargs = {}
+    for row in SETTING_ROWS:
+        p = row["property"]
+        if p["name"] not in values:
+            continue
+        value = values[p["name"]]
+        if p["choices"]:
+            value = dict(p["choices"]).get(value, value)
+        elif _property_kind(row) in ("App::PropertyInteger", "App::PropertyFloat"):
+            if p["zero_is_default"] and value == 0:
+                continue
+            if p["scale"] != 1:
+                value = value * p["scale"]
+        kwargs[row["name"]] = value
+    if "tolerance" in kwargs:
+        kwargs.pop("level", None)
+    return kwargs
+
+
+def object_settings(obj):
+    """settings_of() the NURBS object's properties."""
+    return settings_of({row["property"]["name"]: getattr(obj, row["property"]["name"])
+                        for row in SETTING_ROWS if hasattr(obj, row["property"]["name"])})
 
 
 def _add(obj, kind, name, group, doc, choices=None, read_only=False, hidden=False):
     """Adds the property unless the object has it (a document read back); `choices`: an
-    enumeration's values, set only when the property is new (setting them resets the choice)."""
-    if name not in obj.PropertiesList:
+    enumeration's values, set only when the property is new (setting them resets the choice).
+    True when the property is new."""
+    new = name not in obj.PropertiesList
+    if new:
         obj.addProperty(kind, name, group, doc)
         if choices is not None:
             setattr(obj, name, choices)
     if read_only or hidden:
         obj.setEditorMode(name, (["ReadOnly"] if read_only else []) + (["Hidden"] if hidden else []))
+    return new
 
 
 def _placement_points(vertices, placement):
@@ -241,40 +295,22 @@ class _Progress:
         self.indicator.stop()
 
 
-#: The property of each converter setting (subd2nurbs.SettingsError.setting) on a NURBS or
-#: ColorMap object: the converter's rules name it so.
-PROPERTY_OF_SETTING = {"level": "Level", "tolerance": "Tolerance", "polar": "PolarHandling", "fit": "Fit",
-                       "fair": "FairWeight", "faces": "Faces", "max_faces": "MaxFaces", "max_memory": "MaxMemoryMiB",
-                       "preview": "Coloring", "preview_samples": "Samples", "boundary": "Boundary",
-                       "crease_method": "CreaseMethod", "triangles": "TriangleRule"}
+#: The property of each converter setting (subd2nurbs.SettingsError.setting) on a NURBS object
+#: (the settings table), a ColorMap object (its colouring and samples) or a Cage object (its
+#: subdivision options): the converter's rules name it so.
+PROPERTY_OF_SETTING = dict({row["name"]: row["property"]["name"] for row in SETTING_ROWS},
+                           preview="Coloring", preview_samples="Samples", boundary="Boundary",
+                           crease_method="CreaseMethod", triangles="TriangleRule")
 
 
-def convert_cage(cage, level, tolerance, polar, progress=True, fit="Approximate", fair_weight=0.0, faces="Packed",
-                 **options):
-    """subd2nurbs.convert with the NURBS object's settings (and further convert options).
-    fit: "Approximate" or "Interpolate"; fair_weight != 0 (> 0, with "Interpolate"): a fair fit;
-    faces: "Packed" or "PerQuad" (CONVERTER_NAMES). The converter's rules check the values; a
-    SettingsError names the property (PROPERTY_OF_SETTING)."""
-    if polar == "Polar caps" and not getattr(subd2nurbs, "HAS_POLAR", False):
-        raise subd2nurbs.SettingsError("polar caps are not available in this subd2nurbs build: use Catmull-Clark")
-    # Tolerance > 0 chooses the levels; else a nonzero Level pins them (a negative one is
-    # refused by the converter); else (both 0) the default tolerance, as the command line and
-    # the Python module do.
-    if tolerance and tolerance > 0:
-        kwargs = {"tolerance": tolerance}
-    elif level:
-        kwargs = {"level": int(level)}
-    else:
-        kwargs = {}
-    for setting, value in (("polar", polar), ("fit", fit), ("faces", faces)):
-        kwargs[setting] = CONVERTER_NAMES[setting].get(value, value)
-    if fair_weight:
-        kwargs["fair"] = float(fair_weight)
-    kwargs.update(options)
+def convert_cage(cage, settings, progress=True):
+    """subd2nurbs.convert of `cage` with `settings` (its keywords, as settings_of() makes them);
+    the converter's rules check the values, and a SettingsError names the property
+    (PROPERTY_OF_SETTING)."""
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
         with settings_named_by_property():
-            return subd2nurbs.convert(cage, progress=indicator, **kwargs)
+            return subd2nurbs.convert(cage, progress=indicator, **settings)
     finally:
         if indicator:
             indicator.stop()
@@ -302,34 +338,10 @@ class NurbsFeature(_Feature):
 
     @staticmethod
     def setup(obj):
+        add_setting_properties(obj)  # Level, Tolerance, PolarHandling, Fit, ... (the settings table)
         g = "Conversion"
-        _add(obj, "App::PropertyInteger", "Level", g,
-             "If > 0: extra refinement levels at every irregular vertex (0 with Tolerance 0: the "
-             "default tolerance, 1e-4 of the model size)")
-        _add(obj, "App::PropertyFloat", "Tolerance", g,
-             "If > 0: the deviation from the limit surface to reach (relative to the model size); "
-             "each irregular vertex gets the levels it needs, and Level is ignored")
-        _add(obj, "App::PropertyEnumeration", "PolarHandling", g,
-             "Polar structures (triangle fans around a pole): one singular polar cap each, or "
-             "Catmull-Clark patches like every other vertex", choices=POLAR)
         _add(obj, "App::PropertyEnumeration", "OutputType", g, "A solid (closed cages) or a shell", choices=OUTPUT)
-        _add(obj, "App::PropertyEnumeration", "Fit", g,
-             "Approximate: the cage's own limit surface (it misses the cage's vertices); Interpolate: "
-             "the surface passes through every cage vertex (the cage is solved for first)", choices=FIT)
-        _add(obj, "App::PropertyFloat", "FairWeight", g,
-             "With Fit = Interpolate: if > 0, trade exact interpolation for fairness (least squares with "
-             "the thin-plate energy weighted this much); 0: exact")
-        _add(obj, "App::PropertyEnumeration", "Faces", g,
-             "Packed: each regular region of quads is one B-spline face (fewer, larger faces); "
-             "PerQuad: one face per coarse quad", choices=FACES)
         _add(obj, "App::PropertyBool", "ShowProgress", g, "Show a progress indicator while converting")
-        lim = "Limits"
-        _add(obj, "App::PropertyFloat", "MaxFaces", lim,
-             "Refuse a conversion estimated to make more polynomial pieces (> 0; 0: the default, 4e6; "
-             "as --max-faces)")
-        _add(obj, "App::PropertyFloat", "MaxMemoryMiB", lim,
-             "Refuse a conversion estimated to need more memory, in MiB (> 0; 0: the default, 3/4 of "
-             "the memory available; as --max-memory)")
         r = "Result"
         _add(obj, "App::PropertyInteger", "Patches", r, "NURBS patches (= faces)", read_only=True)
         _add(obj, "App::PropertyInteger", "RecoveredQuads", r,
@@ -348,32 +360,11 @@ class NurbsFeature(_Feature):
         _add(obj, "App::PropertyStringList", "Warnings", r, "Conversion warnings", read_only=True)
 
     @staticmethod
-    def signature(cage, level, tolerance, polar, fit="Approximate", fair_weight=0.0, faces="Packed", limits=None):
+    def signature(cage, settings):
         """What a conversion depends on: a result can be reused while this is unchanged."""
         return (cage.vertices.tobytes(), cage.face_sizes.tobytes(), cage.face_indices.tobytes(),
                 tuple(cage.creases), tuple(cage.corners), tuple(cage.holes), tuple(sorted(cage.options.items())),
-                int(level), float(tolerance), polar, fit, float(fair_weight), faces,
-                tuple(sorted((limits or {}).items())))
-
-    @staticmethod
-    def fit_settings(obj):
-        """(Fit, FairWeight) of a NURBS object (documents saved before they existed: Approximate)."""
-        return getattr(obj, "Fit", "Approximate"), float(getattr(obj, "FairWeight", 0.0))
-
-    @staticmethod
-    def faces_setting(obj):
-        """Faces of a NURBS object (documents saved before the property existed: Packed)."""
-        return getattr(obj, "Faces", "Packed")
-
-    @staticmethod
-    def limits(obj):
-        """convert's max_faces / max_memory of a NURBS object's MaxFaces / MaxMemoryMiB (0: the default)."""
-        limits = {}
-        if getattr(obj, "MaxFaces", 0) != 0:
-            limits["max_faces"] = obj.MaxFaces
-        if getattr(obj, "MaxMemoryMiB", 0) != 0:
-            limits["max_memory"] = obj.MaxMemoryMiB * 1024.0 * 1024.0
-        return limits
+                tuple(sorted(settings.items())))
 
     def prepare(self, signature, result):
         """A result computed before the object existed (make_nurbs), used by the first recompute."""
@@ -387,14 +378,11 @@ class NurbsFeature(_Feature):
         if obj.Source is None:
             raise ValueError("%s: no Source" % obj.Label)
         cage = cage_of(obj.Source)
-        fit, fair_weight = self.fit_settings(obj)
-        faces = self.faces_setting(obj)
-        limits = self.limits(obj)
-        key = self.signature(cage, obj.Level, obj.Tolerance, obj.PolarHandling, fit, fair_weight, faces, limits)
+        settings = object_settings(obj)
+        key = self.signature(cage, settings)
         cache = getattr(self, "_cache", None)
         if cache is None or cache[0] != key:
-            result = convert_cage(cage, obj.Level, obj.Tolerance, obj.PolarHandling, progress=obj.ShowProgress,
-                                  fit=fit, fair_weight=fair_weight, faces=faces, **limits)
+            result = convert_cage(cage, settings, progress=obj.ShowProgress)
             cache = self._cache = (key, result)
         return cage, cache[1]
 

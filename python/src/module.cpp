@@ -26,7 +26,9 @@
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/errors.h"
 #include "converter/pipeline/report.h"
+#include "converter/pipeline/settings.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/eval/preview_mesh.h"
 #include "core/fit/fairing.h"
@@ -77,30 +79,36 @@ void raise(const char* name, const std::string& message, const Attributes&... at
   PyErr_SetObject(cls.ptr(), error.ptr());
 }
 
+/// Raises the Python exception of an error's kind (converter/pipeline/errors.h) with the
+/// attributes its class carries.
 void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
-  } catch (const InvalidMeshError& e) {
-    raise("CageError", e.what(), "code", to_string(e.code()), "element", element_name(e.element()), "index",
-          e.index(), "index2", e.index2());
-  } catch (const InputError& e) {
-    raise("CageError", e.what(), "file", e.file(), "line", e.line(), "code",
-          e.code() ? py::object(py::str(to_string(*e.code()))) : py::object(py::none()));
-  } catch (const WriteError& e) {
-    raise("WriteError", e.what(), "file", e.file());
-  } catch (const pipeline::SettingsError& e) {
-    raise("SettingsError", e.what(), "setting", e.setting(), "rule", e.rule());
-  } catch (const FitError& e) {
-    raise("FitError", e.what(), "vertices", e.vertices());
-  } catch (const pipeline::ResourceError& e) {
-    raise("SettingsError", e.what(), "code", "resource-limit");
-  } catch (const occt::ExportError& e) {
-    raise("ConversionError", e.what(), "stage", e.stage, "patch", e.patch);
+  } catch (const Error& e) {
+    const char* cls = pipeline::error_class(e.kind()).python;
+    if (const auto* m = dynamic_cast<const InvalidMeshError*>(&e))
+      raise(cls, e.what(), "code", to_string(m->code()), "element", element_name(m->element()), "index", m->index(),
+            "index2", m->index2());
+    else if (const auto* i = dynamic_cast<const InputError*>(&e))
+      raise(cls, e.what(), "file", i->file(), "line", i->line(), "code",
+            i->code() ? py::object(py::str(to_string(*i->code()))) : py::object(py::none()));
+    else if (const auto* w = dynamic_cast<const WriteError*>(&e))
+      raise(cls, e.what(), "file", w->file());
+    else if (const auto* s = dynamic_cast<const pipeline::SettingsError*>(&e))
+      raise(cls, e.what(), "setting", s->setting(), "rule", s->rule());
+    else if (const auto* f = dynamic_cast<const FitError*>(&e))
+      raise(cls, e.what(), "vertices", f->vertices());
+    else if (e.kind() == ErrorKind::Resources)
+      raise(cls, e.what(), "code", "resource-limit");
+    else if (const auto* x = dynamic_cast<const occt::ExportError*>(&e))
+      raise(cls, e.what(), "stage", x->stage, "patch", x->patch);
+    else
+      raise(cls, e.what());
   } catch (const std::bad_alloc&) {
     PyErr_SetString(PyExc_MemoryError, "out of memory");
   } catch (const std::invalid_argument& e) {
-    // The patch builder's "topology outside what it supports".
-    raise("ConversionError", e.what());
+    // A broken precondition of the core: a bug, not the user's error.
+    raise("ConversionError", std::string("internal error: ") + e.what(), "stage", "internal");
   }
 }
 
@@ -331,49 +339,76 @@ py::dict patch_dict(const NurbsPatch& p) {
   return d;
 }
 
-/// The settings of a conversion: the keyword arguments of subd2nurbs.convert mapped onto
-/// pipeline::ConversionSettings in this one place and checked by the pipeline's rules when the
-/// object is made (the package checked only their types).
+// --- settings: the keyword arguments of subd2nurbs.convert, by the settings table -----------
+
+/// A keyword's value as its row's type (the package checked the Python types; None: not given).
+pipeline::SettingValue setting_value(const pipeline::SettingRow& row, const py::handle v) {
+  using pipeline::SettingType;
+  if (v.is_none()) return std::monostate{};
+  switch (row.type) {
+    case SettingType::Flag: return v.cast<bool>();
+    case SettingType::Integer: return v.cast<long long>();
+    case SettingType::Number: return v.cast<double>();
+    case SettingType::Word: return v.cast<std::string>();
+    case SettingType::OnOff:  // True / False, or the command line's "on" / "off"
+      if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+      return v.cast<bool>();
+    case SettingType::Size:  // bytes, or a size string such as "8G"
+      if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+      return v.cast<double>();
+  }
+  return std::monostate{};
+}
+
+py::object python_value(const pipeline::SettingValue& v) {
+  if (const auto* b = std::get_if<bool>(&v)) return py::bool_(*b);
+  if (const auto* i = std::get_if<long long>(&v)) return py::int_(*i);
+  if (const auto* x = std::get_if<double>(&v)) return py::float_(*x);
+  if (const auto* t = std::get_if<std::string>(&v)) return py::str(*t);
+  return py::none();
+}
+
+/// The settings of a conversion: convert's keyword arguments mapped onto pipeline::Settings by
+/// the settings table and checked by the pipeline's rules when the object is made.
 struct Settings {
-  pipeline::ConversionSettings settings;
-  std::string preview;      ///< "" for none
-  int preview_samples = 16;
+  pipeline::Settings settings;
 };
 
 Settings make_settings(const py::kwargs& kwargs) {
-  Settings s;
-  pipeline::ConversionSettings& c = s.settings;
-  std::optional<double> max_faces;
-  py::object max_memory = py::none();
+  std::vector<std::pair<std::string, pipeline::SettingValue>> given;
   for (const auto& item : kwargs) {
     const std::string name = py::str(item.first);
-    const py::handle v = item.second;
-    if (name == "level") c.level = v.cast<std::optional<int>>();
-    else if (name == "tolerance") c.tolerance = v.cast<std::optional<double>>();
-    else if (name == "absolute") c.absolute = v.cast<bool>();
-    else if (name == "brep") c.build_brep = v.cast<bool>();
-    else if (name == "polar")  // True / False, or the command line's "on" / "off"
-      c.patch.polar = py::isinstance<py::str>(v) ? pipeline::polar_mode(v.cast<std::string>()) : v.cast<bool>();
-    else if (name == "radial_steps") c.patch.cap.radial_steps = v.cast<int>();
-    else if (name == "polar_lambda") c.patch.cap.lambda = v.cast<double>();
-    else if (name == "separate_poles") c.patch.separate_poles = v.cast<bool>();
-    else if (name == "fit") c.fit.mode = pipeline::fit_mode(v.cast<std::string>());
-    else if (name == "fair") c.fit.fair_weight = v.cast<std::optional<double>>();
-    else if (name == "faces") c.faces = pipeline::face_mode(v.cast<std::string>());
-    else if (name == "max_faces") max_faces = v.cast<std::optional<double>>();
-    else if (name == "max_memory") max_memory = py::reinterpret_borrow<py::object>(v);
-    else if (name == "preview") s.preview = v.is_none() ? std::string() : v.cast<std::string>();
-    else if (name == "preview_samples") s.preview_samples = v.cast<int>();
-    else throw py::type_error("Settings: unknown setting '" + name + "'");
+    const pipeline::SettingRow* row = pipeline::find_setting(name);
+    if (!row || !row->python) throw py::type_error("Settings: unknown setting '" + name + "'");
+    given.emplace_back(name, setting_value(*row, item.second));
   }
-  // In the order the rules have always been checked: limits, conversion, preview.
-  c.limits = resource_limits(max_faces, max_memory);
-  pipeline::validate(c);
-  std::optional<PreviewColor> color;
-  if (!s.preview.empty()) color = pipeline::preview_color(s.preview);
-  pipeline::check_samples("preview_samples", s.preview_samples);
-  if (color) c.preview = pipeline::PreviewSettings{*color, s.preview_samples};
-  return s;
+  return Settings{pipeline::make_settings(given)};
+}
+
+/// The table as Python data: one dict per row the Python module offers (name, type, default,
+/// default_text, help, choices, cli, property {name, group, tooltip, choices, zero_is_default,
+/// scale} or None).
+py::list settings_table() {
+  py::list rows;
+  for (const pipeline::SettingRow& r : pipeline::settings_table()) {
+    py::dict d;
+    set_items(d, "name", r.name, "type", pipeline::to_string(r.type), "default", python_value(r.default_value),
+                 "default_text", r.default_text, "help", r.help, "choices", r.choices,
+                 "cli", r.cli.empty() ? py::object(py::none()) : py::object(py::str(r.cli)), "python", r.python);
+    if (r.property.name.empty()) {
+      d["property"] = py::none();
+    } else {
+      py::dict p;
+      py::list choices;
+      for (const auto& [shown, name] : r.property.choices) choices.append(py::make_tuple(shown, name));
+      set_items(p, "name", r.property.name, "group", r.property.group,
+                   "tooltip", r.property.tooltip.empty() ? r.help : r.property.tooltip, "choices", choices,
+                   "zero_is_default", r.property.zero_is_default, "scale", r.property.scale);
+      d["property"] = p;
+    }
+    rows.append(d);
+  }
+  return rows;
 }
 
 py::dict preview_dict(const PreviewMesh& mesh, const std::string& color) {
@@ -502,7 +537,7 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
     callbacks.brep_fraction = [&](double f) { progress(current, f, key); };
   }
   pipeline::ConversionResult& c = conversion->result;
-  c = pipeline::convert(*conversion->base, points, settings.settings, callbacks,
+  c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
                         load_warnings ? *load_warnings : diagnostics_text(diagnostics));
   c.input = input_name;
   if (c.has_brep) c.output.format = "BREP";
@@ -566,26 +601,23 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   m.def("validate", &validate);
   m.def("info", &info);
   m.def("refine", &refine);
-  py::class_<Settings>(m, "Settings",
-                       "The settings of a conversion (subd2nurbs.convert's keyword arguments), checked by the "
-                       "converter's rules when made")
-      .def(py::init(&make_settings))
-      .def_property_readonly("level", [](const Settings& s) { return s.settings.level; })
-      .def_property_readonly("tolerance", [](const Settings& s) { return s.settings.tolerance; })
-      .def_property_readonly("absolute", [](const Settings& s) { return s.settings.absolute; })
-      .def_property_readonly("brep", [](const Settings& s) { return s.settings.build_brep; })
-      .def_property_readonly("polar", [](const Settings& s) { return s.settings.patch.polar; })
-      .def_property_readonly("radial_steps", [](const Settings& s) { return s.settings.patch.cap.radial_steps; })
-      .def_property_readonly("polar_lambda", [](const Settings& s) { return s.settings.patch.cap.lambda; })
-      .def_property_readonly("separate_poles", [](const Settings& s) { return s.settings.patch.separate_poles; })
-      .def_property_readonly("fit", [](const Settings& s) { return pipeline::to_string(s.settings.fit.mode); })
-      .def_property_readonly("fair", [](const Settings& s) { return s.settings.fit.fair_weight; })
-      .def_property_readonly("faces", [](const Settings& s) { return pipeline::to_string(s.settings.faces); })
-      .def_property_readonly("max_faces", [](const Settings& s) { return s.settings.limits.max_faces; })
-      .def_property_readonly("max_memory", [](const Settings& s) { return s.settings.limits.max_memory; })
-      .def_property_readonly("preview",
-                             [](const Settings& s) { return s.preview.empty() ? py::object(py::none()) : py::str(s.preview); })
-      .def_property_readonly("preview_samples", [](const Settings& s) { return s.preview_samples; });
+  m.def("settings_table", &settings_table);
+  m.def("error_classes", [] {  // (name, exit code, Python class) per kind of error
+    py::list rows;
+    for (const pipeline::ErrorClass& c : pipeline::error_classes())
+      rows.append(py::make_tuple(c.name, static_cast<int>(c.exit_code), c.python));
+    return rows;
+  });
+  py::class_<Settings> settings_class(m, "Settings",
+                                      "The settings of a conversion (subd2nurbs.convert's keyword arguments), checked "
+                                      "by the converter's rules when made");
+  settings_class.def(py::init(&make_settings));
+  for (const pipeline::SettingRow& row : pipeline::settings_table()) {  // one read-only attribute per setting
+    if (!row.python) continue;
+    const pipeline::SettingRow* r = &row;
+    settings_class.def_property_readonly(row.name.c_str(),
+                                         [r](const Settings& s) { return python_value(r->get(s.settings)); });
+  }
   py::class_<Conversion, std::shared_ptr<Conversion>>(m, "Conversion",
                                                       "A conversion's result; subd2nurbs.ConversionResult wraps it")
       .def_property_readonly("report_json", [](const Conversion& c) { return pipeline::report_json(c.result); })

@@ -44,11 +44,8 @@ __all__ = [
     "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "fair",
     "brep_summary", "file_summary",
     "occt_compatible", "CAGE_OPTIONS", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
-    "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS",
+    "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS", "SETTINGS",
 ]
-
-#: Polar structures can become singular polar caps (convert(polar=True)).
-HAS_POLAR = True
 
 #: Sharpness at or above this is infinitely sharp (OpenSubdiv's convention).
 INFINITE_SHARPNESS = 10.0
@@ -421,72 +418,89 @@ class StageText(str):
         return self
 
 
-def convert(cage, level=None, tolerance=None, absolute=False, brep=True, allow_invalid=False,
-            progress=None, polar=True, radial_steps=1, polar_lambda=0.75, separate_poles=False,
-            preview=None, preview_samples=16, fit="approximate", fair=None, max_faces=None, max_memory=None,
-            faces="packed"):
-    """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
+#: The settings of convert(), one per row of the converter's settings table (docs/settings.md),
+#: each a dict: name, type ("flag", "on-off", "integer", "number", "word", "size"), default (None:
+#: optional, default_text says what leaving it out means), help, choices (a word's names), cli
+#: (the command line's flag or None), property (the FreeCAD workbench's property: name, group,
+#: tooltip, choices as (shown, converter's name) pairs, zero_is_default, scale; or None).
+SETTINGS = tuple(row for row in _subd2nurbs.settings_table() if row["python"])
+_SETTING = {row["name"]: row for row in SETTINGS}
 
-    level: pin the extra refinement levels beyond the minimum at every fan (0 .. 12), as --level.
-    tolerance: the deviation from the limit surface to reach (relative to the bounding-box
-        diagonal, or in model units with absolute=True); each fan gets the levels it needs, as
-        --tolerance / --absolute. Excludes level. With neither: DEFAULT_TOLERANCE (1e-4), as the
-        command line does.
-    polar: polar structures (triangle fans around a pole, docs/math.md 3.1) become one singular
-        polar cap each (as --polar on, the default); False: Catmull-Clark everywhere. The command
-        line's names "on" / "off" are taken too (any other string: SettingsError, its rule).
-    radial_steps (1 or 2), polar_lambda (> 0): the caps' shape, as --radial-steps / --lambda.
-    separate_poles: poles of valence 3..5 or too close to another get the separating first
-        step and become caps too (as --separate-poles; needs polar).
-    fit: "approximate" (default: the cage's own limit surface, which misses its vertices) or
-        "interpolate": solve for the cage whose exact limit surface passes through every vertex
-        (as --fit interpolate); the result's cage_vertices is that cage and report["fit"] says
-        how well (residual, displacement, condition). Raises FitError naming the vertices when
-        no cage interpolates.
-    fair: with fit="interpolate", a weight W > 0: least squares with the thin-plate energy as
-        regulariser instead of exact interpolation (as --fair W): noisy points, smooth surface.
-    preview: "deviation", "curvature" or "zebra": also tessellate the patches with per-vertex
-        colours (preview_samples 2 .. 64 per patch side), as convert --preview / --color /
-        --preview-samples do; the result's `preview`
-        is then a dict of numpy arrays (positions, normals, colors, values, triangles) and the
-        colour map's value_min / value_max (result.make_preview() makes another later).
-    progress: a callable(stage: str, fraction: float) called as the stages run; `stage` is a
-        line for people ("building patches (2 extra levels)") whose `key` attribute names the
-        stage: "fit", "patches", "deviation", "packing", "continuity", "brep" or (with preview)
-        "preview".
-    allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
-    max_faces, max_memory: refuse (SettingsError, before any work) when the estimated polynomial
-        pieces the patches are built from would be more, or the estimated memory larger,
-        as --max-faces / --max-memory (defaults 4e6 faces and 3/4 of the memory available;
-        max_memory in bytes or a string such as "8G").
-    faces: "packed" (default: each regular region of quads is one B-spline face, as --faces
-        packed) or "per-quad" (one face per coarse quad). The result's patches are the faces;
-        a packed one lists its quads in its "cells" (base_face, coarse_face, u, v, rotation).
-    """
+#: The Python types each type of setting takes: (check, what it must be, conversion).
+_VALUE_TYPES = {
+    "integer": (_is_int, "an integer", int),
+    "number": (_is_number, "a number", float),
+    "word": (lambda x: isinstance(x, str), "a string", str),
+    "size": (lambda x: isinstance(x, str) or _is_number(x), "a number of bytes or a size string",
+             lambda x: x if isinstance(x, str) else float(x)),
+}
+
+
+def _setting_value(row, value):
+    """A keyword's value with its type checked (SettingsError naming the setting); the converter
+    checks the value itself by its rules."""
+    kind = row["type"]
+    if kind == "flag":
+        return bool(value)
+    if kind == "on-off":  # True / False, or the command line's words "on" / "off"
+        return value if isinstance(value, str) else bool(value)
+    check, what, conversion = _VALUE_TYPES[kind]
+    if row["default"] is None:  # optional: None leaves it to the converter
+        if value is None:
+            return None
+        if kind == "word":
+            what = "None or a string"
+    return _checked(row["name"], value, check, what, conversion)
+
+
+def _settings_doc():
+    lines = []
+    for row in SETTINGS:
+        default = row["default_text"] if row["default"] is None else repr(row["default"])
+        cli = ", as %s" % row["cli"] if row["cli"] else ""
+        lines.append("    %s: %s (default: %s%s)." % (row["name"], row["help"], default, cli))
+    return "\n".join(lines)
+
+
+def convert(cage, progress=None, allow_invalid=False, **settings):
     cage = _cage(cage)
-    level = _optional("level", level, _is_int, "an integer", int)
-    tolerance = _optional("tolerance", tolerance, _is_number, "a number", float)
-    radial_steps = _checked("radial_steps", radial_steps, _is_int, "an integer", int)
-    polar_lambda = _checked("polar_lambda", polar_lambda, _is_number, "a number", float)
-    fair = _optional("fair", fair, _is_number, "a number", float)
-    preview_samples = _checked("preview_samples", preview_samples, _is_int, "an integer", int)
-    for setting, value in (("fit", fit), ("faces", faces)):
-        _checked(setting, value, lambda x: isinstance(x, str), "a string", str)
-    _optional("preview", preview, lambda x: isinstance(x, str), "None or a string", str)
+    given = {}
+    for name, value in settings.items():
+        if name not in _SETTING:
+            raise TypeError("convert() got an unexpected keyword argument '%s'" % name)
+        given[name] = _setting_value(_SETTING[name], value)
     if progress is not None and not callable(progress):
         raise TypeError("progress must be callable(stage, fraction)")
-    face_limit, memory = _limits(max_faces, max_memory)
     on_stage = None if progress is None else lambda text, fraction, key: progress(StageText(text, key), fraction)
-    settings = _subd2nurbs.Settings(level=level, tolerance=tolerance, absolute=bool(absolute), brep=bool(brep),
-                                    polar=polar if isinstance(polar, str) else bool(polar), radial_steps=radial_steps, polar_lambda=polar_lambda,
-                                    separate_poles=bool(separate_poles), fit=fit, fair=fair, faces=faces,
-                                    max_faces=face_limit, max_memory=memory, preview=preview,
-                                    preview_samples=preview_samples)
-    result = ConversionResult(_subd2nurbs.convert(*cage._args(), settings=settings, name=cage.name,
+    built = _subd2nurbs.Settings(**given)
+    result = ConversionResult(_subd2nurbs.convert(*cage._args(), settings=built, name=cage.name,
                                                   warnings=cage.warnings, progress=on_stage))
-    if brep and not allow_invalid and not result.brep["valid"]:
+    if built.brep and not allow_invalid and not result.brep["valid"]:
         raise ConversionError("the B-rep is not valid:\n" + result.brep["check_message"].strip(), stage="check")
     return result
+
+
+convert.__doc__ = """Converts a cage to bicubic NURBS patches and (brep=True) a B-rep checked by OCCT.
+
+Keyword arguments: every setting of the converter's settings table (SETTINGS, docs/settings.md),
+each as the command line's option of the same name; the converter's rules check the values and
+a SettingsError names the setting at fault:
+
+%s
+
+    With neither level nor tolerance the deviation tolerance is DEFAULT_TOLERANCE (1e-4), as on
+    the command line. fit="interpolate" solves for the cage whose exact limit surface passes
+    through every vertex; the result's cage_vertices is that cage and report["fit"] says how well
+    (FitError names the vertices when no cage interpolates). preview: the result's `preview` is
+    then a dict of numpy arrays (positions, normals, colors, values, triangles) and the colour
+    map's value_min / value_max (result.make_preview() makes another later). faces="packed":
+    a packed face lists its quads in its "cells" (base_face, coarse_face, u, v, rotation).
+
+progress: a callable(stage: str, fraction: float) called as the stages run; `stage` is a line
+    for people ("building patches (2 extra levels)") whose `key` attribute names the stage:
+    "fit", "patches", "deviation", "packing", "continuity", "brep" or (with preview) "preview".
+allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
+""" % _settings_doc()
 
 
 def fair(cage, weight=1.0, keep=(), levels=2, membrane=0.0):

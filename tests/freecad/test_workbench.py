@@ -305,6 +305,43 @@ class Workbench(unittest.TestCase):
         self.doc.recompute()
         self.assertTrue(obj.isValid())
 
+    def test_settings_properties_come_from_the_table(self):
+        """The NURBS object's conversion properties are the settings table's (subd2nurbs.SETTINGS):
+        each row with a property is one, with its group and tooltip; a row added to the table is
+        a property too, read back into convert()'s keywords, with no other edit."""
+        cage = s2n.make_cage(corpus("catmark_cube"), doc=self.doc)
+        nurbs = s2n.make_nurbs(cage, progress=False)
+        rows = [row for row in subd2nurbs.SETTINGS if row["property"]]
+        self.assertGreaterEqual(len(rows), 8)
+        for row in rows:
+            p = row["property"]
+            with self.subTest(setting=row["name"]):
+                self.assertIn(p["name"], nurbs.PropertiesList)
+                self.assertEqual(nurbs.getGroupOfProperty(p["name"]), p["group"])
+                self.assertEqual(nurbs.getDocumentationOfProperty(p["name"]), p["tooltip"])
+                self.assertEqual(features.PROPERTY_OF_SETTING[row["name"]], p["name"])
+        # Defaults: nothing given, so the converter's defaults apply.
+        self.assertEqual(features.object_settings(nurbs), {"polar": "on", "fit": "approximate", "faces": "packed"})
+        dummy = {"name": "dummy_setting", "type": "number", "default": None, "default_text": "", "help": "a test row",
+                 "choices": [], "cli": None, "python": True,
+                 "property": {"name": "DummySetting", "group": "Conversion", "tooltip": "only this test has it",
+                              "choices": [], "zero_is_default": True, "scale": 1024.0}}
+        saved = features.SETTING_ROWS
+        try:
+            features.SETTING_ROWS = saved + (dummy,)
+            features.add_setting_properties(nurbs)
+            self.assertIn("DummySetting", nurbs.PropertiesList)
+            self.assertEqual(nurbs.getDocumentationOfProperty("DummySetting"), "only this test has it")
+            self.assertNotIn("dummy_setting", features.object_settings(nurbs))  # 0: the default
+            nurbs.DummySetting = 2.5
+            self.assertEqual(features.object_settings(nurbs)["dummy_setting"], 2.5 * 1024.0)
+        finally:
+            features.SETTING_ROWS = saved
+        # Level is ignored once Tolerance is given (the properties' documented meaning).
+        self.assertEqual(features.settings_of({"Level": 2, "Tolerance": 1e-3}), {"tolerance": 1e-3})
+        self.assertEqual(features.settings_of({"Level": 2, "Tolerance": 0.0, "MaxMemoryMiB": 2.0}),
+                         {"level": 2, "max_memory": 2.0 * 1024 * 1024})
+
     def test_packed_faces_are_the_same_solid(self):
         """Faces = Packed (the default) merges regular regions into one face each: fewer faces,
         the same solid as PerQuad (FreeCAD's own area and volume)."""

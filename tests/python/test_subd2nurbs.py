@@ -603,6 +603,47 @@ class BoundTypes(unittest.TestCase):
         self.assertEqual(keys[-1], "preview")
 
 
+class SettingsTable(unittest.TestCase):
+    """convert()'s keywords come from the converter's settings table (subd2nurbs.SETTINGS,
+    docs/settings.md): every row is a keyword with its default, its type checked and its help
+    in the docstring; a row added to the package's table is checked by the same loop."""
+
+    def test_every_row_is_a_keyword_with_its_default_and_doc(self):
+        names = [row["name"] for row in s2n.SETTINGS]
+        self.assertIn("level", names)
+        self.assertIn("max_memory", names)
+        defaults = s2n._subd2nurbs.Settings()
+        cage = s2n.read_cage(corpus("catmark_cube"))
+        for row in s2n.SETTINGS:
+            with self.subTest(setting=row["name"]):
+                self.assertEqual(getattr(defaults, row["name"]), row["default"])
+                self.assertIn("    %s: %s" % (row["name"], row["help"]), s2n.convert.__doc__)
+                if row["type"] in ("flag", "on-off"):
+                    continue
+                with self.assertRaises(s2n.SettingsError) as e:  # a list is no value of any type
+                    s2n.convert(cage, brep=False, **{row["name"]: [1]})
+                self.assertEqual(e.exception.setting, row["name"])
+        with self.assertRaises(TypeError):
+            s2n.convert(cage, colour="red")
+
+    def test_every_kind_of_error_has_its_exception_class(self):
+        from subd2nurbs import errors
+        kinds = s2n._subd2nurbs.error_classes()
+        self.assertEqual([k[0] for k in kinds], ["usage", "settings", "resources", "input", "fit", "write", "export"])
+        for name, code, cls in kinds:
+            with self.subTest(kind=name):
+                self.assertTrue(issubclass(getattr(errors, cls), errors.Subd2NurbsError))
+                self.assertIn(code, (1, 2, 3, 4))
+
+    def test_a_row_added_to_the_table_is_checked_by_the_loop(self):
+        row = {"name": "dummy_setting", "type": "integer", "default": 5, "default_text": "", "help": "a test row",
+               "choices": [], "cli": None, "python": True, "property": None}
+        self.assertEqual(s2n._setting_value(row, 7), 7)
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n._setting_value(row, "seven")
+        self.assertEqual((e.exception.setting, e.exception.rule), ("dummy_setting", "must be an integer"))
+
+
 class Versions(unittest.TestCase):
     def test_occt_version(self):
         self.assertRegex(s2n.OCC_VERSION, r"^\d+\.\d+\.\d+")

@@ -1,0 +1,347 @@
+#include "converter/pipeline/settings.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstdio>
+#include <stdexcept>
+
+#include "converter/pipeline/resources.h"
+
+namespace subd2nurbs::pipeline {
+
+namespace {
+
+// --- reading a value of the row's type --------------------------------------------------------
+
+bool flag(const SettingValue& v) { return std::get<bool>(v); }
+
+/// A whole number as an int; values beyond int's range become its ends, which every rule refuses.
+int integer(const SettingValue& v) {
+  const long long x = std::get<long long>(v);
+  return static_cast<int>(std::clamp<long long>(x, INT_MIN, INT_MAX));
+}
+
+double number(const SettingValue& v) {
+  if (const auto* i = std::get_if<long long>(&v)) return static_cast<double>(*i);  // Python's 2 for 2.0
+  return std::get<double>(v);
+}
+
+const std::string& word(const SettingValue& v) { return std::get<std::string>(v); }
+
+/// OnOff: a bool, or the words "on" / "off" (checked by `named`).
+bool on_off(const SettingValue& v, bool (*named)(const std::string&)) {
+  if (const auto* b = std::get_if<bool>(&v)) return *b;
+  return named(word(v));
+}
+
+double size(const SettingValue& v) {
+  if (const auto* text = std::get_if<std::string>(&v)) return memory_size(*text);
+  return number(v);
+}
+
+template <class T>
+SettingValue optional_value(const std::optional<T>& x) {
+  if (!x) return std::monostate{};
+  if constexpr (std::is_integral_v<T>) return static_cast<long long>(*x);
+  else return *x;
+}
+
+std::vector<std::string> schema_names() { return {"ap214", "ap242"}; }
+
+std::string lowercase(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::vector<SettingRow> make_table() {
+  std::vector<SettingRow> t;
+  auto row = [&t](std::string name, SettingType type, SettingValue default_value) -> SettingRow& {
+    SettingRow& r = t.emplace_back();
+    r.name = std::move(name);
+    r.type = type;
+    r.default_value = std::move(default_value);
+    return r;
+  };
+  const unsigned both = kConvertCommand | kCheckCommand;
+
+  {
+    SettingRow& r = row("level", SettingType::Integer, {});
+    r.default_text = "chosen by the tolerance";
+    r.help = "Pin the refinement levels beyond the minimum at every fan instead of choosing them from the "
+             "tolerance: each level shrinks the deviation near extraordinary vertices (0 .. " +
+             std::to_string(kMaxLevel) + ")";
+    r.cli = "--level";
+    r.commands = both;
+    r.property = {"Level", "Conversion",
+                  "If > 0: extra refinement levels at every irregular vertex (0 with Tolerance 0: the default "
+                  "tolerance, 1e-4 of the model size)",
+                  {}, true};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.level = integer(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.level); };
+  }
+  {
+    SettingRow& r = row("tolerance", SettingType::Number, {});
+    r.default_text = "1e-4 unless a level is given";
+    r.help = "Deviation from the limit surface to reach, relative to the bounding-box diagonal (unless absolute): "
+             "each fan gets the levels it needs, at most " + std::to_string(kMaxFanExtraLevels) + " extra";
+    r.cli = "--tolerance";
+    r.property = {"Tolerance", "Conversion",
+                  "If > 0: the deviation from the limit surface to reach (relative to the model size); each "
+                  "irregular vertex gets the levels it needs, and Level is ignored",
+                  {}, true};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.tolerance = number(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.tolerance); };
+  }
+  {
+    SettingRow& r = row("absolute", SettingType::Flag, false);
+    r.help = "The tolerance is in model units";
+    r.cli = "--absolute";
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.absolute = flag(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.conversion.absolute; };
+  }
+  {
+    SettingRow& r = row("polar", SettingType::OnOff, true);
+    r.help = "Polar structures (triangle fans around a pole): on (one singular polar cap each) or off "
+             "(Catmull-Clark)";
+    r.cli = "--polar";
+    r.choices = {"on", "off"};
+    r.property = {"PolarHandling", "Conversion",
+                  "Polar structures (triangle fans around a pole): one singular polar cap each, or Catmull-Clark "
+                  "patches like every other vertex",
+                  {{"Polar caps", "on"}, {"Catmull-Clark", "off"}}};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.polar = on_off(v, polar_mode); };
+    r.get = [](const Settings& s) -> SettingValue { return s.conversion.patch.polar; };
+  }
+  {
+    SettingRow& r = row("radial_steps", SettingType::Integer, 1LL);
+    r.help = "Radial BP pre-steps of a polar cap: 1 or " + std::to_string(kMaxRadialSteps) + " (elongated shapes)";
+    r.cli = "--radial-steps";
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.cap.radial_steps = integer(v); };
+    r.get = [](const Settings& s) -> SettingValue { return static_cast<long long>(s.conversion.patch.cap.radial_steps); };
+  }
+  {
+    SettingRow& r = row("polar_lambda", SettingType::Number, 0.75);
+    r.help = "Scale of a polar cap's projected 1-link, > 0";
+    r.cli = "--lambda";
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.cap.lambda = number(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.conversion.patch.cap.lambda; };
+  }
+  {
+    SettingRow& r = row("separate_poles", SettingType::Flag, false);
+    r.help = "Poles of valence 3..5 or too close to another: one separating Catmull-Clark step first "
+             "(docs/math.md 3.7), then polar caps";
+    r.cli = "--separate-poles";
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.separate_poles = flag(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.conversion.patch.separate_poles; };
+  }
+  {
+    SettingRow& r = row("fit", SettingType::Word, std::string(to_string(FitMode::Approximate)));
+    r.help = "approximate (the cage's own limit surface, which misses its vertices) or interpolate (solve for "
+             "the cage whose limit passes through them)";
+    r.cli = "--fit";
+    r.choices = setting_names("fit");
+    r.property = {"Fit", "Conversion",
+                  "Approximate: the cage's own limit surface (it misses the cage's vertices); Interpolate: the "
+                  "surface passes through every cage vertex (the cage is solved for first)",
+                  {{"Approximate", "approximate"}, {"Interpolate", "interpolate"}}};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.fit.mode = fit_mode(word(v)); };
+    r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.conversion.fit.mode)); };
+  }
+  {
+    SettingRow& r = row("fair", SettingType::Number, {});
+    r.default_text = "exact interpolation";
+    r.help = "With fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
+             "interpolation (noisy points give a smooth surface)";
+    r.cli = "--fair";
+    r.property = {"FairWeight", "Conversion",
+                  "With Fit = Interpolate: if > 0, trade exact interpolation for fairness (least squares with the "
+                  "thin-plate energy weighted this much); 0: exact",
+                  {}, true};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.fit.fair_weight = number(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.fit.fair_weight); };
+  }
+  {
+    SettingRow& r = row("faces", SettingType::Word, std::string(to_string(FaceMode::Packed)));
+    r.help = "packed (each regular region of quads is one B-spline face) or per-quad (one face per coarse quad)";
+    r.cli = "--faces";
+    r.commands = both;
+    r.choices = setting_names("faces");
+    r.property = {"Faces", "Conversion",
+                  "Packed: each regular region of quads is one B-spline face (fewer, larger faces); PerQuad: one "
+                  "face per coarse quad",
+                  {{"Packed", "packed"}, {"PerQuad", "per-quad"}}};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.faces = face_mode(word(v)); };
+    r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.conversion.faces)); };
+  }
+  {
+    SettingRow& r = row("brep", SettingType::Flag, true);
+    r.help = "Build the B-rep (checked by OCCT); false: the patches and their measures only";
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.build_brep = flag(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.conversion.build_brep; };
+  }
+  {
+    SettingRow& r = row("schema", SettingType::Word, std::string("ap214"));
+    r.help = "STEP schema of a written STEP file: ap214 or ap242";
+    r.cli = "--schema";
+    r.python = false;  // an argument of ConversionResult.write
+    r.choices = schema_names();
+    r.set = [](Settings& s, const SettingValue& v) { s.write.schema = step_schema(word(v)); };
+    r.get = [](const Settings& s) -> SettingValue { return lowercase(occt::to_string(s.write.schema)); };
+  }
+  {
+    SettingRow& r = row("preview", SettingType::Word, {});
+    r.default_text = "curvature when a preview is asked for";
+    r.help = "Preview colouring: deviation (from the exact limit), curvature (mean), zebra";
+    r.cli = "--color";
+    r.choices = setting_names("preview");
+    r.set = [](Settings& s, const SettingValue& v) { s.preview = preview_color(word(v)); };
+    r.get = [](const Settings& s) -> SettingValue {
+      if (!s.preview) return std::monostate{};
+      return std::string(to_string(*s.preview));
+    };
+  }
+  {
+    SettingRow& r = row("preview_samples", SettingType::Integer, 12LL);
+    r.help = "Preview vertices per patch side, 2 .. 64";
+    r.cli = "--preview-samples";
+    r.set = [](Settings& s, const SettingValue& v) { s.preview_samples = integer(v); };
+    r.get = [](const Settings& s) -> SettingValue { return static_cast<long long>(s.preview_samples); };
+  }
+  {
+    SettingRow& r = row("samples", SettingType::Integer, {});
+    r.default_text = std::to_string(kReportQualitySamples);
+    r.help = "Quality samples per patch side, 2 .. 64";
+    r.cli = "--samples";
+    r.commands = kCheckCommand;
+    r.python = false;
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.quality_samples = integer(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.quality_samples); };
+  }
+  {
+    SettingRow& r = row("max_faces", SettingType::Number, {});
+    r.default_text = "4e6";
+    r.help = "Refuse when the polynomial pieces the patches are built from would exceed N, estimated";
+    r.cli = "--max-faces";
+    r.commands = both;
+    r.property = {"MaxFaces", "Limits",
+                  "Refuse a conversion estimated to make more polynomial pieces (> 0; 0: the default, 4e6; as "
+                  "--max-faces)",
+                  {}, true};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.limits.max_faces = number(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.limits.max_faces); };
+  }
+  {
+    SettingRow& r = row("max_memory", SettingType::Size, {});
+    r.default_text = "3/4 of the memory available";
+    r.help = "Refuse when the estimated memory would exceed SIZE (bytes, or with K/M/G/T)";
+    r.cli = "--max-memory";
+    r.commands = both;
+    r.property = {"MaxMemoryMiB", "Limits",
+                  "Refuse a conversion estimated to need more memory, in MiB (> 0; 0: the default, 3/4 of the "
+                  "memory available; as --max-memory)",
+                  {}, true, 1024.0 * 1024.0};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.limits.max_memory = size(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.limits.max_memory); };
+  }
+  return t;
+}
+
+}  // namespace
+
+const char* to_string(SettingType type) {
+  switch (type) {
+    case SettingType::Flag: return "flag";
+    case SettingType::OnOff: return "on-off";
+    case SettingType::Integer: return "integer";
+    case SettingType::Number: return "number";
+    case SettingType::Word: return "word";
+    case SettingType::Size: return "size";
+  }
+  return "?";
+}
+
+const std::vector<SettingRow>& settings_table() {
+  static const std::vector<SettingRow> table = make_table();
+  return table;
+}
+
+const SettingRow* find_setting(const std::string& name) {
+  for (const SettingRow& r : settings_table())
+    if (r.name == name) return &r;
+  return nullptr;
+}
+
+void validate(const Settings& settings) {
+  validate(settings.conversion);
+  check_samples("preview_samples", settings.preview_samples);
+}
+
+Settings make_settings(const std::vector<std::pair<std::string, SettingValue>>& given) {
+  for (const auto& [name, value] : given)
+    if (!find_setting(name)) throw std::out_of_range("unknown setting '" + name + "'");
+  Settings s;
+  for (const SettingRow& row : settings_table())
+    for (const auto& [name, value] : given)
+      if (name == row.name && !std::holds_alternative<std::monostate>(value)) row.set(s, value);
+  validate(s);
+  return s;
+}
+
+ConversionSettings conversion_settings(const Settings& settings) {
+  ConversionSettings c = settings.conversion;
+  if (settings.preview) c.preview = PreviewSettings{*settings.preview, settings.preview_samples};
+  return c;
+}
+
+std::string value_text(const SettingRow& row, const SettingValue& value) {
+  if (std::holds_alternative<std::monostate>(value)) return "";
+  if (const auto* b = std::get_if<bool>(&value)) {
+    if (row.type == SettingType::OnOff) return *b ? "on" : "off";
+    return *b ? "true" : "false";
+  }
+  if (const auto* i = std::get_if<long long>(&value)) return std::to_string(*i);
+  if (const auto* x = std::get_if<double>(&value)) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", *x);
+    return buffer;
+  }
+  return std::get<std::string>(value);
+}
+
+std::string settings_markdown() {
+  std::string md =
+      "# Settings\n\n"
+      "Every setting of a conversion, as the command line, the Python module (`subd2nurbs.convert`'s\n"
+      "keywords) and the FreeCAD workbench (the NURBS object's properties) spell it. Generated from the\n"
+      "one table of the converter (`converter/pipeline/settings.cpp`) by `subd2nurbs settings`;\n"
+      "a test checks that this page is its output. Error messages name a setting as its front end spells it.\n\n"
+      "| setting | command line | Python | FreeCAD | type | default | what it does |\n"
+      "|---|---|---|---|---|---|---|\n";
+  auto code = [](const std::string& s) { return s.empty() ? std::string("-") : "`" + s + "`"; };
+  for (const SettingRow& r : settings_table()) {
+    std::string cli = code(r.cli);
+    if (!r.cli.empty() && r.commands != kConvertCommand)
+      cli += (r.commands & kConvertCommand) ? " (convert, check)" : " (check)";
+    std::string type = to_string(r.type);
+    if (!r.choices.empty()) {
+      type += ": ";
+      for (size_t i = 0; i < r.choices.size(); ++i) type += (i ? ", " : "") + code(r.choices[i]);
+    }
+    std::string property = code(r.property.name);
+    if (!r.property.choices.empty()) {
+      property += " (";
+      for (size_t i = 0; i < r.property.choices.size(); ++i)
+        property += (i ? ", " : "") + r.property.choices[i].first;
+      property += ")";
+    }
+    if (r.property.scale != 1) property += " (MiB)";
+    const std::string default_text = std::holds_alternative<std::monostate>(r.default_value)
+                                         ? r.default_text
+                                         : code(value_text(r, r.default_value));
+    md += "| `" + r.name + "` | " + cli + " | " + (r.python ? code(r.name) : std::string("-")) + " | " + property +
+          " | " + type + " | " + default_text + " | " + r.help + " |\n";
+  }
+  return md;
+}
+
+}  // namespace subd2nurbs::pipeline
