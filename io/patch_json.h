@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs {
 

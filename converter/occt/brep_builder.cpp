@@ -214,22 +214,14 @@ struct PendingUse {
   Handle(Geom2d_Curve) pcurve;
 };
 
-}  // namespace
-
-BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress) {
-  BrepResult result;
-  const double tol = brep_tolerance(ps.model_size);
-  result.tolerance = tol;
+/// Topology checks that OCCT would not report, or only as a crash: each patch side must name a
+/// curve whose use list contains exactly this (patch, side, reversed), and whose end corners are
+/// the side's corners in the right order; a curve has at most two uses, each made by a side.
+/// \throw ExportError ("topology")
+void check_topology(const PatchSet& ps) {
   const int num_patches = static_cast<int>(ps.patches.size());
   const int num_curves = static_cast<int>(ps.curves.size());
   const int num_corners = static_cast<int>(ps.corners.size());
-  if (num_patches == 0) throw ExportError("input", -1, "the PatchSet has no patches");
-
-  BRep_Builder builder;
-
-  // --- topology checks that OCCT would not report, or only as a crash -------------------
-  // Each patch side must name a curve whose use list contains exactly this (patch, side,
-  // reversed), and whose end corners are the side's corners in the right order.
   std::vector<int> uses_seen(num_curves, 0);
   for (int p = 0; p < num_patches; ++p) {
     const NurbsPatch& patch = ps.patches[p];
@@ -275,15 +267,30 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
       throw ExportError("topology", ps.curves[k].uses.empty() ? -1 : ps.curves[k].uses[0].patch,
                         "curve " + std::to_string(k) + " lists uses that no patch side makes");
   }
+}
 
-  // --- vertices and the 3D edges, each made once ------------------------------------------
-  std::vector<TopoDS_Vertex> vertices(num_corners);
+/// The B-rep's vertices (one per corner) and 3D edges (one per curve, with its parameter range),
+/// each made once and shared by the faces.
+struct SharedTopology {
+  std::vector<TopoDS_Vertex> vertices;
+  std::vector<TopoDS_Edge> edges;
+  std::vector<std::pair<double, double>> edge_range;
+};
+
+SharedTopology make_vertices_and_edges(const PatchSet& ps, BRep_Builder& builder, double tol) {
+  const int num_curves = static_cast<int>(ps.curves.size());
+  const int num_corners = static_cast<int>(ps.corners.size());
+  SharedTopology t;
+  std::vector<TopoDS_Vertex>& vertices = t.vertices;
+  std::vector<TopoDS_Edge>& edges = t.edges;
+  std::vector<std::pair<double, double>>& edge_range = t.edge_range;
+  vertices.resize(num_corners);
   guarded("vertex", -1, [&] {
     for (int c = 0; c < num_corners; ++c)
       builder.MakeVertex(vertices[c], to_pnt(ps.corners[c].position), tol);
   });
-  std::vector<TopoDS_Edge> edges(num_curves);
-  std::vector<std::pair<double, double>> edge_range(num_curves);
+  edges.resize(num_curves);
+  edge_range.resize(num_curves);
   for (int k = 0; k < num_curves; ++k) {
     const BoundaryCurve& curve = ps.curves[k];
     if (curve.uses.empty()) continue;
@@ -298,113 +305,99 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
       edge_range[k] = {c3d->FirstParameter(), c3d->LastParameter()};
     });
   }
+  return t;
+}
 
-  // --- faces ------------------------------------------------------------------------------
-  std::vector<TopoDS_Face> faces(num_patches);
-  std::vector<Handle(Geom_BSplineSurface)> surfaces(num_patches);
-  const int step = std::max(1, num_patches / 100);
-  for (int p = 0; p < num_patches; ++p) {
-    const NurbsPatch& patch = ps.patches[p];
-    surfaces[p] = make_surface(patch, p);
-    const Handle(Geom_BSplineSurface)& surface = surfaces[p];
-    guarded("face", p, [&] {
-      Domain d;
-      surface->Bounds(d.u0, d.u1, d.v0, d.v1);
-      TopoDS_Face& face = faces[p];
-      builder.MakeFace(face, surface, tol);
+/// The face of patch p on `surface`: its wire of the shared edges (split sides one edge per
+/// piece, collapsed sides a degenerated edge), each edge given its straight pcurve along the
+/// side (two for a seam).
+void make_face(const PatchSet& ps, int p, const Handle(Geom_BSplineSurface)& surface, SharedTopology& shared,
+               BRep_Builder& builder, double tol, TopoDS_Face& face) {
+  const NurbsPatch& patch = ps.patches[p];
+  std::vector<TopoDS_Vertex>& vertices = shared.vertices;
+  std::vector<TopoDS_Edge>& edges = shared.edges;
+  const std::vector<std::pair<double, double>>& edge_range = shared.edge_range;
+  Domain d;
+  surface->Bounds(d.u0, d.u1, d.v0, d.v1);
+  builder.MakeFace(face, surface, tol);
 
-      // pcurves of this patch per curve (two for a seam).
-      std::vector<std::pair<int, PendingUse>> pending;
-      std::array<std::vector<TopoDS_Edge>, 4> side_edges;
-      for (int side = 0; side < 4; ++side) {
-        const auto [start, end] = side_ends(d, side);
-        const int k = patch.curves[side];
-        if (k < 0 && !patch.split_sides[side].empty()) {
-          // A side made of several curves (a polar cap's boundary): one edge per piece, each
-          // with the straight pcurve over its part [t0, t1] of the side.
-          auto at = [&](double t) { return gp_Pnt2d(start.XY() + t * (end.XY() - start.XY())); };
-          for (const SidePiece& q : patch.split_sides[side]) {
-            const auto [s0, s1] = edge_range[q.curve];
-            const gp_Pnt2d a = at(q.reversed ? q.t1 : q.t0), b = at(q.reversed ? q.t0 : q.t1);
-            pending.push_back({q.curve, {q.reversed, segment(a, b, s0, s1)}});
-            side_edges[side].push_back(
-                TopoDS::Edge(edges[q.curve].Oriented(q.reversed ? TopAbs_REVERSED : TopAbs_FORWARD)));
-          }
-          continue;
-        }
-        if (k < 0) {
-          // Collapsed side (e.g. the pole of a polar cap): a degenerated edge, which has no 3D
-          // curve, only the pcurve along the side and the one vertex at both ends.
-          side_edges[side].emplace_back();
-          TopoDS_Edge& e = side_edges[side].back();
-          builder.MakeEdge(e);
-          const double length = gp_Vec2d(start, end).Magnitude();
-          builder.UpdateEdge(e, segment(start, end, 0, length), face, tol);
-          builder.Add(e, vertices[patch.corners[side]].Oriented(TopAbs_FORWARD));
-          builder.Add(e, vertices[patch.corners[side]].Oriented(TopAbs_REVERSED));
-          builder.Range(e, 0, length);
-          builder.Degenerated(e, Standard_True);
-          continue;
-        }
-        // The pcurve runs from the side point where s = s0 to the one where s = s1: the side's
-        // start unless the side traverses the curve backwards.
-        const bool rev = patch.curve_reversed[side];
-        const auto [s0, s1] = edge_range[k];
-        pending.push_back({k, {rev, segment(rev ? end : start, rev ? start : end, s0, s1)}});
-        // In the wire the edge runs the way the side does: against the curve when reversed.
-        side_edges[side].push_back(TopoDS::Edge(edges[k].Oriented(rev ? TopAbs_REVERSED : TopAbs_FORWARD)));
+  // pcurves of this patch per curve (two for a seam).
+  std::vector<std::pair<int, PendingUse>> pending;
+  std::array<std::vector<TopoDS_Edge>, 4> side_edges;
+  for (int side = 0; side < 4; ++side) {
+    const auto [start, end] = side_ends(d, side);
+    const int k = patch.curves[side];
+    if (k < 0 && !patch.split_sides[side].empty()) {
+      // A side made of several curves (a polar cap's boundary): one edge per piece, each
+      // with the straight pcurve over its part [t0, t1] of the side.
+      auto at = [&](double t) { return gp_Pnt2d(start.XY() + t * (end.XY() - start.XY())); };
+      for (const SidePiece& q : patch.split_sides[side]) {
+        const auto [s0, s1] = edge_range[q.curve];
+        const gp_Pnt2d a = at(q.reversed ? q.t1 : q.t0), b = at(q.reversed ? q.t0 : q.t1);
+        pending.push_back({q.curve, {q.reversed, segment(a, b, s0, s1)}});
+        side_edges[side].push_back(
+            TopoDS::Edge(edges[q.curve].Oriented(q.reversed ? TopAbs_REVERSED : TopAbs_FORWARD)));
       }
-
-      for (size_t a = 0; a < pending.size(); ++a) {
-        const int k = pending[a].first;
-        size_t b = a + 1;
-        while (b < pending.size() && pending[b].first != k) ++b;
-        if (b < pending.size()) {
-          // Seam: the same edge bounds this face twice. OCCT stores both pcurves together, the
-          // first for the edge's FORWARD occurrence in the face, the second for REVERSED.
-          const PendingUse& u = pending[a].second;
-          const PendingUse& w = pending[b].second;
-          if (u.reversed == w.reversed)
-            throw ExportError("topology", p, "curve " + std::to_string(k) +
-                                                 " is used twice in the same direction");
-          builder.UpdateEdge(edges[k], u.reversed ? w.pcurve : u.pcurve,
-                             u.reversed ? u.pcurve : w.pcurve, face, tol);
-          pending.erase(pending.begin() + static_cast<long>(b));
-        } else {
-          builder.UpdateEdge(edges[k], pending[a].second.pcurve, face, tol);
-        }
-      }
-
-      TopoDS_Wire wire;
-      builder.MakeWire(wire);
-      for (const auto& list : side_edges)
-        for (const TopoDS_Edge& e : list) builder.Add(wire, e);
-      wire.Closed(Standard_True);
-      builder.Add(face, wire);
-      // The wire is the boundary of the whole parameter rectangle.
-      builder.NaturalRestriction(face, Standard_True);
-    });
-    if (progress && ((p + 1) % step == 0 || p + 1 == num_patches))
-      progress(static_cast<double>(p + 1) / num_patches);
+      continue;
+    }
+    if (k < 0) {
+      // Collapsed side (e.g. the pole of a polar cap): a degenerated edge, which has no 3D
+      // curve, only the pcurve along the side and the one vertex at both ends.
+      side_edges[side].emplace_back();
+      TopoDS_Edge& e = side_edges[side].back();
+      builder.MakeEdge(e);
+      const double length = gp_Vec2d(start, end).Magnitude();
+      builder.UpdateEdge(e, segment(start, end, 0, length), face, tol);
+      builder.Add(e, vertices[patch.corners[side]].Oriented(TopAbs_FORWARD));
+      builder.Add(e, vertices[patch.corners[side]].Oriented(TopAbs_REVERSED));
+      builder.Range(e, 0, length);
+      builder.Degenerated(e, Standard_True);
+      continue;
+    }
+    // The pcurve runs from the side point where s = s0 to the one where s = s1: the side's
+    // start unless the side traverses the curve backwards.
+    const bool rev = patch.curve_reversed[side];
+    const auto [s0, s1] = edge_range[k];
+    pending.push_back({k, {rev, segment(rev ? end : start, rev ? start : end, s0, s1)}});
+    // In the wire the edge runs the way the side does: against the curve when reversed.
+    side_edges[side].push_back(TopoDS::Edge(edges[k].Oriented(rev ? TopAbs_REVERSED : TopAbs_FORWARD)));
   }
 
-  // Every pcurve was made with the curve's own parameter, so all representations share one
-  // range and agree pointwise: SameRange and SameParameter hold by construction (BRepCheck
-  // verifies the latter by sampling against the edge tolerance).
-  for (int k = 0; k < num_curves; ++k) {
-    if (edges[k].IsNull()) continue;
-    guarded("edge", ps.curves[k].uses[0].patch, [&] {
-      builder.Range(edges[k], edge_range[k].first, edge_range[k].second);
-      builder.SameRange(edges[k], Standard_True);
-      builder.SameParameter(edges[k], Standard_True);
-    });
+  for (size_t a = 0; a < pending.size(); ++a) {
+    const int k = pending[a].first;
+    size_t b = a + 1;
+    while (b < pending.size() && pending[b].first != k) ++b;
+    if (b < pending.size()) {
+      // Seam: the same edge bounds this face twice. OCCT stores both pcurves together, the
+      // first for the edge's FORWARD occurrence in the face, the second for REVERSED.
+      const PendingUse& u = pending[a].second;
+      const PendingUse& w = pending[b].second;
+      if (u.reversed == w.reversed)
+        throw ExportError("topology", p, "curve " + std::to_string(k) +
+                                             " is used twice in the same direction");
+      builder.UpdateEdge(edges[k], u.reversed ? w.pcurve : u.pcurve,
+                         u.reversed ? u.pcurve : w.pcurve, face, tol);
+      pending.erase(pending.begin() + static_cast<long>(b));
+    } else {
+      builder.UpdateEdge(edges[k], pending[a].second.pcurve, face, tol);
+    }
   }
 
-  // --- shells and solids, one per connected component ------------------------------------
-  // A cage may have several components (catmark_cubes_infsharp is four cubes). BRepCheck
-  // rejects a shell whose faces are not connected, so each component gets its own shell, and
-  // a component without open boundary curves becomes a solid. Several components are returned
-  // as a compound.
+  TopoDS_Wire wire;
+  builder.MakeWire(wire);
+  for (const auto& list : side_edges)
+    for (const TopoDS_Edge& e : list) builder.Add(wire, e);
+  wire.Closed(Standard_True);
+  builder.Add(face, wire);
+  // The wire is the boundary of the whole parameter rectangle.
+  builder.NaturalRestriction(face, Standard_True);
+}
+
+/// One shell per connected component of the faces, a solid (outward) where the component has
+/// no open boundary curve; several components as a compound. Fills result.shape and its counts.
+void assemble(const PatchSet& ps, const std::vector<TopoDS_Face>& faces,
+              const std::vector<Handle(Geom_BSplineSurface)>& surfaces, BRep_Builder& builder, BrepResult& result) {
+  const int num_patches = static_cast<int>(ps.patches.size());
   std::vector<int> parent(num_patches);
   for (int p = 0; p < num_patches; ++p) parent[p] = p;
   auto find = [&](int p) {
@@ -473,8 +466,13 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
       result.shape = compound;
     });
   }
+}
 
-  // --- counts, check ----------------------------------------------------------------------
+/// Counts the result's faces, edges and vertices and checks it with BRepCheck, naming faces and
+/// edges by patch and curve in its messages.
+void count_and_check(const std::vector<TopoDS_Face>& faces, const std::vector<TopoDS_Edge>& edges, BrepResult& result) {
+  const int num_patches = static_cast<int>(faces.size());
+  const int num_curves = static_cast<int>(edges.size());
   guarded("check", -1, [&] {
     TopTools_IndexedMapOfShape map;
     TopExp::MapShapes(result.shape, TopAbs_FACE, map);
@@ -500,8 +498,48 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     };
     result.valid = detail::check_shape(result.shape, result.check_message, namer);
   });
+}
 
-  result.curve_edges.assign(edges.begin(), edges.end());
+}  // namespace
+
+BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress) {
+  BrepResult result;
+  const double tol = brep_tolerance(ps.model_size);
+  result.tolerance = tol;
+  const int num_patches = static_cast<int>(ps.patches.size());
+  const int num_curves = static_cast<int>(ps.curves.size());
+  if (num_patches == 0) throw ExportError("input", -1, "the PatchSet has no patches");
+  check_topology(ps);
+
+  BRep_Builder builder;
+  SharedTopology shared = make_vertices_and_edges(ps, builder, tol);
+  std::vector<TopoDS_Face> faces(num_patches);
+  std::vector<Handle(Geom_BSplineSurface)> surfaces(num_patches);
+  const int step = std::max(1, num_patches / 100);
+  for (int p = 0; p < num_patches; ++p) {
+    surfaces[p] = make_surface(ps.patches[p], p);
+    guarded("face", p, [&] { make_face(ps, p, surfaces[p], shared, builder, tol, faces[p]); });
+    if (progress && ((p + 1) % step == 0 || p + 1 == num_patches))
+      progress(static_cast<double>(p + 1) / num_patches);
+  }
+
+  // Every pcurve was made with the curve's own parameter, so all representations share one
+  // range and agree pointwise: SameRange and SameParameter hold by construction (BRepCheck
+  // verifies the latter by sampling against the edge tolerance).
+  for (int k = 0; k < num_curves; ++k) {
+    if (shared.edges[k].IsNull()) continue;
+    guarded("edge", ps.curves[k].uses[0].patch, [&] {
+      builder.Range(shared.edges[k], shared.edge_range[k].first, shared.edge_range[k].second);
+      builder.SameRange(shared.edges[k], Standard_True);
+      builder.SameParameter(shared.edges[k], Standard_True);
+    });
+  }
+
+  // A cage may have several components (catmark_cubes_infsharp is four cubes). BRepCheck
+  // rejects a shell whose faces are not connected, so each component gets its own shell.
+  assemble(ps, faces, surfaces, builder, result);
+  count_and_check(faces, shared.edges, result);
+  result.curve_edges.assign(shared.edges.begin(), shared.edges.end());
   return result;
 }
 

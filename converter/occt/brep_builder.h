@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "converter/occt/export_error.h"
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs::occt {
 

@@ -1,6 +1,6 @@
 #include "converter/pipeline/conversion.h"
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/util/parallel.h"
 
 #include <algorithm>
@@ -216,193 +216,268 @@ PreviewMesh build_preview(const SubdivLevel& base, const ConversionResult& c, co
   return subd2nurbs::build_preview(c.build, limit ? &*limit : nullptr, preview.color, preview.samples);
 }
 
-ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
-                         const ConversionSettings& settings, const ConversionProgress& progress,
-                         std::vector<std::string> warnings) {
-  validate(settings);
-  ConversionResult c;
-  c.warnings = std::move(warnings);
-  // A level pins the levels; else a tolerance (the user's or the default) chooses them.
-  const bool tolerance_given = !settings.level;
-  c.tolerance_given = tolerance_given;
-  c.tolerance_absolute = settings.absolute;
-  auto stage = [&](Stage which, const std::string& text) {
+namespace {
+
+/// What the stages of a conversion share: the cage, the settings, the progress callbacks and
+/// the result they fill in.
+struct Run {
+  const SubdivLevel& base;
+  const ConversionSettings& settings;
+  const ConversionProgress& progress;
+  ConversionResult& c;
+
+  void stage(Stage which, const std::string& text) const {
     if (progress.stage) progress.stage(which, text);
-  };
-  auto report = [&](ConversionDiagnostic d) {
+  }
+  void report(ConversionDiagnostic d) const {
     if (progress.diagnostic) progress.diagnostic(d);
     c.diagnostics.push_back(std::move(d));
-  };
-  auto warn = [&](DiagnosticCode code, const std::string& message) {
+  }
+  void warn(DiagnosticCode code, const std::string& message) const {
     report({Severity::Warning, code, message, -1, "", ""});
-  };
-  const int level = settings.level.value_or(0);
+  }
+  /// The resource limits allow `extra` levels.
+  bool fits(int extra) const {
+    try {
+      check_resources(estimate_conversion(base, extra, settings.build_brep), settings.limits, kDefaultMaxConvertFaces,
+                      "", "");
+      return true;
+    } catch (const ResourceError&) {
+      return false;
+    }
+  }
+};
+
+/// A cage with a surface to convert: not every face a hole, and of a size double precision
+/// resolves at its distance from the origin. \throw InvalidMeshError
+void check_has_surface(const SubdivLevel& base, const std::vector<Point3>& positions) {
   bool any_surface = false;
   for (const char hole : base.face_hole) any_surface = any_surface || !hole;
   if (!any_surface)
     throw InvalidMeshError(MeshErrorCode::EmptyMesh, ElementKind::None, -1, -1,
                            "every face of the cage is a hole ('t hole' tags): there is no surface to convert");
-  {
-    // A cage of zero size (all vertices at one point), or one too small for its distance from
-    // the origin to be resolved in double precision, has no surface a B-rep can hold.
-    Point3 lo = positions.empty() ? Point3{0, 0, 0} : positions[0], hi = lo;
-    double far = 0;
-    for (const Point3& p : positions)
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], p[k]);
-        hi[k] = std::max(hi[k], p[k]);
-        far = std::max(far, std::fabs(p[k]));
-      }
-    const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    if (!(diagonal > 1e-12 * far) || diagonal == 0)
-      throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::None, -1, -1,
-                             "the cage has size " + short_number(diagonal) + " (bounding-box diagonal) " +
-                                 (diagonal == 0 ? std::string("- all its vertices coincide")
-                                                : "at distance " + short_number(far) +
-                                                      " from the origin, below what double precision resolves") +
-                                 ": there is no surface to convert");
+  // A cage of zero size (all vertices at one point), or one too small for its distance from
+  // the origin to be resolved in double precision, has no surface a B-rep can hold.
+  Point3 lo = positions.empty() ? Point3{0, 0, 0} : positions[0], hi = lo;
+  double far = 0;
+  for (const Point3& p : positions)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], p[k]);
+      hi[k] = std::max(hi[k], p[k]);
+      far = std::max(far, std::fabs(p[k]));
+    }
+  const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  if (!(diagonal > 1e-12 * far) || diagonal == 0)
+    throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::None, -1, -1,
+                           "the cage has size " + short_number(diagonal) + " (bounding-box diagonal) " +
+                               (diagonal == 0 ? std::string("- all its vertices coincide")
+                                              : "at distance " + short_number(far) +
+                                                    " from the origin, below what double precision resolves") +
+                               ": there is no surface to convert");
+}
+
+/// The fit stage (FitMode::Interpolate): c.cage becomes the cage whose limit passes through the
+/// input's vertices (or a fair fit of them); else it stays the input.
+void fit_stage(const Run& r, const std::vector<Point3>& positions) {
+  ConversionResult& c = r.c;
+  const ConversionSettings& settings = r.settings;
+  c.cage = positions;
+  if (settings.fit.mode != FitMode::Interpolate) return;
+  const auto t0 = Clock::now();
+  FitReport& fr = c.fit;
+  fr.mode = FitMode::Interpolate;
+  fr.fair_weight = settings.fit.fair_weight.value_or(0);
+  std::vector<PolarStructure> polar;
+  if (settings.patch.polar) polar = detect_polar_structures(r.base).structures;
+  if (settings.fit.fair_weight) {
+    r.stage(Stage::Fit, "fitting the cage to its vertices (fairing weight " + short_number(fr.fair_weight) + ")");
+    FairOptions fo;
+    fo.weight = fr.fair_weight;
+    fo.energy = settings.fit.energy;
+    fo.polar = polar;
+    const FairResult f = fair(r.base, positions, positions, fo);
+    c.cage = f.positions;
+    fr.residual = f.residual;
+    fr.energy_before = f.energy_before;
+    fr.energy_after = f.energy_after;
+  } else {
+    r.stage(Stage::Fit, "solving for the cage whose limit passes through its vertices");
+    InterpolationOptions io;
+    io.polar = polar;
+    const InterpolationResult f = interpolate(r.base, positions, io);
+    c.cage = f.positions;
+    fr.residual = f.residual;
+    fr.condition = f.condition;
+    fr.singular = f.singular;
+    fr.null_vertices = f.null_vertices;
+    fr.no_surface = static_cast<int>(f.no_surface.size());
+    if (f.singular)
+      r.warn(DiagnosticCode::InterpolationSingular,
+             "the interpolation system is singular near vertices " + index_list(f.null_vertices) +
+                 ": the interpolating cage is not unique, the one nearest to the input was used");
   }
+  fr.polar_vertices = 0;
+  for (const PolarStructure& s : polar) fr.polar_vertices += 1 + 2 * s.valence;
+  fr.displacement = field_stats(c.cage, positions);
+  c.ms.fit = ms_since(t0);
+}
+
+/// The patches with `extra` levels beyond the minimum at every fan.
+void patches_stage(const Run& r, int extra) {
+  const auto t0 = Clock::now();
+  r.stage(Stage::Patches, extra == 0 ? std::string("building patches")
+                                     : "building patches (" + std::to_string(extra) + " extra levels)");
+  PatchOptions po = r.settings.patch;
+  po.extra_levels = extra;
+  r.c.build = build_patches(r.base, r.c.cage, po);
+  r.c.extra_levels = extra;
+  r.c.ms.patches += ms_since(t0);
+}
+
+/// Measures the deviation at every fan, or (with `remeasure`) only at those, keeping the
+/// others' last values.
+void deviation_stage(const Run& r, const std::vector<char>* remeasure = nullptr) {
+  ConversionResult& c = r.c;
+  const auto t0 = Clock::now();
+  r.stage(Stage::Deviation, "measuring the deviation from the limit surface");
+  DeviationReport d = measure_deviation(c.build, kDeviationSampleLevels, remeasure ? &c.deviation : nullptr, remeasure);
+  c.deviation = std::move(d);
+  c.ms.deviation += ms_since(t0);
+}
+
+/// Each fan gets the extra levels its own deviation needs (per-valence rates), so a tolerance
+/// deepens only the fans that miss it; measured again after each rebuild, up to
+/// kToleranceRounds times. Fills c.tolerance; warns when capped or not met.
+void tolerance_stage(const Run& r) {
+  ConversionResult& c = r.c;
+  const ConversionSettings& settings = r.settings;
+  ToleranceResult& tr = c.tolerance;
+  tr.requested = settings.tolerance.value_or(kDefaultTolerance);
+  tr.is_default = !settings.tolerance;
+  tr.absolute = settings.absolute ? tr.requested : tr.requested * c.build.set.model_size;
+  deviation_stage(r);
+  tr.first_max = c.deviation.max;
+  std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
+  bool by_limits = false;  // the last cap came from the face and memory limits (a setting may lift it)
+  for (int round = 0; round < kToleranceRounds; ++round) {
+    const std::vector<int> before = extra;
+    bool deeper = false;
+    for (const FanDeviation& fd : c.deviation.fans) {
+      if (fd.max <= tr.absolute) continue;
+      const IrregularFan& fan = c.build.info.fans[fd.fan];
+      const int want = extra[fan.vertex] + std::max(1, fan_extra_levels_for_tolerance(fan, fd.max, tr.absolute));
+      tr.needed = std::max(tr.needed, want);
+      const int use = std::min(want, kMaxFanExtraLevels);
+      if (use > extra[fan.vertex] && !r.fits(use)) {  // the limits bound every fan alike
+        tr.capped = true;
+        tr.cap_reason = "the face and memory limits";
+        by_limits = true;
+        continue;
+      }
+      if (use > extra[fan.vertex]) {
+        extra[fan.vertex] = use;
+        deeper = true;
+      } else if (want > kMaxFanExtraLevels) {
+        tr.capped = true;
+        tr.cap_reason = "at most " + std::to_string(kMaxFanExtraLevels) + " extra levels per fan";
+        by_limits = false;
+      }
+    }
+    if (!deeper) break;
+    PatchOptions po = settings.patch;
+    po.vertex_extra_levels = extra;
+    po.reuse = &c.build;  // only the quads at deepened vertices are rebuilt
+    const auto t0 = Clock::now();
+    r.stage(Stage::Patches, "building patches (deeper at " +
+                                std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
+                                " vertices for the tolerance)");
+    PatchBuild deeper_build = build_patches(r.base, c.cage, po);
+    c.build = std::move(deeper_build);
+    c.ms.patches += ms_since(t0);
+    std::vector<char> remeasure(c.build.info.fans.size(), 0);
+    for (size_t fi = 0; fi < remeasure.size(); ++fi)
+      remeasure[fi] = extra[c.build.info.fans[fi].vertex] != before[c.build.info.fans[fi].vertex];
+    deviation_stage(r, &remeasure);
+  }
+  tr.used = *std::max_element(extra.begin(), extra.end());
+  tr.fans_deepened = static_cast<int>(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; }));
+  if (tr.capped)
+    r.report({Severity::Warning, DiagnosticCode::ToleranceCapped,
+              "the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
+                  std::to_string(tr.used) + " (" + tr.cap_reason + ")",
+              -1, by_limits ? "max_faces" : "", ""});
+  tr.met = c.deviation.max <= tr.absolute;
+  if (!tr.met)
+    r.warn(DiagnosticCode::ToleranceNotMet, "tolerance NOT met: deviation " + short_number(c.deviation.max) +
+                                                " > tolerance " + short_number(tr.absolute) +
+                                                " (model units) at level " + std::to_string(c.build.info.level));
+}
+
+/// Faces: regular regions packed into one surface each, or one face per quad.
+void faces_stage(const Run& r) {
+  ConversionResult& c = r.c;
+  const auto t = Clock::now();
+  c.faces = r.settings.faces;
+  if (r.settings.faces == FaceMode::Packed) {
+    r.stage(Stage::Packing, "packing regular regions into faces");
+    c.exported = pack_patches(c.build);
+    if (c.exported.rejected_packs > 0)
+      r.warn(DiagnosticCode::PacksRejected,
+             std::to_string(c.exported.rejected_packs) +
+                 " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
+  } else {
+    c.exported = unpacked(c.build.set);
+  }
+  c.ms.packing = ms_since(t);
+}
+
+/// Notes on the poles that are not polar structures and on a separating first step.
+void pole_notes(const Run& r) {
+  const PatchBuildInfo& info = r.c.build.info;
+  const PatchOptions& patch = r.settings.patch;
+  for (const RejectedPole& p : info.rejected_poles) {
+    const bool separable = p.kind != RejectedPole::Kind::Structure && !patch.separate_poles;
+    if (patch.polar && (p.valence >= kMinPolarValence || separable))
+      r.report({Severity::Note, DiagnosticCode::PoleNotPolar,
+                "vertex " + std::to_string(p.vertex) + " (valence " + std::to_string(p.valence) +
+                    ") is not a polar structure, Catmull-Clark is used there: " + p.reason,
+                p.vertex, separable ? "separate_poles" : "",
+                p.kind == RejectedPole::Kind::LowValence ? "valence below " + std::to_string(kMinPolarValence)
+                : p.kind == RejectedPole::Kind::TooClose ? "too close to another pole"
+                                                         : "their rings do not form one"});
+  }
+  if (!info.separated_poles.empty())
+    r.report({Severity::Note, DiagnosticCode::PolesSeparated,
+              "separating first step at " + std::to_string(info.separated_poles.size()) +
+                  " pole(s); the patches are built from that level-1 cage",
+              -1, "", ""});
+}
+
+}  // namespace
+
+ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
+                         const ConversionSettings& settings, const ConversionProgress& progress,
+                         std::vector<std::string> warnings) {
+  validate(settings);
+  ConversionResult c;
+  const Run run{base, settings, progress, c};
+  c.warnings = std::move(warnings);
+  // A level pins the levels; else a tolerance (the user's or the default) chooses them.
+  const bool tolerance_given = !settings.level;
+  c.tolerance_given = tolerance_given;
+  c.tolerance_absolute = settings.absolute;
+  const int level = settings.level.value_or(0);
+  check_has_surface(base, positions);
   check_resources(estimate_conversion(base, level, settings.build_brep), settings.limits, kDefaultMaxConvertFaces,
                   "converting " + std::to_string(base.mesh.num_faces()) + " cage faces at level " +
                       std::to_string(level),
                   level > 0 ? "use a lower level" : "simplify the cage");
-  auto fits = [&](int extra) {
-    try {
-      check_resources(estimate_conversion(base, extra, settings.build_brep), settings.limits, kDefaultMaxConvertFaces, "", "");
-      return true;
-    } catch (const ResourceError&) {
-      return false;
-    }
-  };
 
-  // The fit: the cage whose limit passes through the input's vertices (or a fair fit).
-  c.cage = positions;
-  if (settings.fit.mode == FitMode::Interpolate) {
-    const auto t0 = Clock::now();
-    FitReport& fr = c.fit;
-    fr.mode = FitMode::Interpolate;
-    fr.fair_weight = settings.fit.fair_weight.value_or(0);
-    std::vector<PolarStructure> polar;
-    if (settings.patch.polar) polar = detect_polar_structures(base).structures;
-    if (settings.fit.fair_weight) {
-      stage(Stage::Fit, "fitting the cage to its vertices (fairing weight " + short_number(fr.fair_weight) + ")");
-      FairOptions fo;
-      fo.weight = fr.fair_weight;
-      fo.energy = settings.fit.energy;
-      fo.polar = polar;
-      const FairResult r = fair(base, positions, positions, fo);
-      c.cage = r.positions;
-      fr.residual = r.residual;
-      fr.energy_before = r.energy_before;
-      fr.energy_after = r.energy_after;
-    } else {
-      stage(Stage::Fit, "solving for the cage whose limit passes through its vertices");
-      InterpolationOptions io;
-      io.polar = polar;
-      const InterpolationResult r = interpolate(base, positions, io);
-      c.cage = r.positions;
-      fr.residual = r.residual;
-      fr.condition = r.condition;
-      fr.singular = r.singular;
-      fr.null_vertices = r.null_vertices;
-      fr.no_surface = static_cast<int>(r.no_surface.size());
-      if (r.singular)
-        warn(DiagnosticCode::InterpolationSingular,
-             "the interpolation system is singular near vertices " + index_list(r.null_vertices) +
-                 ": the interpolating cage is not unique, the one nearest to the input was used");
-    }
-    fr.polar_vertices = 0;
-    for (const PolarStructure& s : polar) fr.polar_vertices += 1 + 2 * s.valence;
-    fr.displacement = field_stats(c.cage, positions);
-    c.ms.fit = ms_since(t0);
-  }
-  const std::vector<Point3>& cage = c.cage;
-
+  fit_stage(run, positions);
   // Patches, at the level asked for or at the minimum level first for a tolerance.
-  auto build = [&](int extra) {
-    const auto t0 = Clock::now();
-    stage(Stage::Patches, extra == 0 ? std::string("building patches")
-                     : "building patches (" + std::to_string(extra) + " extra levels)");
-    PatchOptions po = settings.patch;
-    po.extra_levels = extra;
-    c.build = build_patches(base, cage, po);
-    c.extra_levels = extra;
-    c.ms.patches += ms_since(t0);
-  };
-  // Measures every fan, or (with `remeasure`) only those, keeping the others' last values.
-  auto measure_deviation_now = [&](const std::vector<char>* remeasure = nullptr) {
-    const auto t0 = Clock::now();
-    stage(Stage::Deviation, "measuring the deviation from the limit surface");
-    DeviationReport d = measure_deviation(c.build, kDeviationSampleLevels, remeasure ? &c.deviation : nullptr, remeasure);
-    c.deviation = std::move(d);
-    c.ms.deviation += ms_since(t0);
-  };
-  build(level);
-
-  if (tolerance_given) {
-    // Each fan gets the extra levels its own deviation needs (per-valence rates), so a
-    // tolerance deepens only the fans that miss it; measured again after each rebuild.
-    ToleranceResult& tr = c.tolerance;
-    tr.requested = settings.tolerance.value_or(kDefaultTolerance);
-    tr.is_default = !settings.tolerance;
-    tr.absolute = settings.absolute ? tr.requested : tr.requested * c.build.set.model_size;
-    measure_deviation_now();
-    tr.first_max = c.deviation.max;
-    std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
-    bool by_limits = false;  // the last cap came from the face and memory limits (a setting may lift it)
-    for (int round = 0; round < kToleranceRounds; ++round) {
-      const std::vector<int> before = extra;
-      bool deeper = false;
-      for (const FanDeviation& fd : c.deviation.fans) {
-        if (fd.max <= tr.absolute) continue;
-        const IrregularFan& fan = c.build.info.fans[fd.fan];
-        const int want = extra[fan.vertex] + std::max(1, fan_extra_levels_for_tolerance(fan, fd.max, tr.absolute));
-        tr.needed = std::max(tr.needed, want);
-        const int use = std::min(want, kMaxFanExtraLevels);
-        if (use > extra[fan.vertex] && !fits(use)) {  // the limits bound every fan alike
-          tr.capped = true;
-          tr.cap_reason = "the face and memory limits";
-          by_limits = true;
-          continue;
-        }
-        if (use > extra[fan.vertex]) {
-          extra[fan.vertex] = use;
-          deeper = true;
-        } else if (want > kMaxFanExtraLevels) {
-          tr.capped = true;
-          tr.cap_reason = "at most " + std::to_string(kMaxFanExtraLevels) + " extra levels per fan";
-          by_limits = false;
-        }
-      }
-      if (!deeper) break;
-      PatchOptions po = settings.patch;
-      po.vertex_extra_levels = extra;
-      po.reuse = &c.build;  // only the quads at deepened vertices are rebuilt
-      const auto t0 = Clock::now();
-      stage(Stage::Patches, "building patches (deeper at " + std::to_string(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; })) +
-            " vertices for the tolerance)");
-      PatchBuild deeper_build = build_patches(base, c.cage, po);
-      c.build = std::move(deeper_build);
-      c.ms.patches += ms_since(t0);
-      std::vector<char> remeasure(c.build.info.fans.size(), 0);
-      for (size_t fi = 0; fi < remeasure.size(); ++fi) remeasure[fi] = extra[c.build.info.fans[fi].vertex] != before[c.build.info.fans[fi].vertex];
-      measure_deviation_now(&remeasure);
-    }
-    tr.used = *std::max_element(extra.begin(), extra.end());
-    tr.fans_deepened = static_cast<int>(std::count_if(extra.begin(), extra.end(), [](int x) { return x > 0; }));
-    if (tr.capped)
-      report({Severity::Warning, DiagnosticCode::ToleranceCapped,
-              "the tolerance needs " + std::to_string(tr.needed) + " extra levels at some fan; using " +
-                  std::to_string(tr.used) + " (" + tr.cap_reason + ")",
-              -1, by_limits ? "max_faces" : "", ""});
-    tr.met = c.deviation.max <= tr.absolute;
-    if (!tr.met)
-      warn(DiagnosticCode::ToleranceNotMet, "tolerance NOT met: deviation " + short_number(c.deviation.max) +
-                                                " > tolerance " + short_number(tr.absolute) +
-                                                " (model units) at level " + std::to_string(c.build.info.level));
-  }
-  const PatchBuildInfo& info = c.build.info;
+  patches_stage(run, level);
+  if (tolerance_given) tolerance_stage(run);
 
   // The optional quality stage runs on a thread of its own from here on, beside the other
   // stages: first what depends on the cage alone (the exact limit, the quadric fits at the
@@ -420,7 +495,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   std::promise<void> surfaces_ready;
   std::optional<ThreadReservation> main_core;
   if (settings.quality_samples) {
-    stage(Stage::Quality, "measuring against the exact limit surface (beside the next stages)");
+    run.stage(Stage::Quality, "measuring against the exact limit surface (beside the next stages)");
     quality = std::async(std::launch::async,
                          [&base, &c, samples = *settings.quality_samples, ready = surfaces_ready.get_future()]() mutable {
                            const auto t0 = Clock::now();
@@ -433,52 +508,22 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
     main_core.emplace();
   }
 
-  // Faces: regular regions packed into one surface each, or one face per quad.
+  faces_stage(run);
   auto t = Clock::now();
-  c.faces = settings.faces;
-  if (settings.faces == FaceMode::Packed) {
-    stage(Stage::Packing, "packing regular regions into faces");
-    c.exported = pack_patches(c.build);
-    if (c.exported.rejected_packs > 0)
-      warn(DiagnosticCode::PacksRejected,
-           std::to_string(c.exported.rejected_packs) +
-               " regular region(s) did not reproduce their quads as one surface and stay one face per quad");
-  } else {
-    c.exported = unpacked(c.build.set);
-  }
-  c.ms.packing = ms_since(t);
-
-  // Measures.
-  t = Clock::now();
-  stage(Stage::Continuity, "measuring continuity");
+  run.stage(Stage::Continuity, "measuring continuity");
   c.continuity = measure_continuity(c.exported.set, kContinuitySamples);
   c.ms.continuity = ms_since(t);
   surfaces_ready.set_value();
-  if (!tolerance_given) measure_deviation_now();
+  if (!tolerance_given) deviation_stage(run);
   collect_fans(c);
   measure_caps(c);
   c.polar = settings.patch.polar;
   c.cap_options = settings.patch.cap;
-  for (const RejectedPole& r : info.rejected_poles) {
-    const bool separable = r.kind != RejectedPole::Kind::Structure && !settings.patch.separate_poles;
-    if (settings.patch.polar && (r.valence >= kMinPolarValence || separable))
-      report({Severity::Note, DiagnosticCode::PoleNotPolar,
-              "vertex " + std::to_string(r.vertex) + " (valence " + std::to_string(r.valence) +
-                  ") is not a polar structure, Catmull-Clark is used there: " + r.reason,
-              r.vertex, separable ? "separate_poles" : "",
-              r.kind == RejectedPole::Kind::LowValence ? "valence below " + std::to_string(kMinPolarValence)
-              : r.kind == RejectedPole::Kind::TooClose ? "too close to another pole"
-                                                       : "their rings do not form one"});
-  }
-  if (!info.separated_poles.empty())
-    report({Severity::Note, DiagnosticCode::PolesSeparated,
-            "separating first step at " + std::to_string(info.separated_poles.size()) +
-                " pole(s); the patches are built from that level-1 cage",
-            -1, "", ""});
+  pole_notes(run);
 
   if (settings.build_brep) {
     t = Clock::now();
-    stage(Stage::Brep, "building the B-rep");
+    run.stage(Stage::Brep, "building the B-rep");
     c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
     c.has_brep = true;
     c.ms.brep = ms_since(t);
@@ -494,7 +539,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   }
   if (settings.preview) {
     t = Clock::now();
-    stage(Stage::Preview, std::string("tessellating the preview (") + to_string(settings.preview->color) + ")");
+    run.stage(Stage::Preview, std::string("tessellating the preview (") + to_string(settings.preview->color) + ")");
     c.preview_settings = *settings.preview;
     c.preview = build_preview(base, c, *settings.preview);
     c.ms.preview = ms_since(t);

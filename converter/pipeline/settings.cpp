@@ -53,25 +53,28 @@ std::string lowercase(std::string s) {
   return s;
 }
 
-std::vector<SettingRow> make_table() {
-  std::vector<SettingRow> t;
-  auto row = [&t](std::string name, SettingType type, SettingValue default_value) -> SettingRow& {
-    SettingRow& r = t.emplace_back();
-    r.name = std::move(name);
-    r.type = type;
-    r.default_value = std::move(default_value);
-    return r;
-  };
-  const unsigned both = kConvertCommand | kCheckCommand;
+/// Appends a row with its name, type and default; the caller fills in the rest.
+SettingRow& add_row(std::vector<SettingRow>& t, std::string name, SettingType type, SettingValue default_value) {
+  SettingRow& r = t.emplace_back();
+  r.name = std::move(name);
+  r.type = type;
+  r.default_value = std::move(default_value);
+  return r;
+}
+
+constexpr unsigned kBothCommands = kConvertCommand | kCheckCommand;
+
+/// The surface's accuracy: level, tolerance, absolute.
+void add_accuracy_rows(std::vector<SettingRow>& t) {
 
   {
-    SettingRow& r = row("level", SettingType::Integer, {});
+    SettingRow& r = add_row(t, "level", SettingType::Integer, {});
     r.default_text = "chosen by the tolerance";
     r.help = "Pin the refinement levels beyond the minimum at every fan instead of choosing them from the "
              "tolerance: each level shrinks the deviation near extraordinary vertices (0 .. " +
              std::to_string(kMaxLevel) + ")";
     r.cli = "--level";
-    r.commands = both;
+    r.commands = kBothCommands;
     r.property = {"Level", "Conversion",
                   "If > 0: extra refinement levels at every irregular vertex (0 with Tolerance 0: the default "
                   "tolerance, 1e-4 of the model size)",
@@ -80,7 +83,7 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) { return optional_value(s.conversion.level); };
   }
   {
-    SettingRow& r = row("tolerance", SettingType::Number, {});
+    SettingRow& r = add_row(t, "tolerance", SettingType::Number, {});
     r.default_text = "1e-4 unless a level is given";
     r.help = "Deviation from the limit surface to reach, relative to the bounding-box diagonal (unless absolute): "
              "each fan gets the levels it needs, at most " + std::to_string(kMaxFanExtraLevels) + " extra";
@@ -93,14 +96,18 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) { return optional_value(s.conversion.tolerance); };
   }
   {
-    SettingRow& r = row("absolute", SettingType::Flag, false);
+    SettingRow& r = add_row(t, "absolute", SettingType::Flag, false);
     r.help = "The tolerance is in model units";
     r.cli = "--absolute";
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.absolute = flag(v); };
     r.get = [](const Settings& s) -> SettingValue { return s.conversion.absolute; };
   }
+}
+
+/// Polar structures: polar, radial_steps, polar_lambda, separate_poles.
+void add_polar_rows(std::vector<SettingRow>& t) {
   {
-    SettingRow& r = row("polar", SettingType::OnOff, true);
+    SettingRow& r = add_row(t, "polar", SettingType::OnOff, true);
     r.help = "Polar structures (triangle fans around a pole): on (one singular polar cap each) or off "
              "(Catmull-Clark)";
     r.cli = "--polar";
@@ -113,29 +120,33 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) -> SettingValue { return s.conversion.patch.polar; };
   }
   {
-    SettingRow& r = row("radial_steps", SettingType::Integer, 1LL);
+    SettingRow& r = add_row(t, "radial_steps", SettingType::Integer, 1LL);
     r.help = "Radial BP pre-steps of a polar cap: 1 or " + std::to_string(kMaxRadialSteps) + " (elongated shapes)";
     r.cli = "--radial-steps";
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.cap.radial_steps = integer(v); };
     r.get = [](const Settings& s) -> SettingValue { return static_cast<long long>(s.conversion.patch.cap.radial_steps); };
   }
   {
-    SettingRow& r = row("polar_lambda", SettingType::Number, 0.75);
+    SettingRow& r = add_row(t, "polar_lambda", SettingType::Number, 0.75);
     r.help = "Scale of a polar cap's projected 1-link, > 0";
     r.cli = "--lambda";
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.cap.lambda = number(v); };
     r.get = [](const Settings& s) -> SettingValue { return s.conversion.patch.cap.lambda; };
   }
   {
-    SettingRow& r = row("separate_poles", SettingType::Flag, false);
+    SettingRow& r = add_row(t, "separate_poles", SettingType::Flag, false);
     r.help = "Poles of valence 3..5 or too close to another: one separating Catmull-Clark step first "
              "(docs/math.md 3.7), then polar caps";
     r.cli = "--separate-poles";
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.patch.separate_poles = flag(v); };
     r.get = [](const Settings& s) -> SettingValue { return s.conversion.patch.separate_poles; };
   }
+}
+
+/// The surface the cage stands for: fit, fair.
+void add_fit_rows(std::vector<SettingRow>& t) {
   {
-    SettingRow& r = row("fit", SettingType::Word, std::string(to_string(FitMode::Approximate)));
+    SettingRow& r = add_row(t, "fit", SettingType::Word, std::string(to_string(FitMode::Approximate)));
     r.help = "approximate (the cage's own limit surface, which misses its vertices) or interpolate (solve for "
              "the cage whose limit passes through them)";
     r.cli = "--fit";
@@ -148,7 +159,7 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.conversion.fit.mode)); };
   }
   {
-    SettingRow& r = row("fair", SettingType::Number, {});
+    SettingRow& r = add_row(t, "fair", SettingType::Number, {});
     r.default_text = "exact interpolation";
     r.help = "With fit interpolate: least squares with the thin-plate energy weighted W > 0 instead of exact "
              "interpolation (noisy points give a smooth surface)";
@@ -160,11 +171,15 @@ std::vector<SettingRow> make_table() {
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.fit.fair_weight = number(v); };
     r.get = [](const Settings& s) { return optional_value(s.conversion.fit.fair_weight); };
   }
+}
+
+/// What is made and written: faces, brep, schema, preview, preview_samples, samples.
+void add_output_rows(std::vector<SettingRow>& t) {
   {
-    SettingRow& r = row("faces", SettingType::Word, std::string(to_string(FaceMode::Packed)));
+    SettingRow& r = add_row(t, "faces", SettingType::Word, std::string(to_string(FaceMode::Packed)));
     r.help = "packed (each regular region of quads is one B-spline face) or per-quad (one face per coarse quad)";
     r.cli = "--faces";
-    r.commands = both;
+    r.commands = kBothCommands;
     r.choices = setting_names("faces");
     r.property = {"Faces", "Conversion",
                   "Packed: each regular region of quads is one B-spline face (fewer, larger faces); PerQuad: one "
@@ -174,13 +189,13 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.conversion.faces)); };
   }
   {
-    SettingRow& r = row("brep", SettingType::Flag, true);
+    SettingRow& r = add_row(t, "brep", SettingType::Flag, true);
     r.help = "Build the B-rep (checked by OCCT); false: the patches and their measures only";
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.build_brep = flag(v); };
     r.get = [](const Settings& s) -> SettingValue { return s.conversion.build_brep; };
   }
   {
-    SettingRow& r = row("schema", SettingType::Word, std::string("ap214"));
+    SettingRow& r = add_row(t, "schema", SettingType::Word, std::string("ap214"));
     r.help = "STEP schema of a written STEP file: ap214 or ap242";
     r.cli = "--schema";
     r.python = false;  // an argument of ConversionResult.write
@@ -189,7 +204,7 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) -> SettingValue { return lowercase(occt::to_string(s.write.schema)); };
   }
   {
-    SettingRow& r = row("preview", SettingType::Word, {});
+    SettingRow& r = add_row(t, "preview", SettingType::Word, {});
     r.default_text = "curvature when a preview is asked for";
     r.help = "Preview colouring: deviation (from the exact limit), curvature (mean), zebra";
     r.cli = "--color";
@@ -201,14 +216,14 @@ std::vector<SettingRow> make_table() {
     };
   }
   {
-    SettingRow& r = row("preview_samples", SettingType::Integer, 12LL);
+    SettingRow& r = add_row(t, "preview_samples", SettingType::Integer, 12LL);
     r.help = "Preview vertices per patch side, 2 .. 64";
     r.cli = "--preview-samples";
     r.set = [](Settings& s, const SettingValue& v) { s.preview_samples = integer(v); };
     r.get = [](const Settings& s) -> SettingValue { return static_cast<long long>(s.preview_samples); };
   }
   {
-    SettingRow& r = row("samples", SettingType::Integer, {});
+    SettingRow& r = add_row(t, "samples", SettingType::Integer, {});
     r.default_text = std::to_string(kReportQualitySamples);
     r.help = "Quality samples per patch side, 2 .. 64";
     r.cli = "--samples";
@@ -217,12 +232,16 @@ std::vector<SettingRow> make_table() {
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.quality_samples = integer(v); };
     r.get = [](const Settings& s) { return optional_value(s.conversion.quality_samples); };
   }
+}
+
+/// The resource limits: max_faces, max_memory.
+void add_limit_rows(std::vector<SettingRow>& t) {
   {
-    SettingRow& r = row("max_faces", SettingType::Number, {});
+    SettingRow& r = add_row(t, "max_faces", SettingType::Number, {});
     r.default_text = "4e6";
     r.help = "Refuse when the polynomial pieces the patches are built from would exceed N, estimated";
     r.cli = "--max-faces";
-    r.commands = both;
+    r.commands = kBothCommands;
     r.property = {"MaxFaces", "Limits",
                   "Refuse a conversion estimated to make more polynomial pieces (> 0; 0: the default, 4e6; as "
                   "--max-faces)",
@@ -231,11 +250,11 @@ std::vector<SettingRow> make_table() {
     r.get = [](const Settings& s) { return optional_value(s.conversion.limits.max_faces); };
   }
   {
-    SettingRow& r = row("max_memory", SettingType::Size, {});
+    SettingRow& r = add_row(t, "max_memory", SettingType::Size, {});
     r.default_text = "3/4 of the memory available";
     r.help = "Refuse when the estimated memory would exceed SIZE (bytes, or with K/M/G/T)";
     r.cli = "--max-memory";
-    r.commands = both;
+    r.commands = kBothCommands;
     r.property = {"MaxMemoryMiB", "Limits",
                   "Refuse a conversion estimated to need more memory, in MiB (> 0; 0: the default, 3/4 of the "
                   "memory available; as --max-memory)",
@@ -243,6 +262,15 @@ std::vector<SettingRow> make_table() {
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.limits.max_memory = size(v); };
     r.get = [](const Settings& s) { return optional_value(s.conversion.limits.max_memory); };
   }
+}
+
+std::vector<SettingRow> make_table() {
+  std::vector<SettingRow> t;
+  add_accuracy_rows(t);
+  add_polar_rows(t);
+  add_fit_rows(t);
+  add_output_rows(t);
+  add_limit_rows(t);
   return t;
 }
 

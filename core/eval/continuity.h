@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs {
 

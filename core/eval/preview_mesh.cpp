@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/eval/quality.h"
 #include "core/util/constants.h"
 

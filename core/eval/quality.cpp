@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/util/constants.h"
 #include "core/util/parallel.h"
 #include "core/util/tolerances.h"

@@ -31,7 +31,7 @@
 #include <memory>
 #include <vector>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/refine/refiner.h"
 
 namespace subd2nurbs {
@@ -105,7 +105,7 @@ class LimitEvaluator {
 /// Principal curvatures etc. from derivatives (fills normal, k1, k2, mean, gauss).
 void finish_sample(LimitSample& s);
 
-/// A sample of any surface from its derivatives (e.g. a patch's, core/eval/nurbs_eval.h),
+/// A sample of any surface from its derivatives (e.g. a patch's, core/nurbs/nurbs_eval.h),
 /// finished with finish_sample.
 LimitSample sample_from_derivatives(const SurfaceDerivs& d);
 

@@ -62,7 +62,6 @@ class PolyMesh {
     return end == 0 ? corner_vertex_[h] : to_vertex(h);
   }
   bool is_boundary_edge(int e) const { return twin_[edge_corner_[e]] < 0; }
-  int edge_face_count(int e) const { return is_boundary_edge(e) ? 1 : 2; }
   /// Edge joining a and b, or -1.
   int find_edge(int a, int b) const;
 

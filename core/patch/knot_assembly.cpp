@@ -1,6 +1,6 @@
 #include "core/patch/knot_assembly.h"
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 
 #include <algorithm>
 #include <cmath>

@@ -819,11 +819,6 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
 
 }  // namespace
 
-PackedSet pack_patch_set(const PatchSet& quads, const std::vector<char>& patch_ok, const std::vector<char>& curve_ok,
-                         double knot_tolerance, double check) {
-  return pack_impl(quads, patch_ok, curve_ok, {}, knot_tolerance, check);
-}
-
 PackedSet pack_patches(const PatchBuild& b) {
   const PatchSet& ps = b.set;
   const SubdivLevel& la = b.refinement.levels[b.info.coarse_level];

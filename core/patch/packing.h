@@ -23,7 +23,7 @@
 
 #include <vector>
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs {
 
@@ -51,15 +51,10 @@ struct PackedSet {
   long long removed_knots = 0;      ///< knot lines dropped inside packs
 };
 
-/// Packs `quads`. `patch_ok[p]`: patch p may join a pack (it must have 4 x 4 poles and no
-/// weights); `curve_ok[k]`: two packable patches sharing curve k may be in one pack across it.
-/// Knot lines whose third-derivative jump is at most `knot_tolerance` (model units) are dropped;
-/// a pack must reproduce each quad within `check` (model units), else its quads stay alone.
-PackedSet pack_patch_set(const PatchSet& quads, const std::vector<char>& patch_ok,
-                         const std::vector<char>& curve_ok, double knot_tolerance, double check);
-
 /// Packs a build: a patch may join a pack when it is a one-span regular patch of a coarse quad,
-/// across a curve claimed C2 whose coarse edge has no sharpness at all.
+/// across a curve claimed C2 whose coarse edge has no sharpness at all. Knot lines whose
+/// third-derivative jump is at most tolerances::kKnotRemoval of the model size are dropped; a
+/// pack must reproduce each quad within tolerances::kSameSurface, else its quads stay alone.
 PackedSet pack_patches(const PatchBuild& build);
 
 /// The per-quad set unchanged, with the identity places (what `--faces per-quad` exports).

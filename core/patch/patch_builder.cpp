@@ -396,6 +396,232 @@ bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point
 }
 
 
+/// The fans of every coarse vertex that stays irregular for some quad once its semi-sharp tags
+/// have decayed (those tags count as smooth in this view; infinitely sharp ones stay), built in
+/// parallel and numbered in vertex order into out.info.fans and out.fan_pieces.
+FanResults build_all_fans(const SubdivLevel& la, const std::vector<Point3>& xa, int a, int cage_vertices,
+                          const std::vector<char>& capped_a, PatchBuild& out) {
+  FanResults fans;
+  PatchBuildInfo& info = out.info;
+  const PolyMesh& ma = la.mesh;
+  fans.zone_of_corner.assign(ma.num_faces(), {-1, -1, -1, -1});
+  fans.rays.assign(static_cast<size_t>(2) * ma.num_edges(), RayRecord{});
+  {
+    // The level with its semi-sharp tags decayed (a copy only when it has any).
+    const bool any_semi = std::any_of(la.edge_sharpness.begin(), la.edge_sharpness.end(), semi) ||
+                          std::any_of(la.vertex_sharpness.begin(), la.vertex_sharpness.end(), semi);
+    SubdivLevel decayed;
+    if (any_semi) {
+      decayed = la;
+      for (float& s : decayed.edge_sharpness) if (semi(s)) s = 0.0f;
+      for (float& s : decayed.vertex_sharpness) if (semi(s)) s = 0.0f;
+    }
+    const SubdivLevel& dl = any_semi ? decayed : la;
+    const LevelView D{dl, dl.mesh, xa};
+    std::vector<int> candidates;
+    for (int v = 0; v < ma.num_vertices(); ++v)
+      if (ma.vertex_face_count(v) > 0 && !fans_at(D, v).empty()) candidates.push_back(v);
+    std::vector<VertexFans> built(candidates.size());
+    parallel_for(static_cast<int>(candidates.size()), [&](int i) {
+      const int v = candidates[i];
+      built[i] = build_fans_at(la, xa, v, a + 2 + out.vertex_extra[v], a, cage_vertices, capped_a);
+    });
+    // Number them in vertex order (the same whatever the threads did).
+    for (VertexFans& vf : built) {
+      if (vf.fans.empty()) continue;
+      const int first_fan = static_cast<int>(info.fans.size());
+      for (IrregularFan& f : vf.fans) {
+        f.piece = static_cast<int>(out.fan_pieces.size());
+        info.fans.push_back(f);
+      }
+      out.fan_pieces.push_back(std::move(vf.pieces.front()));
+      for (auto& [key, z] : vf.zones) {
+        fans.zone_of_corner[key[0]][key[1]] = static_cast<int>(fans.zones.size());
+        fans.zones.push_back(z);
+      }
+      for (auto& [slot, rr] : vf.rays) {
+        rr.fan += first_fan;
+        fans.rays[slot] = rr;
+      }
+      info.level = std::max(info.level, vf.level);
+    }
+  }
+  return fans;
+}
+
+/// The coarse quads' corners and boundary curves, each made once in face order and shared
+/// (corner_of_vertex, curve_of_edge: the index made for each level-a vertex and edge), with the
+/// counts of out.info.
+void share_corners_and_curves(const SubdivLevel& base, const PolyMesh& ma, int a, const std::vector<int>& patch_of_face,
+                              PatchBuild& out, std::vector<int>& corner_of_vertex, std::vector<int>& curve_of_edge) {
+  PatchSet& ps = out.set;
+  PatchBuildInfo& info = out.info;
+  for (int F = 0; F < ma.num_faces(); ++F) {
+    const int pi = patch_of_face[F];
+    if (pi < 0) continue;
+    NurbsPatch& patch = ps.patches[pi];
+    info.level = std::max(info.level, out.patch_deepest[pi]);
+    info.removed_knots += out.patch_removed_knots[pi];
+    info.leaves += static_cast<long long>(out.leaves[pi].size());
+    (patch.kind == PatchKind::Pccm ? info.pccm_patches : info.regular_patches)++;
+    // Corners and boundary curves.
+    for (int i = 0; i < 4; ++i) {
+      const int va_i = ma.corner_vertex(ma.face_begin(F) + i);
+      if (corner_of_vertex[va_i] < 0) {
+        corner_of_vertex[va_i] = static_cast<int>(ps.corners.size());
+        PatchCorner pc;
+        pc.base_vertex = a == 0 || va_i < base.mesh.num_vertices() ? va_i : -1;
+        const int ui = (i == 1 || i == 2) ? patch.num_poles_u - 1 : 0;  // corner i of the domain
+        const int vi = (i == 2 || i == 3) ? patch.num_poles_v - 1 : 0;
+        pc.position = patch.pole(ui, vi);
+        ps.corners.push_back(pc);
+      }
+      patch.corners[i] = corner_of_vertex[va_i];
+    }
+    for (int side = 0; side < 4; ++side) {
+      const int e = ma.corner_edge(ma.face_begin(F) + side);
+      if (curve_of_edge[e] < 0) {
+        curve_of_edge[e] = static_cast<int>(ps.curves.size());
+        BoundaryCurve bc;
+        bc.corner0 = patch.corners[side];
+        bc.corner1 = patch.corners[(side + 1) % 4];
+        const int nu = patch.num_poles_u, nv = patch.num_poles_v;
+        bc.poles.reserve(side % 2 == 0 ? nu : nv);
+        switch (side) {
+          case 0: bc.knots = patch.knots_u; for (int i = 0; i < nu; ++i) bc.poles.push_back(patch.pole(i, 0)); break;
+          case 1: bc.knots = patch.knots_v; for (int j = 0; j < nv; ++j) bc.poles.push_back(patch.pole(nu - 1, j)); break;
+          case 2: bc.knots = reversed(patch.knots_u); for (int i = nu; i-- > 0;) bc.poles.push_back(patch.pole(i, nv - 1)); break;
+          default: bc.knots = reversed(patch.knots_v); for (int j = nv; j-- > 0;) bc.poles.push_back(patch.pole(0, j)); break;
+        }
+        ps.curves.push_back(std::move(bc));
+        ps.curves.back().uses.push_back({pi, side, false});
+      } else {
+        BoundaryCurve& bc = ps.curves[curve_of_edge[e]];
+        bc.uses.push_back({pi, side, bc.corner0 != patch.corners[side]});
+      }
+      patch.curves[side] = curve_of_edge[e];
+      patch.curve_reversed[side] = ps.curves[curve_of_edge[e]].uses.back().reversed;
+    }
+  }
+}
+
+/// One patch per polar cap, after its neighbours (their boundary curves exist by now): the seam
+/// at spoke 0, the pole a corner of its own, the side along ring 2 split into the neighbours'
+/// curves. Marks those level-a edges in cap_boundary_edge.
+void add_cap_patches(const SubdivLevel& base, const std::vector<Point3>& positions, const PatchOptions& options, int a,
+                     const std::vector<int>& corner_of_vertex, const std::vector<int>& curve_of_edge, PatchBuild& out,
+                     std::vector<char>& cap_boundary_edge) {
+  PatchSet& ps = out.set;
+  PatchBuildInfo& info = out.info;
+  for (CapInfo& ci : info.caps) {
+    const PolarStructure& st = ci.structure;
+    ci.input = polar_net_of(st, positions);
+    ci.cap = build_polar_cap(ci.input, options.cap);
+    NurbsPatch patch = polar_cap_patch(ci.cap, a);
+    patch.base_faces = st.cap_faces;
+    const int pi = static_cast<int>(ps.patches.size());
+    // Corners: the pole at (0,0) and (0,1); ring 2's spoke 0 at (1,0) and (1,1).
+    const int pole_corner = static_cast<int>(ps.corners.size());
+    ps.corners.push_back({ci.cap.centre, st.pole});
+    const int rim_corner = corner_of_vertex[st.rings[1][0]];  // level-a index = cage index
+    if (rim_corner < 0) throw std::logic_error("patch builder: polar cap without neighbour patches");
+    patch.corners = {pole_corner, rim_corner, rim_corner, pole_corner};
+    // The seam at spoke 0, used by sides 0 and 2.
+    BoundaryCurve seam;
+    seam.corner0 = pole_corner;
+    seam.corner1 = rim_corner;
+    seam.knots = patch.knots_u;
+    for (int i = 0; i < patch.num_poles_u; ++i) seam.poles.push_back(patch.pole(i, 0));
+    seam.uses = {{pi, 0, false}, {pi, 2, true}};
+    seam.continuity = Continuity::C2;
+    const int seam_curve = static_cast<int>(ps.curves.size());
+    ps.curves.push_back(std::move(seam));
+    patch.curves = {seam_curve, -1, seam_curve, -1};
+    patch.curve_reversed = {false, false, true, false};
+    // Side 1 (u = 1, v from 0 to 1): the level-a edges along ring 2, spoke 0 onwards.
+    const int n = st.valence, pieces = n << a;
+    int q = 0;
+    for (int j = 0; j < n; ++j) {
+      const int v0 = st.rings[1][j], v1 = st.rings[1][(j + 1) % n];
+      const int e0 = base.mesh.find_edge(v0, v1);
+      std::vector<int> level_edges{e0};
+      if (a == 1) {  // the two halves: child edge 2e is the half at edge_vertex(e, 0)
+        const bool v0_first = base.mesh.edge_vertex(e0, 0) == v0;
+        level_edges = {2 * e0 + (v0_first ? 0 : 1), 2 * e0 + (v0_first ? 1 : 0)};
+      }
+      int at = corner_of_vertex[v0];
+      for (int e : level_edges) {
+        const int k_curve = curve_of_edge[e];
+        if (k_curve < 0) throw std::logic_error("patch builder: polar cap boundary edge without a curve");
+        BoundaryCurve& bc = ps.curves[k_curve];
+        SidePiece piece;
+        piece.curve = k_curve;
+        piece.reversed = bc.corner0 != at;
+        piece.t0 = static_cast<double>(q) / pieces;
+        piece.t1 = static_cast<double>(q + 1) / pieces;
+        at = piece.reversed ? bc.corner0 : bc.corner1;
+        bc.uses.push_back({pi, 1, piece.reversed, piece.t0, piece.t1});
+        patch.split_sides[1].push_back(piece);
+        cap_boundary_edge[e] = 1;
+        ++q;
+      }
+    }
+    ci.patch = pi;
+    out.coarse_face.push_back(-1);
+    out.leaves.emplace_back();
+    out.patch_deepest.push_back(a);
+    out.patch_removed_knots.push_back(0);
+    ps.patches.push_back(std::move(patch));
+  }
+}
+
+/// Continuity claims per coarse edge (boundary, C0 at infinitely sharp edges, G1 at a polar
+/// cap's rim, else C2 lowered by the rays of irregular vertices) and the rays themselves; whether
+/// the set is closed.
+void claim_continuity(const SubdivLevel& la, const FanResults& fans, const std::vector<int>& curve_of_edge,
+                      const std::vector<int>& corner_of_vertex, const std::vector<char>& cap_boundary_edge,
+                      PatchBuild& out) {
+  PatchSet& ps = out.set;
+  PatchBuildInfo& info = out.info;
+  const PolyMesh& ma = la.mesh;
+  ps.closed = true;
+  for (int e = 0; e < ma.num_edges(); ++e) {
+    const int ci = curve_of_edge[e];
+    if (ci < 0) continue;
+    BoundaryCurve& bc = ps.curves[ci];
+    if (bc.uses.size() < 2) {
+      bc.continuity = Continuity::Boundary;
+      ps.closed = false;
+      continue;
+    }
+    // Semi-sharp creases are refined exactly: the limit is C2 across them.
+    if (la.edge_sharpness[e] >= static_cast<float>(kInfiniteSharpness)) {
+      bc.continuity = Continuity::C0;
+      continue;
+    }
+    if (cap_boundary_edge[e]) {
+      // C2 in geometry, but the cap's parameter is an affine image of the neighbours'
+      // (docs/polar.md: x_u = 2^-s x_U), so derivatives are not equal: claimed G1.
+      bc.continuity = Continuity::G1;
+      continue;
+    }
+    bc.continuity = Continuity::C2;
+    for (int end = 0; end < 2; ++end) {
+      const RayRecord& rr = fans.rays[2 * e + end];
+      if (rr.fan < 0) continue;
+      const int v = ma.edge_vertex(e, end);
+      if (static_cast<int>(rr.continuity) < static_cast<int>(bc.continuity)) bc.continuity = rr.continuity;
+      RayCurve ray;
+      ray.curve = ci;
+      ray.vertex_at_start = corner_of_vertex[v] == bc.corner0;
+      ray.fan = rr.fan;
+      ray.continuity = rr.continuity;
+      ray.c = rr.c;
+      info.rays.push_back(ray);
+    }
+  }
+}
+
 }  // namespace
 
 PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -455,49 +681,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
 
   // Fans: every coarse vertex that stays irregular for some quad once its semi-sharp tags have
   // decayed (those tags count as smooth in this view; infinitely sharp ones stay).
-  FanResults fans;
-  fans.zone_of_corner.assign(ma.num_faces(), {-1, -1, -1, -1});
-  fans.rays.assign(static_cast<size_t>(2) * ma.num_edges(), RayRecord{});
-  {
-    // The level with its semi-sharp tags decayed (a copy only when it has any).
-    const bool any_semi = std::any_of(la.edge_sharpness.begin(), la.edge_sharpness.end(), semi) ||
-                          std::any_of(la.vertex_sharpness.begin(), la.vertex_sharpness.end(), semi);
-    SubdivLevel decayed;
-    if (any_semi) {
-      decayed = la;
-      for (float& s : decayed.edge_sharpness) if (semi(s)) s = 0.0f;
-      for (float& s : decayed.vertex_sharpness) if (semi(s)) s = 0.0f;
-    }
-    const SubdivLevel& dl = any_semi ? decayed : la;
-    const LevelView D{dl, dl.mesh, xa};
-    std::vector<int> candidates;
-    for (int v = 0; v < ma.num_vertices(); ++v)
-      if (ma.vertex_face_count(v) > 0 && !fans_at(D, v).empty()) candidates.push_back(v);
-    std::vector<VertexFans> built(candidates.size());
-    parallel_for(static_cast<int>(candidates.size()), [&](int i) {
-      const int v = candidates[i];
-      built[i] = build_fans_at(la, xa, v, a + 2 + out.vertex_extra[v], a, base.mesh.num_vertices(), capped_a);
-    });
-    // Number them in vertex order (the same whatever the threads did).
-    for (VertexFans& vf : built) {
-      if (vf.fans.empty()) continue;
-      const int first_fan = static_cast<int>(info.fans.size());
-      for (IrregularFan& f : vf.fans) {
-        f.piece = static_cast<int>(out.fan_pieces.size());
-        info.fans.push_back(f);
-      }
-      out.fan_pieces.push_back(std::move(vf.pieces.front()));
-      for (auto& [key, z] : vf.zones) {
-        fans.zone_of_corner[key[0]][key[1]] = static_cast<int>(fans.zones.size());
-        fans.zones.push_back(z);
-      }
-      for (auto& [slot, rr] : vf.rays) {
-        rr.fan += first_fan;
-        fans.rays[slot] = rr;
-      }
-      info.level = std::max(info.level, vf.level);
-    }
-  }
+  const FanResults fans = build_all_fans(la, xa, a, base.mesh.num_vertices(), capped_a, out);
 
   // Coarse quads: leaves, then knots. Each is built straight into its patch slot; holes and
   // polar cap faces make no patch.
@@ -571,155 +755,14 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   ps.corners.reserve(ma.num_vertices() + info.caps.size());
   for (auto* v : {&out.coarse_face, &out.patch_deepest, &out.patch_removed_knots}) v->reserve(num_quads + info.caps.size());
   out.leaves.reserve(num_quads + info.caps.size());
-  for (int F = 0; F < ma.num_faces(); ++F) {
-    const int pi = patch_of_face[F];
-    if (pi < 0) continue;
-    NurbsPatch& patch = ps.patches[pi];
-    info.level = std::max(info.level, out.patch_deepest[pi]);
-    info.removed_knots += out.patch_removed_knots[pi];
-    info.leaves += static_cast<long long>(out.leaves[pi].size());
-    (patch.kind == PatchKind::Pccm ? info.pccm_patches : info.regular_patches)++;
-    // Corners and boundary curves.
-    for (int i = 0; i < 4; ++i) {
-      const int va_i = ma.corner_vertex(ma.face_begin(F) + i);
-      if (corner_of_vertex[va_i] < 0) {
-        corner_of_vertex[va_i] = static_cast<int>(ps.corners.size());
-        PatchCorner pc;
-        pc.base_vertex = a == 0 || va_i < base.mesh.num_vertices() ? va_i : -1;
-        const int ui = (i == 1 || i == 2) ? patch.num_poles_u - 1 : 0;  // corner i of the domain
-        const int vi = (i == 2 || i == 3) ? patch.num_poles_v - 1 : 0;
-        pc.position = patch.pole(ui, vi);
-        ps.corners.push_back(pc);
-      }
-      patch.corners[i] = corner_of_vertex[va_i];
-    }
-    for (int side = 0; side < 4; ++side) {
-      const int e = ma.corner_edge(ma.face_begin(F) + side);
-      if (curve_of_edge[e] < 0) {
-        curve_of_edge[e] = static_cast<int>(ps.curves.size());
-        BoundaryCurve bc;
-        bc.corner0 = patch.corners[side];
-        bc.corner1 = patch.corners[(side + 1) % 4];
-        const int nu = patch.num_poles_u, nv = patch.num_poles_v;
-        bc.poles.reserve(side % 2 == 0 ? nu : nv);
-        switch (side) {
-          case 0: bc.knots = patch.knots_u; for (int i = 0; i < nu; ++i) bc.poles.push_back(patch.pole(i, 0)); break;
-          case 1: bc.knots = patch.knots_v; for (int j = 0; j < nv; ++j) bc.poles.push_back(patch.pole(nu - 1, j)); break;
-          case 2: bc.knots = reversed(patch.knots_u); for (int i = nu; i-- > 0;) bc.poles.push_back(patch.pole(i, nv - 1)); break;
-          default: bc.knots = reversed(patch.knots_v); for (int j = nv; j-- > 0;) bc.poles.push_back(patch.pole(0, j)); break;
-        }
-        ps.curves.push_back(std::move(bc));
-        ps.curves.back().uses.push_back({pi, side, false});
-      } else {
-        BoundaryCurve& bc = ps.curves[curve_of_edge[e]];
-        bc.uses.push_back({pi, side, bc.corner0 != patch.corners[side]});
-      }
-      patch.curves[side] = curve_of_edge[e];
-      patch.curve_reversed[side] = ps.curves[curve_of_edge[e]].uses.back().reversed;
-    }
-  }
+  share_corners_and_curves(base, ma, a, patch_of_face, out, corner_of_vertex, curve_of_edge);
 
   // Polar caps, after their neighbours: the boundary curves exist by now.
   std::vector<char> cap_boundary_edge(ma.num_edges(), 0);
-  for (CapInfo& ci : info.caps) {
-    const PolarStructure& st = ci.structure;
-    ci.input = polar_net_of(st, positions);
-    ci.cap = build_polar_cap(ci.input, options.cap);
-    NurbsPatch patch = polar_cap_patch(ci.cap, a);
-    patch.base_faces = st.cap_faces;
-    const int pi = static_cast<int>(ps.patches.size());
-    // Corners: the pole at (0,0) and (0,1); ring 2's spoke 0 at (1,0) and (1,1).
-    const int pole_corner = static_cast<int>(ps.corners.size());
-    ps.corners.push_back({ci.cap.centre, st.pole});
-    const int rim_corner = corner_of_vertex[st.rings[1][0]];  // level-a index = cage index
-    if (rim_corner < 0) throw std::logic_error("patch builder: polar cap without neighbour patches");
-    patch.corners = {pole_corner, rim_corner, rim_corner, pole_corner};
-    // The seam at spoke 0, used by sides 0 and 2.
-    BoundaryCurve seam;
-    seam.corner0 = pole_corner;
-    seam.corner1 = rim_corner;
-    seam.knots = patch.knots_u;
-    for (int i = 0; i < patch.num_poles_u; ++i) seam.poles.push_back(patch.pole(i, 0));
-    seam.uses = {{pi, 0, false}, {pi, 2, true}};
-    seam.continuity = Continuity::C2;
-    const int seam_curve = static_cast<int>(ps.curves.size());
-    ps.curves.push_back(std::move(seam));
-    patch.curves = {seam_curve, -1, seam_curve, -1};
-    patch.curve_reversed = {false, false, true, false};
-    // Side 1 (u = 1, v from 0 to 1): the level-a edges along ring 2, spoke 0 onwards.
-    const int n = st.valence, pieces = n << a;
-    int q = 0;
-    for (int j = 0; j < n; ++j) {
-      const int v0 = st.rings[1][j], v1 = st.rings[1][(j + 1) % n];
-      const int e0 = base.mesh.find_edge(v0, v1);
-      std::vector<int> level_edges{e0};
-      if (a == 1) {  // the two halves: child edge 2e is the half at edge_vertex(e, 0)
-        const bool v0_first = base.mesh.edge_vertex(e0, 0) == v0;
-        level_edges = {2 * e0 + (v0_first ? 0 : 1), 2 * e0 + (v0_first ? 1 : 0)};
-      }
-      int at = corner_of_vertex[v0];
-      for (int e : level_edges) {
-        const int k_curve = curve_of_edge[e];
-        if (k_curve < 0) throw std::logic_error("patch builder: polar cap boundary edge without a curve");
-        BoundaryCurve& bc = ps.curves[k_curve];
-        SidePiece piece;
-        piece.curve = k_curve;
-        piece.reversed = bc.corner0 != at;
-        piece.t0 = static_cast<double>(q) / pieces;
-        piece.t1 = static_cast<double>(q + 1) / pieces;
-        at = piece.reversed ? bc.corner0 : bc.corner1;
-        bc.uses.push_back({pi, 1, piece.reversed, piece.t0, piece.t1});
-        patch.split_sides[1].push_back(piece);
-        cap_boundary_edge[e] = 1;
-        ++q;
-      }
-    }
-    ci.patch = pi;
-    out.coarse_face.push_back(-1);
-    out.leaves.emplace_back();
-    out.patch_deepest.push_back(a);
-    out.patch_removed_knots.push_back(0);
-    ps.patches.push_back(std::move(patch));
-  }
-
+  add_cap_patches(base, positions, options, a, corner_of_vertex, curve_of_edge, out, cap_boundary_edge);
 
   // Continuity claims per coarse edge, and the rays of irregular vertices.
-  ps.closed = true;
-  for (int e = 0; e < ma.num_edges(); ++e) {
-    const int ci = curve_of_edge[e];
-    if (ci < 0) continue;
-    BoundaryCurve& bc = ps.curves[ci];
-    if (bc.uses.size() < 2) {
-      bc.continuity = Continuity::Boundary;
-      ps.closed = false;
-      continue;
-    }
-    // Semi-sharp creases are refined exactly: the limit is C2 across them.
-    if (la.edge_sharpness[e] >= static_cast<float>(kInfiniteSharpness)) {
-      bc.continuity = Continuity::C0;
-      continue;
-    }
-    if (cap_boundary_edge[e]) {
-      // C2 in geometry, but the cap's parameter is an affine image of the neighbours'
-      // (docs/polar.md: x_u = 2^-s x_U), so derivatives are not equal: claimed G1.
-      bc.continuity = Continuity::G1;
-      continue;
-    }
-    bc.continuity = Continuity::C2;
-    for (int end = 0; end < 2; ++end) {
-      const RayRecord& rr = fans.rays[2 * e + end];
-      if (rr.fan < 0) continue;
-      const int v = ma.edge_vertex(e, end);
-      if (static_cast<int>(rr.continuity) < static_cast<int>(bc.continuity)) bc.continuity = rr.continuity;
-      RayCurve ray;
-      ray.curve = ci;
-      ray.vertex_at_start = corner_of_vertex[v] == bc.corner0;
-      ray.fan = rr.fan;
-      ray.continuity = rr.continuity;
-      ray.c = rr.c;
-      info.rays.push_back(ray);
-    }
-  }
+  claim_continuity(la, fans, curve_of_edge, corner_of_vertex, cap_boundary_edge, out);
   for (const NurbsPatch& p : ps.patches) info.total_poles += static_cast<long long>(p.poles.size());
   ps.model_size = model_size;
   return out;

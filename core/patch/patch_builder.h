@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "core/patch/local_mesh.h"
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 #include "core/polar/polar_cap.h"
 #include "core/polar/polar_structure.h"
 #include "core/refine/refiner.h"

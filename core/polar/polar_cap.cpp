@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Dense>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/limit/limit_evaluator.h"  // sample_from_derivatives: curvature
 
 #include "core/util/constants.h"

@@ -11,7 +11,7 @@
 
 #include <vector>
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 #include "core/polar/polar_net.h"
 #include "core/polar/polar_structure.h"
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs::testing {
 

@@ -18,7 +18,7 @@
 #include "converter/occt/shape_check.h"
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "converter/pipeline/report.h"
 #include "core/eval/quality.h"
 #include "io/temp_dir.h"

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs::testing {
 

@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/eval/quality.h"
 #include "core/limit/limit_evaluator.h"
 #include "core/patch/patch_builder.h"

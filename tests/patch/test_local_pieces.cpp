@@ -11,7 +11,7 @@
 #include <cmath>
 #include <string>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/patch/knot_assembly.h"
 #include "core/patch/local_mesh.h"
 #include "core/patch/patch_builder.h"

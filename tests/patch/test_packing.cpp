@@ -17,7 +17,7 @@
 #include "common/corpus.h"
 #include "common/shapes.h"
 #include "core/eval/continuity.h"
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/patch/packing.h"
 #include "io/obj_reader.h"
 #include "patch/patch_test_util.h"

@@ -12,7 +12,7 @@
 
 #include "common/shapes.h"
 #include "core/eval/continuity.h"
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/patch/patch_builder.h"
 #include "io/obj_reader.h"
 #include "patch/patch_test_util.h"

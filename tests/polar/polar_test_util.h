@@ -10,7 +10,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/limit/limit_evaluator.h"  // sample_from_derivatives
 #include "core/polar/polar_cap.h"
 #include "core/polar/polar_net.h"

@@ -10,7 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "common/shapes.h"
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/polar/polar_cap.h"
 #include "core/polar/polar_net.h"
 #include "core/polar/polar_structure.h"

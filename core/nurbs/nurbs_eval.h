@@ -3,7 +3,7 @@
 // evaluated through homogeneous coordinates.
 #pragma once
 
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 namespace subd2nurbs {
 

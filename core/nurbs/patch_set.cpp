@@ -1,4 +1,4 @@
-#include "core/patch/patch_set.h"
+#include "core/nurbs/patch_set.h"
 
 #include <numeric>
 

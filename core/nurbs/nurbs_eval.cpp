@@ -1,4 +1,4 @@
-#include "core/eval/nurbs_eval.h"
+#include "core/nurbs/nurbs_eval.h"
 
 #include <algorithm>
 #include <cmath>
