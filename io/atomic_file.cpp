@@ -67,8 +67,10 @@ extern "C" void remove_temporaries_and_die(int signal_number) {
 
 /// Creates a new, empty, uniquely named file next to `target` (".NAME.XXXXXXXX.tmp", NAME
 /// shortened so that the temporary name stays a valid file name) and returns its name.
-/// O_EXCL: an existing file is never reused.
-std::string create_temporary_next_to(const std::string& path, const std::string& target) {
+/// O_EXCL: an existing file is never reused. The name is registered for removal on a signal
+/// (`slot`) before the file is created, so that no signal can leave it behind; a name that
+/// turns out to exist already is unregistered before the next is tried.
+std::string create_temporary_next_to(const std::string& path, const std::string& target, int& slot) {
   static std::atomic<unsigned> counter{0};
   std::random_device entropy;
   std::string name = file_name_of(target);
@@ -79,6 +81,7 @@ std::string create_temporary_next_to(const std::string& path, const std::string&
     char suffix[32];
     std::snprintf(suffix, sizeof suffix, "%08x", entropy() ^ (counter++ * 2654435761u));
     const std::string candidate = prefix + suffix + ".tmp";
+    slot = register_temporary(candidate);
     // 0666 filtered by the umask: the same permissions a plain std::ofstream would give.
     const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd >= 0) {
@@ -86,6 +89,8 @@ std::string create_temporary_next_to(const std::string& path, const std::string&
       return candidate;
     }
     err = errno;
+    unregister_temporary(slot);
+    slot = -1;
     if (err != EEXIST) break;
   }
   const std::string dir = directory_of(target).empty() ? "." : directory_of(target);
@@ -143,8 +148,7 @@ bool same_file(const std::string& a, const std::string& b) {
 }
 
 StagedFile::StagedFile(const std::string& path) : path_(path), target_(resolve_output_path(path)) {
-  temporary_ = create_temporary_next_to(path_, target_);
-  slot_ = register_temporary(temporary_);
+  temporary_ = create_temporary_next_to(path_, target_, slot_);
   // Replacing an existing file keeps its permissions.
   struct stat existing;
   if (::stat(target_.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
