@@ -303,12 +303,6 @@ class Reader {
   long vertices_ = 0;
 };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 /// tinygltf reads external buffers (a .gltf's "uri") through this: regular files only and
 /// the same size cap as the main file (io/input_file.h), so a buffer naming a FIFO or a
 /// device neither blocks nor reads forever.
@@ -339,7 +333,7 @@ bool refuse_write(std::string* err, const std::string& path, const std::vector<u
 }  // namespace
 
 LoadedCage read_gltf(const std::string& path) {
-  const bool binary = lower_extension(path) == ".glb";
+  const bool binary = lowercase_extension(path) == ".glb";
   return parse_gltf(read_input_file(path, binary ? "a GLB file" : "a glTF file"), path, binary,
                     std::filesystem::path(path).parent_path().string());
 }
@@ -402,12 +396,6 @@ LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bo
     cage.diagnostics.push_back({"gltf-warning", ElementKind::None, 0, printable(warning, 400)});
   }
   return cage;
-}
-
-LoadedCage read_cage(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
-  return read_obj(path);
 }
 
 }  // namespace subd2nurbs

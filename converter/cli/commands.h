@@ -29,7 +29,7 @@ enum ExitCode : int {
   kInternalError = 4,  ///< a bug, an unexpected failure (e.g. out of memory), a failed export
 };
 
-/// A cage read (OBJ with tags, or glTF with quad recovery: io/gltf_reader.h read_cage) and
+/// A cage read (OBJ with tags, glTF with quad recovery, or STL / PLY / OFF: io/cage_reader.h read_cage) and
 /// validated, with the reader's and validation's warnings formatted "FILE:LINE: warning: ...".
 struct LoadedInput {
   LoadedCage cage;
