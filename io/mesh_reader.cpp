@@ -113,10 +113,13 @@ std::string face_list(const RawMesh& raw, const std::vector<int>& faces) {
 
 /// Welds positions closer than `tolerance` (the first vertex of a cluster represents it;
 /// spatial hashing with cells of the tolerance's size). Returns the welded id per vertex;
-/// ids are given in order of the representatives' first appearance.
-std::vector<int> weld(const std::vector<Point>& positions, const Point& lower, double tolerance, int& count) {
+/// ids are given in order of the representatives' first appearance. `near` counts the
+/// vertices welded onto a representative at a different position.
+std::vector<int> weld(const std::vector<Point>& positions, const Point& lower, double tolerance, int& count,
+                      int& near) {
   std::vector<int> id(positions.size());
   count = 0;
+  near = 0;
   // Cells by their integer coordinates held as doubles (no overflow whatever the ratio of the
   // model's size to the tolerance); tolerance 0: the positions themselves.
   using Cell = std::array<double, 3>;
@@ -162,6 +165,8 @@ std::vector<int> weld(const std::vector<Point>& positions, const Point& lower, d
       found = count++;
       representative.push_back(static_cast<int>(v));
       grid[c].push_back(found);
+    } else if (positions[static_cast<std::size_t>(representative[static_cast<std::size_t>(found)])] != p) {
+      ++near;
     }
     id[v] = found;
   }
@@ -310,7 +315,9 @@ std::string repair_summary(const LoadedCage::MeshRepair& r) {
   auto add = [&](int n, const std::string& what) {
     if (n > 0) s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + what;
   };
-  add(r.vertices_merged, "vertices welded (tolerance " + number_text(r.weld_tolerance) + ")");
+  // Welding equal positions is what indexed STL needs, not a repair: only near ones count here.
+  add(r.vertices_merged_near, "vertices welded onto a different position within the tolerance " +
+                                  number_text(r.weld_tolerance) + " (cracks closed)");
   add(r.degenerate_faces, "degenerate faces dropped");
   add(r.duplicate_faces, "duplicate faces dropped");
   add(r.unused_vertices, "unused vertices removed");
@@ -404,7 +411,7 @@ LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptio
   repair.weld_tolerance = tolerance;
 
   int welded_count = 0;
-  const std::vector<int> id = weld(raw.positions, lower, tolerance, welded_count);
+  const std::vector<int> id = weld(raw.positions, lower, tolerance, welded_count, repair.vertices_merged_near);
   repair.vertices_merged = static_cast<int>(nv) - welded_count;
 
   // Faces on welded vertices: repeats of a vertex in a row removed (an edge collapsed), faces

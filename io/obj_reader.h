@@ -69,6 +69,7 @@ struct LoadedCage {
     int file_faces = 0;           ///< faces (facets) in the file
     double weld_tolerance = 0;    ///< the absolute tolerance used (model units)
     int vertices_merged = 0;      ///< file vertices welded onto an earlier one
+    int vertices_merged_near = 0; ///< of those, the ones at a different position (cracks closed)
     int unused_vertices = 0;      ///< vertices (after welding) no kept face uses: removed
     int degenerate_faces = 0;     ///< faces that collapsed to fewer than 3 vertices: dropped
     int duplicate_faces = 0;      ///< faces with the vertex set of an earlier face: dropped

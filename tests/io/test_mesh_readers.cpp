@@ -353,7 +353,8 @@ TEST(MeshReaders, EveryTriangleVariantReadsToTheSameMesh) {
       EXPECT_TRUE(cage.repair.triangles_only);
       EXPECT_TRUE(cage.recovery.applied);
       EXPECT_EQ(cage.recovery.quads, quads);
-      EXPECT_EQ(cage.repair.faces_flipped + cage.repair.components_reversed + cage.repair.degenerate_faces +
+      EXPECT_TRUE(cage.diagnostics.empty());  // nothing repaired: no warning
+      EXPECT_EQ(cage.repair.vertices_merged_near + cage.repair.faces_flipped + cage.repair.components_reversed + cage.repair.degenerate_faces +
                     cage.repair.duplicate_faces + cage.repair.unused_vertices,
                 0);
       EXPECT_EQ(cage.repair.closed_components, 1);
@@ -425,6 +426,7 @@ TEST(MeshReaders, JitteredSoupWeldsToTheCleanMesh) {
   }
   const LoadedCage cage = parse_stl(stl_ascii(soup, "jittered"), "soup.stl");
   EXPECT_EQ(cage.repair.vertices_merged, 36 - 8);
+  EXPECT_EQ(cage.repair.vertices_merged_near, 36 - 8);
   ASSERT_EQ(cage.input.num_vertices(), 8);
   EXPECT_EQ(cage.input.num_faces(), 6);
   // The first of each cluster represents it: within the jitter of the clean cube, which
@@ -459,6 +461,9 @@ TEST(MeshReaders, CrackCloses) {
   EXPECT_EQ(topology(parse_off(off(m, false, false), "c.off", exact).input).boundary_edges, 8);
   const LoadedCage cage = parse_off(off(m, false, false), "c.off");
   EXPECT_EQ(cage.repair.vertices_merged, 4);
+  EXPECT_EQ(cage.repair.vertices_merged_near, 4);
+  ASSERT_EQ(cage.diagnostics.size(), 1u);
+  EXPECT_TRUE(contains(cage.diagnostics[0].message, "4 vertices welded onto a different position")) << cage.diagnostics[0].message;
   const Topology t = topology(cage.input);
   EXPECT_EQ(t.boundary_edges, 0);
   EXPECT_EQ(t.euler(), 2);
@@ -697,6 +702,7 @@ TEST(MeshReaders, FeaturetypeIsGenus9OnceWelded) {
   EXPECT_EQ(t.misoriented_edges, 0);
   EXPECT_EQ(t.euler(), -16);
   EXPECT_EQ(cage.repair.components, 1);
+  EXPECT_GT(cage.repair.vertices_merged_near, 0);  // the cracks
   EXPECT_GT(volume(cage.input), 0);
   EXPECT_NO_THROW(validate_cage(cage));
   // Welding exactly equal positions only leaves the cracks open.
