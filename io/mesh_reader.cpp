@@ -100,12 +100,13 @@ std::string number_text(double x) {
   return buffer;
 }
 
-/// Where faces are, for messages: "lines 3, 7, 9" or "facets 2, 6, 8".
+/// Where faces are, for messages: "lines 3, 7, 9" or "facets 2, 6, 8" ("line 3", "facet 2").
 std::string face_list(const RawMesh& raw, const std::vector<int>& faces) {
-  std::string s = raw.locator == LoadedCage::Locator::Line ? "lines " : raw.face_unit + "s ";
+  const bool lines = raw.locator == LoadedCage::Locator::Line;
+  std::string s = (lines ? std::string("line") : raw.face_unit) + (faces.size() > 1 ? "s " : " ");
   for (std::size_t i = 0; i < faces.size() && i < 8; ++i) {
     const int loc = raw.face_loc[static_cast<std::size_t>(faces[i])];
-    s += (i ? ", " : "") + std::to_string(raw.locator == LoadedCage::Locator::Line ? loc : loc - 1);
+    s += (i ? ", " : "") + std::to_string(lines ? loc : loc - 1);
   }
   if (faces.size() > 8) s += ", ...";
   return s;
@@ -265,7 +266,8 @@ void orient(Faces& faces, const std::vector<Point>& positions, const RawMesh& ra
           const int a = faces.source[static_cast<std::size_t>(f)], b = faces.source[static_cast<std::size_t>(l.other)];
           throw error_at(name, raw.locator, raw.face_unit, raw.face_loc[static_cast<std::size_t>(std::max(a, b))],
                          "the surface is not orientable (like a Moebius strip): this face cannot be oriented "
-                         "consistently with all its neighbours (" + face_list(raw, {std::min(a, b)}) + ")",
+                         "consistently with all its neighbours (it meets the one on " + face_list(raw, {std::min(a, b)}) +
+                             " both ways round)",
                          MeshErrorCode::InconsistentOrientation);
         }
       }
