@@ -384,13 +384,7 @@ LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bo
 
   LoadedCage cage;
   cage.path = path;
-  const QuadRecoveryResult r = recover_quads(triangles);
-  cage.input = r.mesh;
-  cage.recovery.applied = true;
-  cage.recovery.source_triangles = r.input_triangles;
-  cage.recovery.quads = r.quads;
-  cage.recovery.triangles_kept = r.triangles_kept;
-  cage.recovery.fan_vertices = r.fan_vertices;
+  take_recovered_quads(cage, recover_quads(triangles));
   if (!warning.empty()) {
     while (!warning.empty() && std::isspace(static_cast<unsigned char>(warning.back()))) warning.pop_back();
     cage.diagnostics.push_back({"gltf-warning", ElementKind::None, 0, printable(warning, 400)});

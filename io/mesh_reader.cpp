@@ -510,15 +510,10 @@ LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptio
   repair.triangles_only = std::all_of(raw.face_sizes.begin(), raw.face_sizes.end(), [](int n) { return n == 3; });
   cage.vertex_line = std::move(vertex_loc);
   if (repair.triangles_only && options.recover_quads) {
-    const QuadRecoveryResult r = recover_quads(mesh);
-    cage.input = r.mesh;
-    cage.recovery.applied = true;
-    cage.recovery.source_triangles = r.input_triangles;
-    cage.recovery.quads = r.quads;
-    cage.recovery.triangles_kept = r.triangles_kept;
-    cage.recovery.fan_vertices = r.fan_vertices;
+    QuadRecoveryResult r = recover_quads(mesh);
     for (const std::vector<int>& s : r.sources)
       cage.face_line.push_back(raw.face_loc[static_cast<std::size_t>(faces.source[static_cast<std::size_t>(s[0])])]);
+    take_recovered_quads(cage, std::move(r));
   } else {
     cage.input = std::move(mesh);
     for (int s : faces.source) cage.face_line.push_back(raw.face_loc[static_cast<std::size_t>(s)]);
@@ -529,3 +524,16 @@ LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptio
 }
 
 }  // namespace subd2nurbs::mesh_detail
+
+namespace subd2nurbs {
+
+void take_recovered_quads(LoadedCage& cage, QuadRecoveryResult&& result) {
+  cage.input = std::move(result.mesh);
+  cage.recovery.applied = true;
+  cage.recovery.source_triangles = result.input_triangles;
+  cage.recovery.quads = result.quads;
+  cage.recovery.triangles_kept = result.triangles_kept;
+  cage.recovery.fan_vertices = result.fan_vertices;
+}
+
+}  // namespace subd2nurbs

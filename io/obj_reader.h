@@ -87,6 +87,11 @@ struct LoadedCage {
   } repair;
 };
 
+/// Sets cage.input to the result of a quad recovery (core/mesh/quad_recovery.h) and
+/// cage.recovery to its counts (glTF and the mesh readers; defined in io/mesh_reader.cpp).
+struct QuadRecoveryResult;
+void take_recovered_quads(LoadedCage& cage, QuadRecoveryResult&& result);
+
 /// Reads an OBJ file. Topology is not validated yet (see validate_cage).
 /// \throw InputError (naming the file and line) if the file cannot be read, a statement is
 /// malformed, a face has fewer than 3 vertices or uses vertex index 0, or a tag is malformed

@@ -658,6 +658,17 @@ TEST(MeshReaders, HostileInputsAreRefusedWithTheirReason) {
 
 const std::string kMeshData = std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/";
 
+/// A closed, manifold, consistently and outward oriented valid cage of this Euler characteristic.
+void expect_closed_manifold(const LoadedCage& cage, long euler) {
+  const Topology t = topology(cage.input);
+  EXPECT_EQ(t.boundary_edges, 0);
+  EXPECT_EQ(t.non_manifold_edges, 0);
+  EXPECT_EQ(t.misoriented_edges, 0);
+  EXPECT_EQ(t.euler(), euler);
+  EXPECT_GT(volume(cage.input), 0);
+  EXPECT_NO_THROW(validate_cage(cage));
+}
+
 TEST(MeshReaders, FandiskIsAClosedManifold) {
   const std::string path = std::string(SUBD2NURBS_REAL_CORPUS_DIR) + "/fandisk.off";
   if (!std::ifstream(path)) GTEST_SKIP() << path << " is not here";
@@ -665,13 +676,7 @@ TEST(MeshReaders, FandiskIsAClosedManifold) {
   EXPECT_TRUE(cage.repair.triangles_only);
   EXPECT_EQ(cage.repair.file_faces, 12946);
   EXPECT_EQ(cage.recovery.source_triangles, 12946);
-  const Topology t = topology(cage.input);
-  EXPECT_EQ(t.boundary_edges, 0);
-  EXPECT_EQ(t.non_manifold_edges, 0);
-  EXPECT_EQ(t.misoriented_edges, 0);
-  EXPECT_EQ(t.euler(), 2);
-  EXPECT_GT(volume(cage.input), 0);
-  EXPECT_NO_THROW(validate_cage(cage));
+  expect_closed_manifold(cage, 2);
   // The triangles themselves (no recovery): 12 946 faces, the same Euler characteristic.
   MeshReadOptions triangles;
   triangles.recover_quads = false;
@@ -684,27 +689,15 @@ TEST(MeshReaders, PlateHolesIsGenus5) {
   const LoadedCage cage = read_cage(kMeshData + "plate_holes.STL");  // binary, "solid" header
   EXPECT_EQ(cage.locator, LoadedCage::Locator::Element);
   EXPECT_EQ(cage.repair.file_faces, 1252);
-  const Topology t = topology(cage.input);
-  EXPECT_EQ(t.boundary_edges, 0);
-  EXPECT_EQ(t.non_manifold_edges, 0);
-  EXPECT_EQ(t.misoriented_edges, 0);
-  EXPECT_EQ(t.euler(), -8);
-  EXPECT_GT(volume(cage.input), 0);
-  EXPECT_NO_THROW(validate_cage(cage));
+  expect_closed_manifold(cage, -8);
 }
 
 TEST(MeshReaders, FeaturetypeIsGenus9OnceWelded) {
   const LoadedCage cage = read_cage(kMeshData + "featuretype.STL");
   EXPECT_EQ(cage.repair.file_faces, 3476);
-  const Topology t = topology(cage.input);
-  EXPECT_EQ(t.boundary_edges, 0);
-  EXPECT_EQ(t.non_manifold_edges, 0);
-  EXPECT_EQ(t.misoriented_edges, 0);
-  EXPECT_EQ(t.euler(), -16);
+  expect_closed_manifold(cage, -16);
   EXPECT_EQ(cage.repair.components, 1);
   EXPECT_GT(cage.repair.vertices_merged_near, 0);  // the cracks
-  EXPECT_GT(volume(cage.input), 0);
-  EXPECT_NO_THROW(validate_cage(cage));
   // Welding exactly equal positions only leaves the cracks open.
   MeshReadOptions exact;
   exact.weld_tolerance = 0;
