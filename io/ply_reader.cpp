@@ -204,7 +204,9 @@ class PlyReader {
       fail(e.line, "element '" + e.name + "' has " + std::to_string(e.count) + " items; at most " +
                        std::to_string(options_.max_elements) + " are read");
     const std::size_t left = bytes_.size() - (text_ ? body_ + text_->position() : offset_);
-    if (min_bytes > 0 && e.count > left / min_bytes + 1)
+    // Binary: exactly (an element of fixed size is then skipped in one step); ASCII: the last
+    // value needs no separator.
+    if (min_bytes > 0 && e.count > left / min_bytes + (text_ ? 1 : 0))
       fail(e.line, "element '" + e.name + "' announces " + std::to_string(e.count) + " items, but only " +
                        std::to_string(left) + " bytes follow (each item takes at least " + std::to_string(min_bytes) +
                        ")");

@@ -633,6 +633,12 @@ TEST(MeshReaders, HostileInputsAreRefusedWithTheirReason) {
                          std::string(36, '\0');
   put_u32(skipped, 0x80000000u);
   EXPECT_TRUE(contains(error_of([&] { parse_ply(skipped, "s.ply"); }).message(), "ends inside extra 0"));
+  // A skipped element of fixed size one item longer than the bytes: refused, not skipped past
+  // the end (the face element after it would be read from beyond the file).
+  std::string past = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                     "property float z\nelement extra 2\nproperty int a\nelement face 1\n"
+                     "property list uchar int vertex_indices\nend_header\n" + std::string(40, '\0');
+  EXPECT_TRUE(contains(error_of([&] { parse_ply(past, "p.ply"); }).message(), "announces 2 items, but only 4 bytes"));
   // Negative and out-of-range indices name the face.
   const InputError i1 = error_of([] { parse_off("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n", "i.off"); });
   EXPECT_EQ(i1.line(), 6);
