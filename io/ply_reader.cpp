@@ -190,6 +190,7 @@ class PlyReader {
         if (it == e.properties.end() || !it->list)
           fail(e.line, "element 'face' has no list property 'vertex_indices' (or 'vertex_index')");
         if (is_float(it->type)) fail(e.line, "the face's vertex indices must have an integer type");
+        indices_ = &*it;
       }
     }
     if (!vertex_) fail(0, "the header declares no 'vertex' element");
@@ -279,7 +280,7 @@ class PlyReader {
       const double count = value(e, i, prop.count_type, true);
       if (first && text_) loc = text_->line();
       first = false;
-      const bool indices = &e == face_ && (prop.name == "vertex_indices" || prop.name == "vertex_index");
+      const bool indices = &prop == indices_;
       if (count < 0) fail(text_ ? text_->line() : 0, e.name + " " + std::to_string(i) + ": list '" + prop.name +
                                                           "' has a negative length " + std::to_string(count));
       if (indices && count > kMaxFaceSize)
@@ -320,6 +321,7 @@ class PlyReader {
   std::vector<Element> elements_;
   const Element* vertex_ = nullptr;
   const Element* face_ = nullptr;
+  const Property* indices_ = nullptr;  ///< the face's index list (the first of the two names)
   std::size_t body_ = 0;   ///< where the body starts
   int body_line_ = 1;      ///< its line (ASCII)
   std::size_t offset_ = 0; ///< binary: the next byte to read
