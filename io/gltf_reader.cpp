@@ -303,12 +303,6 @@ class Reader {
   long vertices_ = 0;
 };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 /// tinygltf reads external buffers (a .gltf's "uri") through this: regular files only and
 /// the same size cap as the main file (io/input_file.h), so a buffer naming a FIFO or a
 /// device neither blocks nor reads forever.
@@ -339,7 +333,7 @@ bool refuse_write(std::string* err, const std::string& path, const std::vector<u
 }  // namespace
 
 LoadedCage read_gltf(const std::string& path) {
-  const bool binary = lower_extension(path) == ".glb";
+  const bool binary = lowercase_extension(path) == ".glb";
   return parse_gltf(read_input_file(path, binary ? "a GLB file" : "a glTF file"), path, binary,
                     std::filesystem::path(path).parent_path().string());
 }
@@ -390,24 +384,12 @@ LoadedCage parse_gltf(const std::string& file_bytes, const std::string& path, bo
 
   LoadedCage cage;
   cage.path = path;
-  const QuadRecoveryResult r = recover_quads(triangles);
-  cage.input = r.mesh;
-  cage.recovery.applied = true;
-  cage.recovery.source_triangles = r.input_triangles;
-  cage.recovery.quads = r.quads;
-  cage.recovery.triangles_kept = r.triangles_kept;
-  cage.recovery.fan_vertices = r.fan_vertices;
+  take_recovered_quads(cage, recover_quads(triangles));
   if (!warning.empty()) {
     while (!warning.empty() && std::isspace(static_cast<unsigned char>(warning.back()))) warning.pop_back();
     cage.diagnostics.push_back({"gltf-warning", ElementKind::None, 0, printable(warning, 400)});
   }
   return cage;
-}
-
-LoadedCage read_cage(const std::string& path) {
-  const std::string ext = lower_extension(path);
-  if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
-  return read_obj(path);
 }
 
 }  // namespace subd2nurbs

@@ -11,6 +11,7 @@
 
 #include <string>
 
+#include "io/cage_reader.h"  // read_cage, which moved there
 #include "io/obj_reader.h"
 
 namespace subd2nurbs {
@@ -37,8 +38,5 @@ LoadedCage read_gltf(const std::string& path);
 /// for the file in messages, `base_dir` is where external buffers are looked up.
 LoadedCage parse_gltf(const std::string& bytes, const std::string& name, bool binary, const std::string& base_dir,
                       const GltfLimits& limits = {});
-
-/// Reads a cage by extension: .gltf / .glb with read_gltf, anything else with read_obj.
-LoadedCage read_cage(const std::string& path);
 
 }  // namespace subd2nurbs

@@ -19,6 +19,9 @@ constexpr std::size_t kMaxInputFileBytes = std::size_t{2} << 30;  // 2 GiB
 /// content in messages ("an OBJ file", "a glTF file", ...).
 std::string read_input_file(const std::string& path, const std::string& what);
 
+/// The file name's extension in lower case, with its dot (".stl"), or "" if it has none.
+std::string lowercase_extension(const std::string& path);
+
 /// "a directory", "a FIFO (named pipe)", "a character device", ... for a stat() st_mode.
 const char* file_kind(unsigned mode);
 

@@ -24,6 +24,7 @@
 
 #include "core/mesh/validate.h"
 #include "io/input_file.h"
+#include "io/mesh_reader_detail.h"
 
 namespace subd2nurbs {
 
@@ -329,6 +330,18 @@ int line_at(const std::vector<int>& lines, long index) {
 /// Vertices as the user sees them in 'f' lines (1-based).
 std::string obj_vertex(long v) { return "vertex " + std::to_string(v + 1); }
 
+/// A cage vertex for a message: OBJ's number; a mesh reader's cage vertices are welded and
+/// renumbered, so there the location (line or element) alone names it.
+std::string vertex_name(const LoadedCage& cage, long v) { return cage.repair.applied ? "vertex" : obj_vertex(v); }
+
+/// Where an error is: a line, or with Locator::Element the element number and its unit.
+struct Where {
+  Where(int line) : loc(line) {}  // NOLINT: a plain line converts
+  Where(int l, const std::string& u) : loc(l), unit(&u) {}
+  int loc;
+  const std::string* unit = nullptr;
+};
+
 /// Faces that use vertex `a`, and also vertex `b` as a neighbour if b >= 0 (faces along
 /// edge a-b), in file order.
 std::vector<int> faces_around(const MeshInput& input, long a, long b = -1) {
@@ -348,11 +361,13 @@ std::vector<int> faces_around(const MeshInput& input, long a, long b = -1) {
   return faces;
 }
 
+/// "lines 3, 7, 9", or "facets 2, 6, 8" for Locator::Element (the file's 0-based numbers).
 std::string line_list(const LoadedCage& cage, const std::vector<int>& faces) {
-  std::string s;
+  const bool lines = cage.locator == LoadedCage::Locator::Line;
+  std::string s = lines ? "lines " : cage.face_unit + "s ";
   const size_t shown = std::min<size_t>(faces.size(), 8);
   for (size_t i = 0; i < shown; ++i)
-    s += (i ? ", " : "") + std::to_string(line_at(cage.face_line, faces[i]));
+    s += (i ? ", " : "") + std::to_string(line_at(cage.face_line, faces[i]) - (lines ? 0 : 1));
   if (shown < faces.size()) s += ", ...";
   return s;
 }
@@ -390,68 +405,71 @@ std::string sharpness_text(double s) {
 InputError locate(const LoadedCage& cage, const InvalidMeshError& e) {
   const MeshInput& in = cage.input;
   const MeshErrorCode code = e.code();
-  auto at = [&](int line, const std::string& message) {
-    return InputError(cage.path, line, message, code);
+  auto at = [&](const Where& where, const std::string& message) {
+    if (where.unit) return mesh_detail::error_at(cage.path, cage.locator, *where.unit, where.loc, message, code);
+    return InputError(cage.path, where.loc, message, code);
   };
+  auto vertex_at = [&](long v) { return Where(line_at(cage.vertex_line, v), cage.vertex_unit); };
+  auto face_at = [&](long f) { return Where(line_at(cage.face_line, f), cage.face_unit); };
   switch (code) {
     case MeshErrorCode::EmptyMesh:
       return at(0, "the file defines no mesh (" + std::to_string(in.num_vertices()) +
                        " vertices, " + std::to_string(in.num_faces()) + " faces)");
     case MeshErrorCode::NonFiniteCoordinate:
-      return at(line_at(cage.vertex_line, e.index()),
-                obj_vertex(e.index()) + " has a non-finite " +
+      return at(vertex_at(e.index()),
+                vertex_name(cage, e.index()) + " has a non-finite " +
                     (e.index2() >= 0 && e.index2() < 3 ? std::string(1, "xyz"[e.index2()]) + " " : "") +
                     "coordinate");
     case MeshErrorCode::CoordinateOutOfRange: {
       const int axis = e.index2() >= 0 && e.index2() < 3 ? static_cast<int>(e.index2()) : 0;
-      return at(line_at(cage.vertex_line, e.index()),
-                obj_vertex(e.index()) + " has " + "xyz"[axis] + " = " +
+      return at(vertex_at(e.index()),
+                vertex_name(cage, e.index()) + " has " + "xyz"[axis] + " = " +
                     sharpness_text(in.positions.at(static_cast<size_t>(e.index()))[axis]) +
                     ", beyond the coordinate limit +-" + sharpness_text(kMaxCoordinate) +
                     " (scale the model down)");
     }
     case MeshErrorCode::FaceTooLarge:
-      return at(line_at(cage.face_line, e.index()),
+      return at(face_at(e.index()),
                 "face has " + std::to_string(e.index2()) + " vertices; at most " +
                     std::to_string(kMaxFaceSize) + " are supported (split it)");
     case MeshErrorCode::ValenceTooHigh:
-      return at(line_at(cage.vertex_line, e.index()),
-                obj_vertex(e.index()) + " has valence " + std::to_string(e.index2()) + "; at most " +
+      return at(vertex_at(e.index()),
+                vertex_name(cage, e.index()) + " has valence " + std::to_string(e.index2()) + "; at most " +
                     std::to_string(kMaxValence) + " is supported");
     case MeshErrorCode::FaceTooSmall:  // read_obj reports these itself; kept for hand-made cages
-      return at(line_at(cage.face_line, e.index()),
+      return at(face_at(e.index()),
                 "face has " + std::to_string(line_at(in.face_sizes, e.index())) +
                     " vertices; at least 3 are needed");
     case MeshErrorCode::IndexOutOfRange:
-      return at(line_at(cage.face_line, e.index()),
+      return at(face_at(e.index()),
                 e.index2() < 0 ? "face refers to a vertex before the first one (relative index "
                                  "too large)"
-                               : "face refers to " + obj_vertex(e.index2()) + ", but the file defines " +
+                               : "face refers to " + vertex_name(cage, e.index2()) + ", but the file defines " +
                                      std::to_string(in.num_vertices()) + " vertices");
     case MeshErrorCode::RepeatedVertexInFace:
-      return at(line_at(cage.face_line, e.index()),
-                "face uses " + obj_vertex(e.index2()) +
+      return at(face_at(e.index()),
+                "face uses " + vertex_name(cage, e.index2()) +
                     " twice; such degenerate (non-manifold) faces are not supported");
     case MeshErrorCode::NonManifoldEdge: {
       const std::vector<int> faces = faces_around(in, e.index(), e.index2());
       // Point at the first face beyond the two an edge may have.
       const int culprit = faces.size() > 2 ? faces[2] : -1;
-      return at(line_at(cage.face_line, culprit),
+      return at(face_at(culprit),
                 "non-manifold edge " + std::to_string(e.index() + 1) + "-" +
                     std::to_string(e.index2() + 1) + ": shared by " +
-                    std::to_string(faces.size()) + " faces (lines " +
+                    std::to_string(faces.size()) + " faces (" +
                     line_list(cage, faces) + "); an edge may border at most 2 faces");
     }
     case MeshErrorCode::InconsistentOrientation: {
       const long later = std::max(e.index(), e.index2()), earlier = std::min(e.index(), e.index2());
-      return at(line_at(cage.face_line, later),
+      return at(face_at(later),
                 "face is oriented inconsistently with its neighbour on line " +
                     std::to_string(line_at(cage.face_line, earlier)) +
                     " (both traverse their shared edge in the same direction); reverse one of them");
     }
     case MeshErrorCode::NonManifoldVertex:
-      return at(line_at(cage.vertex_line, e.index()),
-                obj_vertex(e.index()) + " is non-manifold: its faces (lines " +
+      return at(vertex_at(e.index()),
+                vertex_name(cage, e.index()) + " is non-manifold: its faces (" +
                     line_list(cage, faces_around(in, e.index())) +
                     ") do not form a single connected fan");
     case MeshErrorCode::InvalidTag: {
@@ -507,6 +525,7 @@ PolyMesh validate_cage(const LoadedCage& cage, Diagnostics* diagnostics) {
 }
 
 int source_line(const LoadedCage& cage, const Diagnostic& diagnostic) {
+  if (cage.locator == LoadedCage::Locator::Element && diagnostic.element != ElementKind::None) return 0;
   switch (diagnostic.element) {
     case ElementKind::None: return diagnostic.index > 0 ? static_cast<int>(diagnostic.index) : 0;
     case ElementKind::Vertex: return line_at(cage.vertex_line, diagnostic.index);
@@ -522,7 +541,7 @@ std::string format_diagnostic(const LoadedCage& cage, const Diagnostic& diagnost
   std::string message = diagnostic.message;
   // Validation messages count vertices from 0; say which vertex the user sees.
   if (diagnostic.code == "unused-vertex" && diagnostic.element == ElementKind::Vertex)
-    message = obj_vertex(diagnostic.index) + " is not used by any face";
+    message = vertex_name(cage, diagnostic.index) + " is not used by any face";
   return cage.path + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": warning: " +
          message;
 }

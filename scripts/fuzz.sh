@@ -4,7 +4,7 @@
 # SECONDS_PER_TARGET seconds (default 600) or RUNS executions, from a seed corpus made of
 # tests/data (the OpenSubdiv shapes, the invalid and valid samples) and samples/
 # (docs/hardening.md). Crashes are written to <build>/findings/<target>/.
-#   scripts/fuzz.sh                 all four targets, 600 s each
+#   scripts/fuzz.sh                 all seven targets, 600 s each
 #   SECONDS_PER_TARGET=60 scripts/fuzz.sh fuzz_obj
 #   SANITIZERS=undefined RUNS=10000000 SECONDS_PER_TARGET=0 MAX_LEN=4096 scripts/fuzz.sh fuzz_obj
 set -euo pipefail
@@ -16,7 +16,7 @@ PER=${SECONDS_PER_TARGET:-600}
 RUNS=${RUNS:--1}
 JOBS=${JOBS:-2}
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_obj fuzz_gltf fuzz_limit_queries fuzz_convert)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_obj fuzz_gltf fuzz_limit_queries fuzz_convert fuzz_stl fuzz_ply fuzz_off)
 
 nice -n 10 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_C_COMPILER=clang -DSUBD2NURBS_FUZZ=ON -DSUBD2NURBS_FUZZ_SANITIZERS="$SANITIZERS" -DSUBD2NURBS_BUILD_TESTS=OFF -DSUBD2NURBS_BUILD_BENCH=OFF \
@@ -29,9 +29,14 @@ nice -n 10 cmake --build "$BUILD" -j"$JOBS" --target "${TARGETS[@]}"
 seeds="$BUILD/seeds"
 mkdir -p "$seeds/obj"
 cp tests/data/corpus/*.obj tests/data/invalid/*.obj tests/data/valid/*.obj samples/*.obj "$seeds/obj/" 2>/dev/null || true
+# The mesh readers' seeds, with the small real OFF files of tests/data/mesh (the STL ones are
+# near MAX_LEN and slow every execution down).
+mkdir -p "$seeds/fuzz_stl" "$seeds/fuzz_ply" "$seeds/fuzz_off"
+for t in fuzz_stl fuzz_ply fuzz_off; do cp tests/fuzz/seeds/$t/* "$seeds/$t/"; done
+cp tests/data/mesh/*.off "$seeds/fuzz_off/"
 
 dict_for() { case "$1" in fuzz_obj|fuzz_convert) echo tests/fuzz/obj.dict;; fuzz_gltf) echo tests/fuzz/gltf.dict;; *) echo "";; esac; }
-seed_for() { case "$1" in fuzz_obj|fuzz_convert) echo "$seeds/obj";; *) echo "tests/fuzz/seeds/$1";; esac; }
+seed_for() { case "$1" in fuzz_obj|fuzz_convert) echo "$seeds/obj";; fuzz_stl|fuzz_ply|fuzz_off) echo "$seeds/$1";; *) echo "tests/fuzz/seeds/$1";; esac; }
 
 for t in "${TARGETS[@]}"; do
   work="$BUILD/corpus/$t"; findings="$BUILD/findings/$t"

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Writes the hostile-input corpus (issue #14) into a directory: broken OBJ, glTF and GLB
-files, absurd counts and sizes, odd encodings, special files (a FIFO, a directory, symbolic
+"""Writes the hostile-input corpus (issue #14) into a directory: broken OBJ, glTF, GLB, STL, PLY
+and OFF files, absurd counts and sizes, odd encodings, special files (a FIFO, a directory, symbolic
 links), and a manifest.json saying, per file, what each command must do with it.
 
     python3 scripts/make_hostile_corpus.py OUT_DIR
@@ -136,6 +136,39 @@ def glb_bytes(model, data, truncate=None, magic=b"glTF"):
     out = struct.pack("<I", len(body)) + b"JSON" + body + struct.pack("<I", len(data)) + b"BIN\0" + data
     out = magic + struct.pack("<II", 2, 12 + len(out)) + out
     return out[:truncate] if truncate else out
+
+
+# --- STL, PLY, OFF (io/mesh_reader.h); faces as 0-based index tuples ------------------------
+
+CUBE_TRIANGLES = [t for q in CUBE_F for t in ((q[0] - 1, q[1] - 1, q[2] - 1), (q[0] - 1, q[2] - 1, q[3] - 1))]
+
+
+def stl_binary(triangles=CUBE_TRIANGLES, vertices=CUBE_V, header=b"binary", count=None):
+    out = header.ljust(80, b" ")[:80] + struct.pack("<I", len(triangles) if count is None else count)
+    for t in triangles:
+        out += struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *vertices[v]) for v in t) + b"\0\0"
+    return out
+
+
+def stl_ascii(triangles=CUBE_TRIANGLES, vertices=CUBE_V):
+    facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join("vertex %r %r %r\n" % vertices[v] for v in t) +
+                     "endloop\nendfacet\n" for t in triangles)
+    return "solid cube\n" + facets + "endsolid cube\n"
+
+
+def off_text(faces=[tuple(v - 1 for v in f) for f in CUBE_F], vertices=CUBE_V, keyword="OFF", counts=None):
+    nv, nf = counts or (len(vertices), len(faces))
+    return ("%s\n%d %d 0\n" % (keyword, nv, nf) + "".join("%r %r %r\n" % v for v in vertices) +
+            "".join("%d %s\n" % (len(f), " ".join(map(str, f))) for f in faces))
+
+
+def ply_binary_big(faces=[tuple(v - 1 for v in f) for f in CUBE_F], vertices=CUBE_V, count_type="uchar"):
+    header = ("ply\nformat binary_big_endian 1.0\nelement vertex %d\nproperty double x\nproperty double y\n"
+              "property double z\nelement face %d\nproperty list %s int vertex_indices\nend_header\n"
+              % (len(vertices), len(faces), count_type)).encode()
+    count = {"uchar": "B", "uint": "I"}[count_type]
+    return header + b"".join(struct.pack(">3d", *v) for v in vertices) + b"".join(
+        struct.pack(">" + count + "%di" % len(f), len(f), *f) for f in faces)
 
 
 # --- the corpus -----------------------------------------------------------------------------
@@ -396,6 +429,44 @@ def main():
     m, d = gltf_model()
     m["nodes"][0]["name"] = "\x1b[2J" + "n" * 100000
     c.add("long_node_name.glb", glb_bytes(m, d), {"default": OK})
+
+    # --- STL, PLY, OFF ---
+    c.add("cube.stl", stl_binary(header=b"solid cube, but binary"), {"default": OK})
+    c.add("cube_ascii.STL", stl_ascii(), {"default": OK})
+    c.add("cube.ply", ply_binary_big(), {"default": OK})
+    c.add("cube.off", off_text(keyword="COFF"), {"default": OK})
+    c.invalid("empty.stl", b"", r"error: not an STL file")
+    c.invalid("truncated.stl", stl_binary()[:-7], r"error: binary STL truncated: bytes 80-83 announce 12 facets")
+    c.invalid("count_2e9.stl", stl_binary(count=2000000000), r"error: binary STL truncated: bytes 80-83 announce 2000000000")
+    nan = bytearray(stl_binary())
+    nan[84 + 50 * 3 + 16:84 + 50 * 3 + 20] = struct.pack("<f", float("nan"))
+    c.invalid("nan.stl", bytes(nan), r"error: facet 3: vertex has a non-finite y coordinate \(NaN\)")
+    c.invalid("ascii_garbage.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 1 2\n",
+              r"\.stl:4: error: (vertex coordinate|the file ends)")
+    c.invalid("count_1e7.ply", ply_binary_big()[:200].replace(b"vertex 8", b"vertex 10000000"),
+              r"error: element 'vertex' announces 10000000 items")
+    big = ply_binary_big(count_type="uint")
+    at = big.index(b"end_header\n") + 11 + 8 * 24
+    c.invalid("list_2e31.ply", big[:at] + struct.pack(">I", 2 ** 31) + big[at + 4:],
+              r"error: face 0: face has 2147483648 vertices")
+    c.invalid("point_cloud.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+              "property float z\nend_header\n0 0 0\n1 1 1\n", r"error: the file defines no mesh")
+    c.invalid("negative_index.off", off_text(faces=[(0, 1, -1)]), r"\.off:11: error: face refers to vertex -1")
+    c.invalid("nonmanifold.off", off_text(faces=[(0, 1, 2), (1, 0, 3), (0, 1, 4)]),
+              r"\.off:13: error: non-manifold edge: shared by 3 faces \(lines 11, 12, 13\)")
+    c.invalid("counts_1e12.off", off_text(counts=(10 ** 12, 6)), r"\.off:2: error: the file announces 1000000000000 vertices")
+    c.invalid("counts_beyond.off", off_text(counts=(8, 10 ** 7)), r"\.off:2: error: .*but only \d+ bytes follow")
+    moebius_v, moebius_f = [], []
+    for i in range(8):
+        u = 2 * math.pi * i / 8
+        for w in (-0.3, 0.3):
+            moebius_v.append(((1 + w * math.cos(u / 2)) * math.cos(u), (1 + w * math.cos(u / 2)) * math.sin(u),
+                              w * math.sin(u / 2)))
+    for i in range(8):
+        a, b = 2 * i, 2 * i + 1
+        cc, d = (2 * i + 2, 2 * i + 3) if i < 7 else (1, 0)
+        moebius_f += [(a, cc, d), (a, d, b)]
+    c.invalid("moebius.off", off_text(moebius_f, moebius_v), r"\.off:\d+: error: the surface is not orientable")
 
     # --- special files and names ---
     fifo = os.path.join(c.root, "fifo_buffer.bin")

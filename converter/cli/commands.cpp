@@ -23,7 +23,7 @@
 #include "core/polar/polar_refine.h"
 #include "core/polar/polar_structure.h"
 #include "core/refine/refiner.h"
-#include "io/gltf_reader.h"
+#include "io/cage_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 #include "io/obj_writer.h"

@@ -33,7 +33,7 @@ constexpr int kInternalError = pipeline::kExitInternalError;
 /// its flag, an input error at FILE:LINE, an invalid cage found after validation at `input`.
 std::string error_message(const Error& e, const std::string& input);
 
-/// A cage read (OBJ with tags, or glTF with quad recovery: io/gltf_reader.h read_cage) and
+/// A cage read (OBJ with tags, glTF with quad recovery, or STL / PLY / OFF: io/cage_reader.h read_cage) and
 /// validated, with the reader's and validation's warnings formatted "FILE:LINE: warning: ...".
 struct LoadedInput {
   LoadedCage cage;

@@ -37,7 +37,7 @@
 #include "core/mesh/errors.h"
 #include "core/refine/refiner.h"
 #include "core/mesh/quad_recovery.h"
-#include "io/gltf_reader.h"
+#include "io/cage_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/gltf_writer.h"
+#include "io/cage_reader.h"
 #include "io/gltf_reader.h"
 #include "io/input_error.h"
 
