@@ -181,35 +181,46 @@ void project_to_patch(const Samples& S, int grid, const std::vector<Point3>& Y, 
 }
 
 /// The closest point to t on the surface pieces around level-k vertex `near` (its nearest
-/// sample): exact on regular patches, else on the two triangles of limit points of each face.
+/// sample): the faces at `near` and at its edge neighbours (a foot need not lie in a face at the
+/// nearest vertex where faces are long and thin); exact on regular patches (Gauss-Newton from
+/// each face corner at `near` or its neighbour), else on the two triangles of limit points of
+/// each face.
 Foot foot_point(const Samples& S, const std::vector<Point3>& Y, const std::vector<Point3>& X,
                 const std::vector<Vec3>& normal, const Vec3& t, int near) {
   static const double corner_uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   const PolyMesh& m = S.level.mesh;
   Foot best;
-  const int* c = m.vertex_corners(near);
-  for (int i = 0, nf = m.vertex_face_count(near); i < nf; ++i) {
-    const int f = m.corner_face(c[i]);
-    if (S.level.face_hole[f]) continue;
-    if (S.grid_of[f] >= 0) {
-      const int k = c[i] - m.face_begin(f);
-      project_to_patch(S, S.grid_of[f], Y, t, corner_uv[k][0], corner_uv[k][1], best);
-      continue;
+  int done[64];
+  int ndone = 0;
+  auto visit = [&](int v) {
+    const int* c = m.vertex_corners(v);
+    for (int i = 0, nf = m.vertex_face_count(v); i < nf; ++i) {
+      const int f = m.corner_face(c[i]);
+      if (S.level.face_hole[f] || std::find(done, done + ndone, f) != done + ndone) continue;
+      if (ndone < 64) done[ndone++] = f;
+      if (S.grid_of[f] >= 0) {
+        const int k = c[i] - m.face_begin(f);
+        project_to_patch(S, S.grid_of[f], Y, t, corner_uv[k][0], corner_uv[k][1], best);
+        continue;
+      }
+      const int* fv = m.face_vertices(f);
+      for (int a = 1; a + 1 < m.face_size(f); ++a) {
+        const std::array<int, 3> tri = {fv[0], fv[a], fv[a + 1]};
+        const Point3 q = closest_point_on_triangle({t[0], t[1], t[2]}, X[tri[0]], X[tri[1]], X[tri[2]]);
+        const double d2 = (vec(q) - t).squaredNorm();
+        if (d2 >= best.distance2) continue;
+        best.distance2 = d2;
+        best.point = vec(q);
+        best.grid = -1;
+        best.tri = tri;
+        best.bary = barycentric(q, X[tri[0]], X[tri[1]], X[tri[2]]);
+        best.normal =
+            (best.bary[0] * normal[tri[0]] + best.bary[1] * normal[tri[1]] + best.bary[2] * normal[tri[2]]).normalized();
+      }
     }
-    const int* fv = m.face_vertices(f);
-    for (int a = 1; a + 1 < m.face_size(f); ++a) {
-      const std::array<int, 3> tri = {fv[0], fv[a], fv[a + 1]};
-      const Point3 q = closest_point_on_triangle({t[0], t[1], t[2]}, X[tri[0]], X[tri[1]], X[tri[2]]);
-      const double d2 = (vec(q) - t).squaredNorm();
-      if (d2 >= best.distance2) continue;
-      best.distance2 = d2;
-      best.point = vec(q);
-      best.grid = -1;
-      best.tri = tri;
-      best.bary = barycentric(q, X[tri[0]], X[tri[1]], X[tri[2]]);
-      best.normal = (best.bary[0] * normal[tri[0]] + best.bary[1] * normal[tri[1]] + best.bary[2] * normal[tri[2]]).normalized();
-    }
-  }
+  };
+  visit(near);
+  for_each_vertex_edge(m, near, [&](int, int w) { visit(w); });
   return best;
 }
 
@@ -219,7 +230,6 @@ int ptex_faces(const SubdivLevel& cage) {
     if (!cage.face_hole[f]) count += cage.mesh.face_size(f) == 4 ? 1 : cage.mesh.face_size(f);
   return std::max(count, 1);
 }
-
 
 /// The normal equations in the cage's 3n coordinates, accumulated one weighted row at a time:
 /// a row r over the cage (indices, weights) with the symmetric 3 x 3 weight W and g = W c adds
