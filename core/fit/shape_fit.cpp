@@ -117,17 +117,10 @@ void sample_normals(const SubdivLevel& L, const std::vector<Point3>& X, std::vec
   }
 }
 
-/// Uniform cubic B-spline basis values and derivatives on one span.
+/// Uniform cubic B-spline basis values and first derivatives on one span.
 void bspline(double t, double b[4], double d[4]) {
-  const double s = 1 - t;
-  b[0] = s * s * s / 6;
-  b[1] = (3 * t * t * t - 6 * t * t + 4) / 6;
-  b[2] = (-3 * t * t * t + 3 * t * t + 3 * t + 1) / 6;
-  b[3] = t * t * t / 6;
-  d[0] = -s * s / 2;
-  d[1] = (3 * t * t - 4 * t) / 2;
-  d[2] = (-3 * t * t + 2 * t + 1) / 2;
-  d[3] = t * t / 2;
+  double dd[4];
+  bspline_basis(t, b, d, dd);
 }
 
 /// The closest surface point found for one target point: a row over the level-k vertices
