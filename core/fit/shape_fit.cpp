@@ -376,10 +376,14 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       const Vec3 x = vec(xs[i]), c = vec(closest[i].point), d = x - c;
       sa += d.squaredNorm();
       h.surface_max = std::max(h.surface_max, d.norm());
-      if (plane) {
-        const Vec3 nt = vec(closest[i].normal);
+      const Vec3 nt = vec(closest[i].normal);
+      const double along = nt.dot(d);
+      // Point-to-plane only where the closest point is a foot along the target's normal; where
+      // the sample lies beyond the target's border, the whole distance (else the surface could
+      // grow past an open target's border for free).
+      if (plane && d.squaredNorm() - along * along <= 0.0625 * d.squaredNorm()) {
         put(Ma, Ga, i, wa * nt * nt.transpose(), c);
-        data_sum += wa * std::pow(nt.dot(d), 2);
+        data_sum += wa * along * along;
       } else {
         put(Ma, Ga, i, wa * Eigen::Matrix3d::Identity(), c);
         data_sum += wa * d.squaredNorm();
