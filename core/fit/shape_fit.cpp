@@ -213,7 +213,9 @@ Foot foot_point(const Samples& S, const std::vector<Point3>& Y, const std::vecto
     }
   };
   visit(near);
-  for_each_vertex_edge(m, near, [&](int, int w) { visit(w); });
+  const bool inside = best.grid >= 0 ? best.u > 0 && best.u < 1 && best.v > 0 && best.v < 1
+                                     : best.bary[0] > 0 && best.bary[1] > 0 && best.bary[2] > 0;
+  if (!inside) for_each_vertex_edge(m, near, [&](int, int w) { visit(w); });
   return best;
 }
 
@@ -234,14 +236,18 @@ struct NormalEquations {
   Eigen::VectorXd rhs;         ///< coordinate-major: x of every vertex, then y, then z
 
   explicit NormalEquations(int vertices) : n(vertices), blocks(static_cast<size_t>(9) * n * n, 0.0), rhs(Eigen::VectorXd::Zero(3 * n)) {}
+  /// Only the blocks (a, b) with a <= b are accumulated (the matrix is symmetric, and so is W).
   void add(const int* idx, const double* w, int count, const Eigen::Matrix3d& W, const Vec3& g) {
+    double w9[9];
+    for (int k = 0; k < 9; ++k) w9[k] = W(k / 3, k % 3);
     for (int a = 0; a < count; ++a) {
       for (int c = 0; c < 3; ++c) rhs[c * n + idx[a]] += w[a] * g[c];
       double* row = &blocks[static_cast<size_t>(9) * idx[a] * n];
       for (int b = 0; b < count; ++b) {
+        if (idx[b] < idx[a]) continue;
         const double s = w[a] * w[b];
         double* block = row + static_cast<size_t>(9) * idx[b];
-        for (int k = 0; k < 9; ++k) block[k] += s * W(k / 3, k % 3);
+        for (int k = 0; k < 9; ++k) block[k] += s * w9[k];
       }
     }
   }
@@ -249,12 +255,15 @@ struct NormalEquations {
   SparseMatrix matrix(const SparseMatrix* K, double lambda, double mu) const {
     std::vector<Eigen::Triplet<double>> trip;
     for (int a = 0; a < n; ++a)
-      for (int b = 0; b < n; ++b) {
+      for (int b = a; b < n; ++b) {
         const double* block = &blocks[static_cast<size_t>(9) * (static_cast<size_t>(a) * n + b)];
         bool any = false;
         for (int k = 0; k < 9 && !any; ++k) any = block[k] != 0;
         if (!any) continue;
-        for (int k = 0; k < 9; ++k) trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, block[k]);
+        for (int k = 0; k < 9; ++k) {
+          trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, block[k]);
+          if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, block[k]);
+        }
       }
     for (int c = 0; c < 3; ++c) {
       if (K)
