@@ -41,7 +41,6 @@ struct Samples {
   StencilTable limit;             ///< limit rows of every level-k vertex over level k
   StencilTable all_rows;          ///< the same over the cage
   std::vector<int> vertex;        ///< sample -> level-k vertex
-  std::vector<int> sample_of;     ///< level-k vertex -> sample or -1
   /// Per level-k face: index into `grids` where the face is a regular B-spline patch of 16
   /// level-k vertices (all four corners smooth, interior, valence 4, no tag on their edges), or -1.
   std::vector<int> grid_of;
@@ -70,12 +69,8 @@ Samples make_samples(const SubdivLevel& cage, int levels) {
   const int nk = m.num_vertices();
   std::vector<char> none(nk, 0);
   for (int v : lr.no_surface) none[v] = 1;
-  s.sample_of.assign(nk, -1);
   for (int v = 0; v < nk; ++v)
-    if (!none[v]) {
-      s.sample_of[v] = static_cast<int>(s.vertex.size());
-      s.vertex.push_back(v);
-    }
+    if (!none[v]) s.vertex.push_back(v);
   s.grid_of.assign(m.num_faces(), -1);
   const std::vector<Point3> zero(nk, Point3{0, 0, 0});
   const bool diagonal[4] = {true, true, true, true};

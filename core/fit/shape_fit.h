@@ -45,7 +45,7 @@ struct ShapeFitOptions {
   double smoothing = 1e-4;      ///< weight of the thin-plate energy per ptex face (dimensionless)
   int max_iterations = 30;      ///< closest-point iterations (each: pair, then solve)
   /// Stop when the RMS of both distance terms (surface -> target point-to-point, target ->
-  /// surface to the tangent plane) is at most tolerance x target diagonal.
+  /// surface as measured by the solver) is at most tolerance x target diagonal.
   double tolerance = 1e-7;
   /// Stop when the objective falls by less than this fraction in an iteration of the last phase.
   double min_improvement = 1e-6;
@@ -73,7 +73,9 @@ const char* to_string(ShapeFitStop s);
 struct ShapeFitIteration {
   double objective = 0;        ///< F / diagonal^2
   double surface_rms = 0, surface_max = 0;  ///< samples to their closest target points
-  double target_rms = 0, target_max = 0;    ///< data points to the samples' tangent planes
+  /// data points to their closest surface points (along the surface normal; the whole distance
+  /// for a point beyond the surface's border)
+  double target_rms = 0, target_max = 0;
   bool point_to_plane = false;              ///< the surface -> target term's phase
 };
 
@@ -87,7 +89,7 @@ struct ShapeFitResult {
   double surface_rms = 0, surface_max = 0, target_rms = 0, target_max = 0;
 };
 
-/// Called after each iteration's pairing with (iteration, objective / diagonal^2); return false
+/// Called after each pairing that a solve follows, with (iteration, objective / diagonal^2); return false
 /// to cancel (the result is then the cage of the last solve, stop = Cancelled).
 using ShapeFitProgress = std::function<bool(int iteration, double objective)>;
 
