@@ -101,21 +101,7 @@ LimitSample to_ptex(const Derivs& d, const Affine& A) {
 // ---------------------------------------------------------------------------------------------
 // Uniform cubic B-spline patch of 16 points P[4a + b] (a along s)
 
-void basis(double x, double N[4], double D[4], double DD[4]) {
-  const double x2 = x * x, x3 = x2 * x, y = 1 - x;
-  N[0] = y * y * y / 6;
-  N[1] = (3 * x3 - 6 * x2 + 4) / 6;
-  N[2] = (-3 * x3 + 3 * x2 + 3 * x + 1) / 6;
-  N[3] = x3 / 6;
-  D[0] = -y * y / 2;
-  D[1] = (9 * x2 - 12 * x) / 6;
-  D[2] = (-9 * x2 + 6 * x + 3) / 6;
-  D[3] = x2 / 2;
-  DD[0] = y;
-  DD[1] = 3 * x - 2;
-  DD[2] = -3 * x + 1;
-  DD[3] = x;
-}
+void basis(double x, double N[4], double D[4], double DD[4]) { bspline_basis(x, N, D, DD); }
 
 /// The bicubic sum over 16 points P[4a + b] (a along s) from the basis values and derivatives
 /// in s and t.

@@ -1,0 +1,107 @@
+// Fitting a cage's exact Catmull-Clark limit surface to a target shape (issue #27;
+// docs/fitting.md "Fitting to a shape", docs/math.md 14).
+//
+// The cage's topology and tags are kept; its vertex positions P are solved so that the limit
+// surface fits the target (a triangle mesh or a point cloud, shape_target.h) in least squares,
+// regularised by the thin-plate energy (fairing.h):
+//
+//   F(P) = (1/Na) sum_i |W_i^1/2 (S_i P - c_i)|^2 + (w_b/Nb) sum_j |V_j^1/2 (R_j P - t_j)|^2
+//        + smoothing * E_tp(P) / N_ptex
+//
+//  * S_i: exact limit rows (over the cage) of the limit points of the level-k vertices (the cage
+//    refined `levels` times): linear in P, no approximation (shape_fit_sample_rows).
+//  * surface -> target: c_i the closest target point of sample i; point-to-plane (W_i = n n^T,
+//    n the target's normal at c_i) in the first phase, point-to-point (W_i = I) in the second.
+//  * target -> surface: every data point t_j of the target paired with its closest surface point,
+//    found from the nearest sample: on the regular level-k patches around it (bicubic B-splines
+//    of 16 level-k points) by Gauss-Newton in the patch's (u, v), exactly; on the other level-k
+//    faces (within 2^-k of extraordinary vertices, creases, boundaries) on the two triangles of
+//    their corners' limit points. R_j is that point's row (B-spline weights times the level-k
+//    rows, or barycentric weights times three sample rows); V_j = m m^T (m the surface normal
+//    there) when t_j - foot is along m, else I (t_j beyond the surface's border).
+//  * the pairings are recomputed between solves (closest-point iterations, ICP).
+// Each solve is one sparse symmetric system in the 3n coordinates (the point-to-plane terms
+// couple x, y, z; 3n is small, so the coupled system is solved rather than alternating), with a
+// small proximal term mu |P - P_prev|^2 that vanishes at convergence. All terms scale with the
+// square of the model size and are invariant under translation, so the result is scale- and
+// translation-invariant (tested to 1e-15). Tags (boundaries, creases, corners, holes) are
+// respected because the rows come from the tagged cage; polar structures are ignored
+// (Catmull-Clark rows everywhere).
+//
+// Cost per iteration: closest-point queries (BVH, parallel_for), then the normal equations,
+// accumulated as dense 3 x 3 blocks per cage vertex pair (72 n^2 bytes), and a sparse LDLT.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include "core/fit/shape_target.h"
+#include "core/refine/refiner.h"
+
+namespace subd2nurbs {
+
+struct ShapeFitOptions {
+  int levels = 3;               ///< refinement levels of the samples (level-k vertex limits); 1..5
+  double smoothing = 1e-4;      ///< weight of the thin-plate energy per ptex face (dimensionless)
+  int max_iterations = 30;      ///< closest-point iterations (each: pair, then solve)
+  /// Stop when the RMS of both distance terms (surface -> target point-to-point, target ->
+  /// surface as measured by the solver) is at most tolerance x target diagonal.
+  double tolerance = 1e-7;
+  /// Stop when the objective falls by less than this fraction in an iteration of the last phase.
+  double min_improvement = 1e-6;
+  /// Point-to-plane iterations at most, before point-to-point (also switched as soon as the
+  /// objective falls by less than plane_switch in one iteration). 0: point-to-point throughout.
+  /// Ignored (0) for a point cloud without normals.
+  int plane_iterations = 50;
+  double plane_switch = 0.01;
+  double target_weight = 1.0;   ///< weight of the target -> surface term (surface -> target: 1)
+  /// Relative weight of the proximal term |P - P_prev|^2 (times the mean diagonal of the data
+  /// normal matrix); keeps each solve regular where the data leave a direction free.
+  double proximal = 1e-8;
+};
+
+enum class ShapeFitStop : unsigned char {
+  Tolerance,      ///< both RMS distances at most options.tolerance (relative)
+  Converged,      ///< the objective improved by less than min_improvement
+  IterationLimit, ///< max_iterations reached
+  Cancelled,      ///< the progress callback returned false (positions: the last solved cage)
+};
+const char* to_string(ShapeFitStop s);
+
+/// One closest-point iteration, measured at its start (its pairings, before its solve).
+/// Distances relative to the target's diagonal.
+struct ShapeFitIteration {
+  double objective = 0;        ///< F / diagonal^2
+  double surface_rms = 0, surface_max = 0;  ///< samples to their closest target points
+  /// data points to their closest surface points (along the surface normal; the whole distance
+  /// for a point beyond the surface's border)
+  double target_rms = 0, target_max = 0;
+  bool point_to_plane = false;              ///< the surface -> target term's phase
+};
+
+struct ShapeFitResult {
+  std::vector<Point3> positions;             ///< the fitted cage (one per cage vertex)
+  std::vector<ShapeFitIteration> history;    ///< one per iteration, plus the final state last
+  ShapeFitStop stop = ShapeFitStop::IterationLimit;
+  int iterations = 0;                        ///< solves done
+  int samples = 0;                           ///< surface samples (level-k vertices with a limit)
+  /// The final state (= history.back()): distances relative to the target's diagonal.
+  double surface_rms = 0, surface_max = 0, target_rms = 0, target_max = 0;
+};
+
+/// Called after each pairing that a solve follows, with (iteration, objective / diagonal^2); return false
+/// to cancel (the result is then the cage of the last solve, stop = Cancelled).
+using ShapeFitProgress = std::function<bool(int iteration, double objective)>;
+
+/// The solver's surface samples: the exact limit rows, over the cage's vertices, of the limit
+/// points of the vertices of the cage refined `levels` times (those with a limit surface, in
+/// level-k vertex order). Row r applied to the cage positions is a point of the limit surface.
+StencilTable shape_fit_sample_rows(const SubdivLevel& cage, int levels);
+
+/// Fits the limit surface of `cage` (topology and tags; positions ignored) starting from the
+/// positions `start` to `target`. \throw std::invalid_argument (sizes, options), FitError
+/// (interpolate.h: a system could not be factorised)
+ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target,
+                            const ShapeFitOptions& options = {}, const ShapeFitProgress& progress = {});
+
+}  // namespace subd2nurbs
