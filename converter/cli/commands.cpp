@@ -175,17 +175,6 @@ void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
 
 // --- loading and output checks shared by the subcommands ---------------------------------
 
-LoadedInput load_input(const std::string& path) {
-  LoadedInput result;
-  result.cage = read_cage(path);
-  Diagnostics validation;
-  result.level = SubdivLevel::from_validated(validate_cage(result.cage, &validation), result.cage.input);
-  for (const Diagnostic& d : result.cage.diagnostics)
-    result.warnings.push_back(format_diagnostic(result.cage, d));
-  for (const Diagnostic& d : validation) result.warnings.push_back(format_diagnostic(result.cage, d));
-  return result;
-}
-
 void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs) {
   namespace fs = std::filesystem;
   std::vector<std::pair<std::string, std::string>> seen;  // (option, absolute target)
@@ -243,16 +232,18 @@ void DiagnosticPrinter::finish() {
   } else {
     std::map<std::string, int> by_category;
     int mendable = 0;
+    std::string remedy;  // the setting that may make them polar caps
     for (const pipeline::ConversionDiagnostic& d : poles_) {
       ++by_category[d.category];
       mendable += !d.remedy.empty();
+      if (!d.remedy.empty()) remedy = d.remedy;
     }
     std::string counts;
     for (const auto& [category, count] : by_category)
       counts += (counts.empty() ? "" : ", ") + std::to_string(count) + ": " + category;
     err_ << "subd2nurbs: note: " << poles_.size() << " vertices are not polar structures, Catmull-Clark is used there ("
          << counts << ")";
-    if (mendable > 0) err_ << "; " << option_name("separate_poles") << " may make " << mendable << " of them polar caps";
+    if (mendable > 0) err_ << "; " << option_name(remedy) << " may make " << mendable << " of them polar caps";
     err_ << "; `subd2nurbs info --json` lists them all\n";
   }
   poles_.clear();

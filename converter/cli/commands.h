@@ -11,6 +11,7 @@
 
 #include "converter/pipeline/conversion.h"
 #include "converter/pipeline/errors.h"
+#include "converter/pipeline/input.h"
 #include "converter/pipeline/resources.h"
 #include "converter/pipeline/settings.h"
 #include "core/refine/refiner.h"
@@ -33,19 +34,10 @@ constexpr int kInternalError = pipeline::kExitInternalError;
 /// its flag, an input error at FILE:LINE, an invalid cage found after validation at `input`.
 std::string error_message(const Error& e, const std::string& input);
 
-/// A cage read (OBJ with tags, glTF with quad recovery, or STL / PLY / OFF: io/cage_reader.h read_cage) and
-/// validated, with the reader's and validation's warnings formatted "FILE:LINE: warning: ...".
-struct LoadedInput {
-  LoadedCage cage;
-  SubdivLevel level;
-  std::vector<std::string> warnings;
-
-  std::vector<Point3> positions() const {
-    return std::vector<Point3>(cage.input.positions.begin(), cage.input.positions.end());
-  }
-};
-/// \throw InputError for an unreadable or invalid cage
-LoadedInput load_input(const std::string& path);
+/// A cage read and validated, with its warnings: the pipeline's (converter/pipeline/input.h), the
+/// same for every front end.
+using pipeline::LoadedInput;
+using pipeline::load_input;
 
 /// Checks the outputs before any work (io/atomic_file.h resolve_output_path): each must be
 /// a regular file or not exist yet (a symbolic link is followed: its target is replaced),

@@ -1,4 +1,5 @@
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/settings.h"
 
 #include "core/nurbs/nurbs_eval.h"
 #include "core/util/parallel.h"
@@ -94,7 +95,8 @@ const char* to_string(DiagnosticCode code) {
 
 std::string report_text(const ConversionDiagnostic& d) {
   std::string text = std::string("subd2nurbs: ") + to_string(d.severity) + ": " + d.message;
-  if (d.code == DiagnosticCode::PoleNotPolar && !d.remedy.empty()) text += " (--separate-poles may make it a polar cap)";
+  if (d.code == DiagnosticCode::PoleNotPolar && !d.remedy.empty())
+    text += " (" + find_setting(d.remedy)->cli + " may make it a polar cap)";
   if (d.code == DiagnosticCode::ToleranceCapped && !d.remedy.empty()) text.insert(text.size() - 1, ", --max-faces / --max-memory");
   return text;
 }

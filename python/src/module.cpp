@@ -27,6 +27,7 @@
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
 #include "converter/pipeline/errors.h"
+#include "converter/pipeline/input.h"
 #include "converter/pipeline/report.h"
 #include "converter/pipeline/settings.h"
 #include "core/analysis/mesh_stats.h"
@@ -192,17 +193,13 @@ py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
   return d;
 }
 
-/// Reads and validates a cage: OBJ (errors name the file and line), or glTF / GLB (quads
-/// recovered from the triangles).
+/// Reads and validates a cage as every front end does (pipeline::load_input): any format
+/// read_cage reads, errors naming the file and line, the warnings as text.
 py::dict read_cage_file(const std::string& path) {
-  const LoadedCage cage = read_cage(path);
-  Diagnostics validation;
-  validate_cage(cage, &validation);
+  const pipeline::LoadedInput loaded = pipeline::load_input(path);
+  const LoadedCage& cage = loaded.cage;
   py::dict d = cage_dict(cage.input);
-  std::vector<std::string> warnings;
-  for (const Diagnostic& diag : cage.diagnostics) warnings.push_back(format_diagnostic(cage, diag));
-  for (const Diagnostic& diag : validation) warnings.push_back(format_diagnostic(cage, diag));
-  set_items(d, "warnings", warnings, "path", path, "quad_recovery",
+  set_items(d, "warnings", loaded.warnings, "path", path, "quad_recovery",
             cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none()));
   return d;
 }
