@@ -1,5 +1,6 @@
-// Errors of the file front end. Every message names the file and, where there is one, the
-// line, in the "FILE:LINE: message" form that editors and terminals recognise.
+// The error of an input file. Every message names the file and, where there is one, the line,
+// in the "FILE:LINE: message" form that editors and terminals recognise. (An output's error is
+// WriteError, io/write_error.h, included here for the callers that catch both.)
 #pragma once
 
 #include <optional>
@@ -10,6 +11,7 @@
 #include "core/mesh/errors.h"
 #include "core/util/error.h"
 #include "io/input_file.h"
+#include "io/write_error.h"
 
 namespace subd2nurbs {
 
@@ -46,21 +48,6 @@ class InputError : public Error {
   int line_;
   std::string message_;
   std::optional<MeshErrorCode> code_;
-};
-
-/// An output file could not be written. what() is "FILE: message".
-class WriteError : public Error {
- public:
-  WriteError(std::string file, std::string message)
-      : Error(ErrorKind::Write, printable(file) + ": " + message), file_(std::move(file)),
-        message_(std::move(message)) {}
-
-  const std::string& file() const { return file_; }
-  const std::string& message() const { return message_; }
-
- private:
-  std::string file_;
-  std::string message_;
 };
 
 }  // namespace subd2nurbs
