@@ -17,6 +17,7 @@ struct StencilTable {
   DefaultInitVector<double> weights;   ///< weight of each entry
 
   int num_rows() const { return static_cast<int>(offsets.size()) - 1; }
+  int row_size(int r) const { return offsets[r + 1] - offsets[r]; }
   double row_sum(int r) const;
 
   /// dst[r] = sum_k weights[k] * src[indices[k]] over row r. dst is resized.
