@@ -12,6 +12,7 @@
 #include "core/eval/target_distance.h"
 #include "fit/shape_fit_test_util.h"
 #include "io/obj_reader.h"
+#include "io/input_error.h"
 #include "io/obj_writer.h"
 #include "io/target_reader.h"
 
@@ -171,4 +172,42 @@ TEST(ShapeFitCli, CheckMeasuresTheDistanceToATarget) {
   r = run_command(quote(kExe) + " check " + quote(cage) + " --to " + quote(bad));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("bad.xyz:2:"), std::string::npos) << r.err;
+}
+
+// io/target_reader: polygons fan-triangulated without quad recovery, unused vertices dropped;
+// vertices without faces (OBJ `v` lines, PLY vertices only) and .xyz are point clouds; .xyz
+// errors name FILE:LINE.
+TEST(ShapeFitCli, TargetReaderMeshesAndClouds) {
+  TempDir dir;
+  const std::string quad = dir.file("quad.obj"), cloud = dir.file("cloud.obj"), ply = dir.file("cloud.ply"),
+                    tris = dir.file("two.off"), xyz = dir.file("p.xyz");
+  std::ofstream(quad) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 1 0.5\nv 5 5 5\nf 1 2 3 4 5\n";
+  std::ofstream(cloud) << "v 0 0 0\nv 1 0 0\nv 1 1 0\n";
+  std::ofstream(ply) << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                        "end_header\n0 0 0\n1 2 3\n";
+  // Two triangles forming a quad: kept as triangles (no quad recovery for targets).
+  std::ofstream(tris) << "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+  std::ofstream(xyz) << "# points\n0 0 0\n\n1,2,3 0.5 extra\n";
+  TargetShape t = read_target(quad);
+  EXPECT_EQ(t.points.size(), 5u);  // vertex 6 unused
+  EXPECT_EQ(t.triangles, (std::vector<std::array<int, 3>>{{0, 1, 2}, {0, 2, 3}, {0, 3, 4}}));
+  EXPECT_EQ(read_target(cloud).points.size(), 3u);
+  EXPECT_TRUE(read_target(cloud).triangles.empty());
+  t = read_target(ply);
+  EXPECT_EQ(t.points.size(), 2u);
+  EXPECT_TRUE(t.triangles.empty());
+  EXPECT_EQ(read_target(tris).triangles.size(), 2u);
+  t = read_target(xyz);
+  ASSERT_EQ(t.points.size(), 2u);
+  EXPECT_EQ(t.points[1], (Point3{1, 2, 3}));
+  for (const auto& [text, line] : std::vector<std::pair<std::string, std::string>>{
+           {"1 2 3\n1 2\n", ":2:"}, {"1 2 nan\n", ":1:"}, {"# nothing\n", "no points"}, {"\n\nx 1 2\n", ":3:"}}) {
+    std::ofstream(xyz) << text;
+    try {
+      read_target(xyz);
+      ADD_FAILURE() << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(line), std::string::npos) << e.what();
+    }
+  }
 }
