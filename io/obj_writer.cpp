@@ -88,8 +88,7 @@ void write_level(std::ostream& out, const std::vector<Point3>& positions,
 
 }  // namespace
 
-void write_obj(const std::string& path, const std::vector<Point3>& positions,
-               const SubdivLevel& level) {
+void write_obj(std::ostream& out, const std::vector<Point3>& positions, const SubdivLevel& level) {
   const PolyMesh& m = level.mesh;
   if (static_cast<int>(positions.size()) != m.num_vertices() ||
       static_cast<int>(level.edge_sharpness.size()) != m.num_edges() ||
@@ -98,7 +97,12 @@ void write_obj(const std::string& path, const std::vector<Point3>& positions,
     throw std::invalid_argument("write_obj: positions or tags do not match the mesh (" +
                                 std::to_string(positions.size()) + " positions for " +
                                 std::to_string(m.num_vertices()) + " vertices)");
-  write_file_atomically(path, [&](std::ostream& out) { write_level(out, positions, level); });
+  write_level(out, positions, level);
+}
+
+void write_obj(const std::string& path, const std::vector<Point3>& positions,
+               const SubdivLevel& level) {
+  write_file_atomically(path, [&](std::ostream& out) { write_obj(out, positions, level); });
 }
 
 }  // namespace subd2nurbs

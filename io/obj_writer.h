@@ -3,6 +3,7 @@
 // effective sharpness, holes and options.
 #pragma once
 
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -23,5 +24,7 @@ namespace subd2nurbs {
 /// \throw WriteError if the file cannot be written
 void write_obj(const std::string& path, const std::vector<Point3>& positions,
                const SubdivLevel& level);
+/// The same onto a stream (e.g. a StagedFile's, io/atomic_file.h, committed with other outputs).
+void write_obj(std::ostream& out, const std::vector<Point3>& positions, const SubdivLevel& level);
 
 }  // namespace subd2nurbs

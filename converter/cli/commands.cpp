@@ -17,6 +17,7 @@
 #include "converter/cli/limit_cmd.h"
 #include "converter/cli/check_cmd.h"
 #include "converter/cli/fair_cmd.h"
+#include "converter/cli/fit_cmd.h"
 #include "core/fit/interpolate.h"
 #include "converter/occt/export_error.h"
 #include "core/analysis/mesh_stats.h"
@@ -398,6 +399,8 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   CLI::App* check_command = add_check_command(app, check);
   FairCommandOptions fair;
   CLI::App* fair_command = add_fair_command(app, fair);
+  FitCommandOptions fit;
+  CLI::App* fit_command = add_fit_command(app, fit);
 
   try {
     app.parse(argc, argv);
@@ -406,7 +409,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
     return app.exit(e, out, err) == 0 ? kOk : kUsage;
   }
 
-  std::string current_input = info.mesh + refine.mesh + convert.mesh + limit.mesh + check.mesh;
+  std::string current_input = info.mesh + refine.mesh + convert.mesh + limit.mesh + check.mesh + fit.mesh;
   try {
     if (*settings_command) out << pipeline::settings_markdown();
     if (*info_command) run_info(info, out);
@@ -414,6 +417,7 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
     if (*limit_command) run_limit(limit, std::cin, out, err);
     if (*check_command) run_check(check, err);
     if (*fair_command) run_fair(fair, err);
+    if (*fit_command) run_fit(fit, err);
     if (*convert_command) {
       convert.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) == 1;
       run_convert(convert, err);

@@ -4,6 +4,7 @@
 
 #include "converter/cli/convert.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/shape_fit_report.h"
 #include "core/eval/preview_mesh.h"
 #include "io/gltf_preview.h"
 
@@ -46,6 +47,12 @@ void print_quality_summary(std::ostream& err, const QualityReport& q, double siz
     err << "quality: quadric-fit H at " << q.quadric.vertices << " cage vertices vs exact: mean error "
         << short_number(q.quadric.mean_abs_H_error_cage) << " (cage points), "
         << short_number(q.quadric.mean_abs_H_error_limit) << " (limit points)\n";
+}
+
+void print_target_distance(std::ostream& err, const std::string& label, const TargetDistance& d) {
+  err << label << ": limit -> target " << pipeline::distance_text(d.limit_to_target) << "; target -> limit "
+      << pipeline::distance_text(d.target_to_limit) << " (relative to the target's diagonal "
+      << short_number(d.diagonal) << ")\n";
 }
 
 }  // namespace subd2nurbs::cli

@@ -10,6 +10,7 @@
 
 #include "converter/pipeline/conversion.h"
 #include "core/eval/quality.h"
+#include "core/eval/target_distance.h"
 
 namespace subd2nurbs::cli {
 
@@ -20,5 +21,9 @@ StagedFile stage_preview(const ConvertOptions& options, const pipeline::Conversi
 
 /// Three lines for stderr.
 void print_quality_summary(std::ostream& err, const QualityReport& q, double model_size);
+
+/// One line for stderr: "<label>: limit -> target max .., rms .., p95 ..; target -> limit ...
+/// (relative to the target's diagonal D)" (`fit`, `check --to`).
+void print_target_distance(std::ostream& err, const std::string& label, const TargetDistance& d);
 
 }  // namespace subd2nurbs::cli

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "converter/pipeline/shape_fit_report.h"
 #include "io/json_writer.h"
 
 namespace subd2nurbs::pipeline {
@@ -274,7 +275,7 @@ std::string report_json(const ConversionResult& c) {
   return w.take() + "\n";
 }
 
-std::string quality_report_json(const ConversionResult& c) {
+std::string quality_report_json(const ConversionResult& c, const TargetDistance* target) {
   if (!c.quality) throw std::logic_error("quality_report_json: the conversion ran without the quality stage");
   const double size = c.build.set.model_size;
   JsonWriter w = report_writer();
@@ -287,6 +288,7 @@ std::string quality_report_json(const ConversionResult& c) {
   w.end_object();
   w.members("quality_ms", c.ms.quality, "quality_wait_ms", c.ms.quality_wait);
   write_quality(w.key("quality"), *c.quality, size, 2);
+  if (target) write_target_distance(w.key("target"), *target);
   w.end_object();
   return w.take() + "\n";
 }

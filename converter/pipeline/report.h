@@ -7,6 +7,7 @@
 #include <string>
 
 #include "converter/pipeline/conversion.h"
+#include "core/eval/target_distance.h"
 #include "io/json_writer.h"
 
 namespace subd2nurbs::pipeline {
@@ -15,8 +16,9 @@ namespace subd2nurbs::pipeline {
 /// "quality_ms" members last.
 std::string report_json(const ConversionResult& result);
 
-/// `check --json`: the quality report of result.quality (which must be set), ending in a newline.
-std::string quality_report_json(const ConversionResult& result);
+/// `check --json`: the quality report of result.quality (which must be set), ending in a newline;
+/// with `target` (`check --to`), its two-sided distance as the last member "target".
+std::string quality_report_json(const ConversionResult& result, const TargetDistance* target = nullptr);
 
 /// The members "max", "mean" and "where" (the vertex, or null) of a field's size, as the
 /// report's "fit" and the fair report (`subd2nurbs fair --report`) give them.

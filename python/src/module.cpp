@@ -14,8 +14,10 @@
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 
+#include <array>
 #include <memory>
 #include <new>
+#include <numeric>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -30,6 +32,7 @@
 #include "converter/pipeline/input.h"
 #include "converter/pipeline/report.h"
 #include "converter/pipeline/settings.h"
+#include "converter/pipeline/shape_fit_report.h"
 #include "core/analysis/mesh_stats.h"
 #include "core/eval/preview_mesh.h"
 #include "core/fit/fairing.h"
@@ -41,6 +44,7 @@
 #include "io/cage_reader.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
+#include "io/target_reader.h"
 
 namespace py = pybind11;
 using namespace subd2nurbs;
@@ -569,6 +573,54 @@ py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, con
   return d;
 }
 
+/// A target file (io/target_reader.h) as (points (n, 3), triangles (m, 3); none for a cloud).
+py::tuple read_target_file(const std::string& path) {
+  const TargetShape t = read_target(path);
+  py::array_t<int> triangles({static_cast<py::ssize_t>(t.triangles.size()), py::ssize_t{3}});
+  int* out = triangles.mutable_data();
+  for (const std::array<int, 3>& tri : t.triangles)
+    for (const int v : tri) *out++ = v;
+  return py::make_tuple(points_array(t.points), triangles);
+}
+
+/// Fits a cage to a target (as `subd2nurbs fit`): the target's points (n, 3) and polygons (as
+/// face_sizes / face_indices; none for a point cloud), fan-triangulated. Returns {vertices,
+/// report}: the fitted positions and the fit report's JSON text (subd2nurbs-fit v1).
+py::dict fit_cage(const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                  const std::vector<std::tuple<int, int, double>>& creases,
+                  const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                  const py::dict& options, const DoubleArray& target_points, const IntArray& target_sizes,
+                  const IntArray& target_indices, const std::string& target_name, double smoothing, int levels,
+                  int max_iterations, double tolerance) {
+  ShapeFitOptions fo;
+  fo.smoothing = smoothing;
+  fo.levels = levels;
+  fo.max_iterations = max_iterations;
+  fo.tolerance = tolerance;
+  pipeline::validate_shape_fit(fo);
+  if (target_points.ndim() != 2 || target_points.shape(1) != 3)
+    throw pipeline::SettingsError("target", "must be an array of shape (n, 3)");
+  const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+  const SubdivLevel level = SubdivLevel::from_input(in);
+  TargetShape shape;
+  const double* p = target_points.data();
+  for (py::ssize_t i = 0; i < target_points.shape(0); ++i) shape.points.push_back({p[3 * i], p[3 * i + 1], p[3 * i + 2]});
+  const std::vector<int> sizes(target_sizes.data(), target_sizes.data() + target_sizes.size());
+  const std::vector<int> indices(target_indices.data(), target_indices.data() + target_indices.size());
+  for (const int n : sizes)
+    if (n < 3) throw pipeline::SettingsError("triangles", "must have at least 3 vertices per face");
+  if (std::accumulate(sizes.begin(), sizes.end(), std::size_t{0}) != indices.size())
+    throw pipeline::SettingsError("triangles", "face sizes do not match the indices");
+  shape.triangles = fan_triangles(sizes, indices);
+  const ShapeTarget target = pipeline::make_target(std::move(shape), target_name);
+  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
+  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(level, start, target, fo);
+  py::dict d;
+  set_items(d, "vertices", points_array(run.fit.positions), "report",
+            pipeline::shape_fit_report_json(run, fo, "cage", target_name, ""));
+  return d;
+}
+
 /// OCCT's own measurement of BREP text: counts, validity, area, volume.
 py::dict brep_summary(const std::string& text) {
   const occt::ShapeSummary s = occt::summarize(occt::read_brep_text(text));
@@ -634,6 +686,8 @@ PYBIND11_MODULE(_subd2nurbs, m) {
         py::arg("corners"), py::arg("holes"), py::arg("options"), py::arg("settings"), py::arg("name"),
         py::arg("warnings"), py::arg("progress"));
   m.def("fair", &fair_cage);
+  m.def("read_target", &read_target_file, py::arg("path"));
+  m.def("fit", &fit_cage);
   m.def("brep_summary", &brep_summary, py::arg("text"));
   m.def("file_summary", &file_summary, py::arg("path"));
 }

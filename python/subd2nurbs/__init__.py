@@ -14,6 +14,7 @@ The same code as the ``subd2nurbs`` command line, from Python::
     result.report                                      # the quality report as a dict
     through = subd2nurbs.convert(cage, fit="interpolate")  # the limit passes through the vertices
     smooth, info = subd2nurbs.fair(cage, weight=0.1, keep="boundary")  # a faired cage
+    fitted, info = subd2nurbs.fit(cage, "scan.ply")    # the limit surface fitted to a shape
 
 Arguments' types are checked here, in Python, before the compiled part (``_subd2nurbs``) sees
 them; the rules of the settings' values (ranges, what excludes what) are the converter's own, the
@@ -41,7 +42,7 @@ __version__ = _subd2nurbs.__version__
 OCC_VERSION = _subd2nurbs.OCC_VERSION
 
 __all__ = [
-    "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "fair",
+    "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "fair", "fit",
     "brep_summary", "file_summary",
     "occt_compatible", "CAGE_OPTIONS", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS", "SETTINGS",
@@ -522,6 +523,71 @@ def fair(cage, weight=1.0, keep=(), levels=2, membrane=0.0):
     out = Cage(d.pop("vertices"), cage.faces, cage.creases, cage.corners, cage.holes, o["boundary"],
                o["crease_method"], o["triangles"], name="%s (faired)" % cage.name)
     return out, d
+
+
+def _target(target, triangles):
+    """(name, points (n, 3), face_sizes, face_indices) of fit()'s target."""
+    if isinstance(target, Cage):
+        if triangles is not None:
+            raise _type_error("triangles", "None when the target is a Cage", triangles)
+        return target.name, target.vertices, target.face_sizes, target.face_indices
+    if isinstance(target, (str, bytes)) or hasattr(target, "__fspath__"):
+        if triangles is not None:
+            raise _type_error("triangles", "None when the target is a file", triangles)
+        name = str(target.decode() if isinstance(target, bytes) else target)
+        points, tris = _subd2nurbs.read_target(name)
+    elif isinstance(target, np.ndarray):
+        name, points, tris = "points", target, triangles
+    else:
+        raise _type_error("target", "a path, a Cage or a numpy array of shape (n, 3)", target)
+    try:
+        points = np.array(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise _type_error("target", "an array of numbers of shape (n, 3)", target) from None
+    if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] == 0 or not np.all(np.isfinite(points)):
+        raise _type_error("target", "a non-empty array of finite numbers of shape (n, 3)", target)
+    if tris is None:
+        tris = np.zeros((0, 3), dtype=np.int32)
+    try:
+        tris = np.array(tris)
+    except (TypeError, ValueError):
+        raise _type_error("triangles", "an integer array of shape (m, 3)", triangles) from None
+    if tris.size == 0:
+        tris = np.zeros((0, 3), dtype=np.int32)
+    if tris.ndim != 2 or tris.shape[1] != 3 or not np.issubdtype(tris.dtype, np.integer):
+        raise _type_error("triangles", "an integer array of shape (m, 3)", triangles)
+    if tris.size and (tris.min() < 0 or tris.max() >= points.shape[0]):
+        raise SettingsError("triangles: vertex index out of range (0 .. %d)" % (points.shape[0] - 1),
+                            setting="triangles", rule="must index the target's points")
+    tris = tris.astype(np.int32)
+    return name, points, np.full(tris.shape[0], 3, dtype=np.int32), tris.reshape(-1)
+
+
+def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-7, triangles=None):
+    """Fits a cage to a target shape (as `subd2nurbs fit`): moves its vertices so that the exact
+    limit surface fits the target, from the cage's own positions (docs/fitting.md).
+
+    target: a path (STL, PLY, OFF, OBJ, glTF triangles; a point cloud as .xyz or a PLY / OBJ
+    with vertices only), a Cage (its faces fan-triangulated), or a numpy (n, 3) array of points,
+    with triangles=(m, 3) vertex indices for a triangle mesh.
+    Returns (Cage with the same faces and tags, info dict: iterations, stop, samples, before and
+    after (the two-sided distance of the input and the fitted limit surface to the target:
+    diagonal, limit_to_target and target_to_limit, each max / rms / p95 relative to the target's
+    diagonal), history, fit_ms, measure_ms)."""
+    cage = _cage(cage)
+    smoothing = _checked("smoothing", smoothing, _is_number, "a number", float)
+    levels = _checked("levels", levels, _is_int, "an integer", int)
+    max_iterations = _checked("max_iterations", max_iterations, _is_int, "an integer", int)
+    tolerance = _checked("tolerance", tolerance, _is_number, "a number", float)
+    name, points, sizes, indices = _target(target, triangles)
+    d = _subd2nurbs.fit(*cage._args(), points, sizes, indices, name, smoothing, levels, max_iterations, tolerance)
+    info = json.loads(d["report"])
+    for key in ("format", "version", "input", "output"):
+        info.pop(key, None)
+    o = cage.options
+    out = Cage(d["vertices"], cage.faces, cage.creases, cage.corners, cage.holes, o["boundary"],
+               o["crease_method"], o["triangles"], name="%s (fitted)" % cage.name)
+    return out, info
 
 
 def brep_summary(text):

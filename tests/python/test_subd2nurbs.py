@@ -715,5 +715,72 @@ class Fitting(unittest.TestCase):
             self.assertEqual((r.returncode, r.stderr), (1, "subd2nurbs: error: --%s %s\n" % (setting, rule)))
 
 
+def torus_cage(m=8, n=6, R=3.0, r=1.0):
+    """The stretched, bent torus of the C++ shape fit tests (tests/fit/shape_fit_test_util.h)."""
+    v = []
+    for i in range(m):
+        for j in range(n):
+            a, b = 2 * math.pi * i / m, 2 * math.pi * j / n
+            v.append((1.4 * (R + r * math.cos(b)) * math.cos(a), (R + r * math.cos(b)) * math.sin(a),
+                      r * math.sin(b) + 0.5 * math.cos(a) ** 2))
+    faces = [[i * n + j, (i + 1) % m * n + j, (i + 1) % m * n + (j + 1) % n, i * n + (j + 1) % n]
+             for i in range(m) for j in range(n)]
+    return s2n.Cage(v, faces, creases=[(i * n, (i + 1) % m * n, 1.0) for i in range(m)], name="torus")
+
+
+class ShapeFitTest(unittest.TestCase):
+    def two_sided(self, d):
+        return max(d["limit_to_target"]["max"], d["target_to_limit"]["max"])
+
+    def test_fit_brings_a_perturbed_torus_back(self):
+        truth = torus_cage()
+        # The target: the true cage refined three times (close to its limit), as a Cage, as
+        # points with triangles, and as a file.
+        fine = s2n.refine(truth, 3)
+        rng = np.random.default_rng(3)
+        diag = np.linalg.norm(truth.vertices.max(0) - truth.vertices.min(0))
+        moved = truth.vertices + rng.uniform(-0.01, 0.01, truth.vertices.shape) * diag
+        start = s2n.Cage(moved, truth.faces, truth.creases, name="perturbed")
+        fitted, info = s2n.fit(start, fine, max_iterations=10)
+        before, after = self.two_sided(info["before"]), self.two_sided(info["after"])
+        print("fit: two-sided max before %.3g, after %.3g, %d iterations (%s)" % (before, after, info["iterations"], info["stop"]))
+        self.assertLess(after, 0.3 * before)
+        self.assertGreater(info["iterations"], 0)
+        self.assertIn(info["stop"], ("tolerance", "converged", "iteration limit"))
+        self.assertEqual(fitted.faces, truth.faces)
+        self.assertEqual(fitted.creases, truth.creases)
+        self.assertFalse(np.array_equal(fitted.vertices, start.vertices))
+        tris = np.array([[f[0], f[k], f[k + 1]] for f in fine.faces for k in (1, 2)])
+        _, info2 = s2n.fit(start, fine.vertices, triangles=tris, max_iterations=10)
+        self.assertAlmostEqual(self.two_sided(info2["after"]), after, delta=1e-12)
+        _, cloud = s2n.fit(start, fine.vertices, max_iterations=3)
+        self.assertLess(cloud["after"]["target_to_limit"]["max"], cloud["before"]["target_to_limit"]["max"])
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "target.xyz")
+            np.savetxt(path, fine.vertices)
+            _, from_file = s2n.fit(start, path, max_iterations=3)
+            self.assertEqual(from_file["before"], cloud["before"])
+            with self.assertRaises(s2n.CageError):
+                s2n.fit(start, os.path.join(d, "missing.ply"))
+
+    def test_fit_argument_errors(self):
+        cage = torus_cage()
+        points = cage.vertices
+        for kwargs, setting in (({"smoothing": "x"}, "smoothing"), ({"levels": 2.5}, "levels"),
+                                ({"max_iterations": None}, "max_iterations"), ({"tolerance": True}, "tolerance"),
+                                ({"smoothing": -1.0}, "smoothing"), ({"levels": 5}, "levels"),
+                                ({"max_iterations": 0}, "max_iterations"), ({"tolerance": 0.0}, "tolerance"),
+                                ({"triangles": [[0, 1]]}, "triangles"), ({"triangles": [[0, 1, 999]]}, "triangles")):
+            with self.assertRaises(s2n.SettingsError) as e:
+                s2n.fit(cage, points, **kwargs)
+            self.assertEqual(e.exception.setting, setting)
+        for target in (42, [[0.0, 0.0, 0.0]], np.zeros((4, 2)), np.zeros((0, 3))):
+            with self.assertRaises(s2n.SettingsError) as e:
+                s2n.fit(cage, target)
+            self.assertEqual(e.exception.setting, "target")
+        with self.assertRaises(TypeError):
+            s2n.fit("not a cage", points)
+
+
 if __name__ == "__main__":
     unittest.main()

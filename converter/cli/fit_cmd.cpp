@@ -1,0 +1,85 @@
+#include "converter/cli/fit_cmd.h"
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+
+#include "converter/cli/commands.h"
+#include "converter/cli/quality_text.h"
+#include "converter/pipeline/shape_fit_report.h"
+#include "converter/pipeline/text.h"
+#include "io/atomic_file.h"
+#include "io/input_file.h"
+#include "io/obj_writer.h"
+#include "io/target_reader.h"
+
+namespace subd2nurbs::cli {
+
+CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
+  CLI::App* c = add_cage_command(
+      app, "fit",
+      "Fit a cage to a target shape (a triangle mesh, or a point cloud: PLY or OBJ with vertices only, .xyz): "
+      "move its vertices so that the limit surface fits the target; write the cage as OBJ",
+      o.mesh);
+  c->add_option("--to", o.target, "The target: STL, PLY, OFF, OBJ, glTF (triangles) or a point cloud (.xyz, "
+                                  "PLY / OBJ with vertices only)")
+      ->required();
+  c->add_option("-o,--output", o.output, "Output OBJ file (same topology and tags)")->required();
+  c->add_option("--smoothing", o.smoothing, "Weight of the thin-plate energy (>= 0, default 1e-4)");
+  c->add_option("--levels", o.levels, "Refinement levels of the surface samples (1..4, default 3)");
+  c->add_option("--max-iterations", o.max_iterations, "Closest-point iterations at most (>= 1, default 30)");
+  c->add_option("--tolerance", o.tolerance,
+                "Stop when both RMS distances are at most T x the target's diagonal (> 0, default 1e-7)");
+  c->add_option("--report", o.report, "Also write a JSON report (iterations, distances before and after)");
+  c->add_flag("-q,--quiet", o.quiet, "No progress or summary on stderr (warnings are still printed)");
+  return c;
+}
+
+void run_fit(const FitCommandOptions& o, std::ostream& err) {
+  ShapeFitOptions fo;
+  fo.smoothing = o.smoothing;
+  fo.levels = o.levels;
+  fo.max_iterations = o.max_iterations;
+  fo.tolerance = o.tolerance;
+  pipeline::validate_shape_fit(fo);
+  check_outputs(o.mesh, {{"-o", o.output}, {"--report", o.report}});
+  if (same_file(o.target, o.output) || (!o.report.empty() && same_file(o.target, o.report)))
+    throw UsageError("an output is the target file " + printable(o.target) + "; choose another output name");
+  const LoadedInput loaded = load_input(o.mesh);
+  for (const std::string& w : loaded.warnings) err << w << "\n";
+  const ShapeTarget target = pipeline::make_target(read_target(o.target), o.target);
+  if (!o.quiet)
+    err << "subd2nurbs: fitting " << o.mesh << " (" << loaded.level.mesh.num_vertices() << " vertices) to "
+        << o.target << " (" << target.points().size()
+        << (target.has_triangles() ? " points, " + std::to_string(target.triangles().size()) + " triangles)"
+                                   : std::string(" points)"))
+        << "\n";
+
+  ShapeFitProgress progress;
+  if (!o.quiet)
+    progress = [&](int iteration, double objective) {
+      err << "subd2nurbs: iteration " << iteration + 1 << ": objective " << pipeline::short_number(objective) << "\n";
+      return true;
+    };
+  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(loaded.level, loaded.positions(), target, fo, progress);
+
+  // Both outputs staged, then renamed into place together.
+  StagedFile obj(o.output);
+  obj.write([&](std::ostream& out) { write_obj(out, run.fit.positions, loaded.level); });
+  std::optional<StagedFile> report;
+  if (!o.report.empty()) {
+    const std::string text = pipeline::shape_fit_report_json(run, fo, o.mesh, o.target, o.output);
+    report.emplace(o.report);
+    report->write([&](std::ostream& out) { out << text; });
+  }
+  obj.commit();
+  if (report) report->commit();
+
+  if (o.quiet) return;
+  err << "subd2nurbs: wrote " << o.output << ": " << run.fit.iterations << " iterations, stopped: "
+      << to_string(run.fit.stop) << "\n";
+  print_target_distance(err, "subd2nurbs: before", run.before);
+  print_target_distance(err, "subd2nurbs: after", run.after);
+}
+
+}  // namespace subd2nurbs::cli

@@ -1,0 +1,35 @@
+// `subd2nurbs fit CAGE --to TARGET -o FITTED.obj [--smoothing S] [--levels K] [--max-iterations N]
+// [--tolerance T] [--report R.json] [-q]`: fits the cage's limit surface to a target shape (a
+// triangle mesh or a point cloud: io/target_reader.h) from the cage's own positions
+// (core/fit/shape_fit.h, docs/fitting.md), writes the fitted cage as OBJ with its topology and
+// tags, and reports the two-sided distance to the target before and after
+// (core/eval/target_distance.h).
+#pragma once
+
+#include <ostream>
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace subd2nurbs::cli {
+
+struct FitCommandOptions {
+  std::string mesh;
+  std::string target;
+  std::string output;             ///< OBJ
+  double smoothing = 1e-4;        ///< >= 0
+  int levels = 3;                 ///< 1 .. 4
+  int max_iterations = 30;        ///< >= 1
+  double tolerance = 1e-7;        ///< > 0, relative to the target's diagonal
+  std::string report;             ///< JSON path, empty for none
+  bool quiet = false;
+};
+
+CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& options);
+
+/// \throw InputError, WriteError, UsageError, pipeline::SettingsError, FitError
+void run_fit(const FitCommandOptions& options, std::ostream& err);
+
+}  // namespace subd2nurbs::cli
