@@ -341,7 +341,7 @@ class ConversionResult:
     diagnostics: the conversion's warnings and notes as dicts: severity ("note" or "warning"),
         code (a stable name, e.g. "pole_not_polar", "tolerance_not_met"), message (no program or
         option names), element (the cage vertex it is about, or -1), remedy (the keyword argument
-        that may mend it, e.g. "separate_poles", or None).
+        that may mend it, a name of SETTINGS, or None).
     preview: convert(preview=...): the coloured tessellation (see convert), else None;
         make_preview() makes one later from the same patches.
 
