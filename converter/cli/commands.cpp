@@ -385,6 +385,9 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                               "Also write a JSON report (counts, continuity, deviation, timings)");
   convert_command->add_option("--preview", convert.preview,
                               "Also write a GLB preview of the patches with per-vertex colours (see --color)");
+  convert_command->add_option("--fit-to", convert.fit_to,
+                              "First fit the cage to this target shape (a mesh or point cloud, as `subd2nurbs fit "
+                              "--to`, default options), then convert the fitted cage");
   add_setting_options(*convert_command, pipeline::kConvertCommand, convert.settings);
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress, notes or summary on stderr (warnings are still printed)");

@@ -15,6 +15,7 @@
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
 #include "converter/pipeline/report.h"
+#include "converter/pipeline/shape_fit_report.h"
 #include "io/atomic_file.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
@@ -194,6 +195,24 @@ pipeline::Settings conversion_settings(const ConvertOptions& options, bool build
   return settings;
 }
 
+/// `--fit-to`: the cage's positions fitted to the target shape with the default options (the
+/// same fit as `subd2nurbs fit`), the distances before and after on stderr.
+std::vector<Point3> fit_to_target(const ConvertOptions& options, const pipeline::Settings& settings,
+                                  const SubdivLevel& base, const std::vector<Point3>& positions, Progress& progress,
+                                  std::ostream& err) {
+  if (settings.conversion.fit.mode != pipeline::FitMode::Approximate)
+    throw UsageError("--fit-to and --fit interpolate exclude each other: the fit to a target already decides the cage");
+  const ShapeTarget target = pipeline::make_target(read_target(options.fit_to), options.fit_to);
+  progress.stage("fitting the cage to " + options.fit_to);
+  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(base, positions, target, ShapeFitOptions{});
+  if (!options.quiet) {
+    err << "subd2nurbs: fitted in " << run.fit.iterations << " iterations, stopped: " << to_string(run.fit.stop) << "\n";
+    print_target_distance(err, "subd2nurbs: before", run.before);
+    print_target_distance(err, "subd2nurbs: after", run.after);
+  }
+  return run.fit.positions;
+}
+
 }  // namespace
 
 // --- the subcommand ------------------------------------------------------------------------
@@ -204,6 +223,10 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   const occt::StepSchema schema = all.write.schema;
   const pipeline::ConversionSettings settings = pipeline::conversion_settings(all);
   check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
+  if (!options.fit_to.empty())
+    for (const std::string& out : {options.output, options.report, options.preview})
+      if (!out.empty() && same_file(options.fit_to, out))
+        throw UsageError("an output is the target file " + printable(options.fit_to) + "; choose another output name");
 
   Progress progress(err, options.quiet, options.progress_tty);
   std::vector<std::string> load_warnings;
@@ -219,8 +242,9 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   const LoadedCage& cage = loaded.cage;
   const SubdivLevel& base = loaded.level;
   for (const std::string& w : loaded.warnings) warn(w);
-  const std::vector<Point3> positions = loaded.positions();
+  std::vector<Point3> positions = loaded.positions();
   const double load_ms = ms_since(t);
+  if (!options.fit_to.empty()) positions = fit_to_target(options, all, base, positions, progress, err);
   if (cage.recovery.applied && !options.quiet)
     err << "subd2nurbs: recovered " << cage.recovery.quads << " quads from " << cage.recovery.source_triangles
         << " triangles (" << cage.recovery.triangles_kept << " triangles kept, " << cage.recovery.fan_vertices

@@ -211,3 +211,34 @@ TEST(ShapeFitCli, TargetReaderMeshesAndClouds) {
     }
   }
 }
+
+// convert --fit-to is `fit` then `convert` of the fitted cage: the same patches, bit for bit
+// (the fitted OBJ keeps every coordinate exactly), and it excludes --fit interpolate.
+TEST(ShapeFitCli, ConvertFitToIsFitThenConvert) {
+  TempDir dir;
+  const MeshInput in = creased_torus();
+  const SubdivLevel level = SubdivLevel::from_input(in);
+  const std::vector<Point3> truth = positions_of(in);
+  const LimitTarget lt = limit_target(LimitEvaluator(level, truth), 8);
+  const std::string target = dir.file("target.ply"), cage = dir.file("cage.obj"), fitted = dir.file("fitted.obj"),
+                    two_steps = dir.file("two.json"), one_step = dir.file("one.json");
+  write_ply(target, lt.points, lt.triangles);
+  write_obj(cage, perturbed(truth, 0.01, 11), level);
+  CommandResult r = run_command(quote(kExe) + " fit " + quote(cage) + " --to " + quote(target) + " -o " +
+                                quote(fitted) + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_command(quote(kExe) + " convert " + quote(fitted) + " -o " + quote(two_steps) + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_command(quote(kExe) + " convert " + quote(cage) + " --fit-to " + quote(target) + " -o " + quote(one_step));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("subd2nurbs: after: limit -> target max"), std::string::npos) << r.err;
+  EXPECT_EQ(read_text(one_step), read_text(two_steps));
+  // Without --fit-to the perturbed cage's own patches differ.
+  r = run_command(quote(kExe) + " convert " + quote(cage) + " -o " + quote(two_steps) + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(read_text(one_step), read_text(two_steps));
+  r = run_command(quote(kExe) + " convert " + quote(cage) + " --fit-to " + quote(target) + " --fit interpolate -o " +
+                  quote(dir.file("never.json")));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("--fit-to and --fit interpolate"), std::string::npos) << r.err;
+}
