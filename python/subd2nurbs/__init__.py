@@ -463,8 +463,13 @@ def _settings_doc():
     return "\n".join(lines)
 
 
-def convert(cage, progress=None, allow_invalid=False, **settings):
+def convert(cage, progress=None, allow_invalid=False, fit_to=None, **settings):
     cage = _cage(cage)
+    if fit_to is not None:
+        if settings.get("fit", "approximate") != "approximate":
+            raise SettingsError("fit_to excludes fit=%r: the fit to a target already decides the cage"
+                                % settings["fit"], setting="fit_to", rule="excludes the interpolating fit")
+        cage, _ = fit(cage, fit_to)
     given = {}
     for name, value in settings.items():
         if name not in _SETTING:
@@ -501,6 +506,8 @@ progress: a callable(stage: str, fraction: float) called as the stages run; `sta
     for people ("building patches (2 extra levels)") whose `key` attribute names the stage:
     "fit", "patches", "deviation", "packing", "continuity", "brep" or (with preview) "preview".
 allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
+fit_to: a target shape (anything fit() takes): the cage is fitted to it first with fit()'s
+    defaults, then converted (as the command line's convert --fit-to); excludes fit="interpolate".
 """ % _settings_doc()
 
 

@@ -732,6 +732,21 @@ class ShapeFitTest(unittest.TestCase):
     def two_sided(self, d):
         return max(d["limit_to_target"]["max"], d["target_to_limit"]["max"])
 
+    def test_convert_fit_to_is_fit_then_convert(self):
+        truth = torus_cage()
+        fine = s2n.refine(truth, 2)
+        rng = np.random.default_rng(5)
+        start = s2n.Cage(truth.vertices + rng.uniform(-0.02, 0.02, truth.vertices.shape), truth.faces, truth.creases)
+        one = s2n.convert(start, fit_to=fine, brep=False)
+        two = s2n.convert(s2n.fit(start, fine)[0], brep=False)
+        plain = s2n.convert(start, brep=False)
+        for a, b, c in zip(one.patches, two.patches, plain.patches):
+            np.testing.assert_array_equal(a["poles"], b["poles"])
+        self.assertFalse(all(np.array_equal(a["poles"], c["poles"]) for a, c in zip(one.patches, plain.patches)))
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n.convert(start, fit_to=fine, fit="interpolate")
+        self.assertEqual(e.exception.setting, "fit_to")
+
     def test_fit_brings_a_perturbed_torus_back(self):
         truth = torus_cage()
         # The target: the true cage refined three times (close to its limit), as a Cage, as
