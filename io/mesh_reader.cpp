@@ -330,12 +330,14 @@ std::string repair_summary(const LoadedCage::MeshRepair& r) {
 
 }  // namespace
 
-LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptions& options) {
+/// The raw mesh's coordinates (finite, within the limit of every cage) and faces (3 ..
+/// kMaxFaceSize vertices, indices in range) checked; the faces' offsets into face_indices.
+/// \throw InputError naming the element
+std::vector<std::size_t> checked_face_offsets(const RawMesh& raw, const std::string& name) {
   const std::size_t nv = raw.positions.size(), nf = raw.face_sizes.size();
   auto face_error = [&](std::size_t f, const std::string& message, MeshErrorCode code) {
     return error_at(name, raw.locator, raw.face_unit, raw.face_loc[f], message, code);
   };
-
   // Coordinates: finite and within the limit of every cage.
   for (std::size_t v = 0; v < nv; ++v)
     for (int k = 0; k < 3; ++k) {
@@ -370,28 +372,17 @@ LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptio
                          MeshErrorCode::IndexOutOfRange);
     }
   }
+  return offset;
+}
 
-  LoadedCage cage;
-  cage.path = name;
-  cage.locator = raw.locator;
-  cage.face_unit = raw.face_unit;
-  cage.vertex_unit = raw.vertex_unit;
-  cage.diagnostics = std::move(raw.diagnostics);
-  LoadedCage::MeshRepair& repair = cage.repair;
-  repair.applied = true;
-  repair.file_vertices = static_cast<int>(nv);
-  repair.file_faces = static_cast<int>(nf);
-  if (nf == 0) {
-    if (nv == 0) throw InputError(name, 0, "the file has no vertices and no faces");
-    // A point cloud: no cage, but the points are kept (validate_cage refuses it as empty).
-    repair.point_cloud = true;
-    cage.input.positions = std::move(raw.positions);
-    cage.vertex_line = std::move(raw.vertex_loc);
-    return cage;
-  }
-
-  // The weld tolerance: relative to the bounding box, below the shortest edge.
-  Point lower{0, 0, 0}, upper{0, 0, 0};
+/// The weld tolerance: options.weld_tolerance of the bounding-box diagonal, at most
+/// options.max_weld_edge_fraction of the shortest non-zero edge; 0 when that leaves nothing.
+/// `lower`: the bounding box's lower corner (the welding grid's origin).
+double weld_tolerance(const RawMesh& raw, const std::vector<std::size_t>& offset, const MeshReadOptions& options,
+                      Point& lower) {
+  const std::size_t nv = raw.positions.size(), nf = raw.face_sizes.size();
+  Point upper{0, 0, 0};
+  lower = {0, 0, 0};
   for (std::size_t v = 0; v < nv; ++v)
     for (std::size_t k = 0; k < 3; ++k) {
       lower[k] = v == 0 ? raw.positions[v][k] : std::min(lower[k], raw.positions[v][k]);
@@ -410,36 +401,13 @@ LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptio
   double tolerance = std::max(0.0, options.weld_tolerance) * diagonal;
   if (std::isfinite(shortest)) tolerance = std::min(tolerance, options.max_weld_edge_fraction * shortest);
   if (!(tolerance > 0) || !std::isfinite(tolerance)) tolerance = 0;
-  repair.weld_tolerance = tolerance;
+  return tolerance;
+}
 
-  int welded_count = 0;
-  const std::vector<int> id = weld(raw.positions, lower, tolerance, welded_count, repair.vertices_merged_near);
-  repair.vertices_merged = static_cast<int>(nv) - welded_count;
-
-  // Faces on welded vertices: repeats of a vertex in a row removed (an edge collapsed), faces
-  // left with fewer than 3 vertices dropped; a vertex repeated apart is an error.
-  Faces faces;
+/// Drops the faces with the vertex set of an earlier face (either orientation), counted in
+/// repair.duplicate_faces.
+void drop_duplicate_faces(Faces& faces, LoadedCage::MeshRepair& repair) {
   std::vector<int> face;
-  for (std::size_t f = 0; f < nf; ++f) {
-    face.clear();
-    for (std::size_t i = offset[f]; i < offset[f + 1]; ++i) {
-      const int w = id[static_cast<std::size_t>(raw.face_indices[i])];
-      if (face.empty() || face.back() != w) face.push_back(w);
-    }
-    while (face.size() > 1 && face.back() == face.front()) face.pop_back();
-    if (face.size() < 3) {
-      ++repair.degenerate_faces;
-      continue;
-    }
-    std::vector<int> sorted = face;
-    std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
-      throw face_error(f, "face uses a vertex twice (after welding with tolerance " + number_text(tolerance) +
-                              "); such pinched faces are not supported",
-                       MeshErrorCode::RepeatedVertexInFace);
-    faces.add(face, static_cast<int>(f));
-  }
-  // Duplicates: faces with the vertex set of an earlier face (either orientation).
   {
     std::vector<int> sorted_indices = faces.indices;
     for (int f = 0; f < faces.count(); ++f)
@@ -475,6 +443,67 @@ LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptio
       faces = std::move(kept);
     }
   }
+}
+
+LoadedCage finish_mesh(RawMesh raw, const std::string& name, const MeshReadOptions& options) {
+  const std::size_t nv = raw.positions.size(), nf = raw.face_sizes.size();
+  auto face_error = [&](std::size_t f, const std::string& message, MeshErrorCode code) {
+    return error_at(name, raw.locator, raw.face_unit, raw.face_loc[f], message, code);
+  };
+
+  const std::vector<std::size_t> offset = checked_face_offsets(raw, name);
+
+  LoadedCage cage;
+  cage.path = name;
+  cage.locator = raw.locator;
+  cage.face_unit = raw.face_unit;
+  cage.vertex_unit = raw.vertex_unit;
+  cage.diagnostics = std::move(raw.diagnostics);
+  LoadedCage::MeshRepair& repair = cage.repair;
+  repair.applied = true;
+  repair.file_vertices = static_cast<int>(nv);
+  repair.file_faces = static_cast<int>(nf);
+  if (nf == 0) {
+    if (nv == 0) throw InputError(name, 0, "the file has no vertices and no faces");
+    // A point cloud: no cage, but the points are kept (validate_cage refuses it as empty).
+    repair.point_cloud = true;
+    cage.input.positions = std::move(raw.positions);
+    cage.vertex_line = std::move(raw.vertex_loc);
+    return cage;
+  }
+
+  Point lower{0, 0, 0};
+  const double tolerance = weld_tolerance(raw, offset, options, lower);
+  repair.weld_tolerance = tolerance;
+
+  int welded_count = 0;
+  const std::vector<int> id = weld(raw.positions, lower, tolerance, welded_count, repair.vertices_merged_near);
+  repair.vertices_merged = static_cast<int>(nv) - welded_count;
+
+  // Faces on welded vertices: repeats of a vertex in a row removed (an edge collapsed), faces
+  // left with fewer than 3 vertices dropped; a vertex repeated apart is an error.
+  Faces faces;
+  std::vector<int> face;
+  for (std::size_t f = 0; f < nf; ++f) {
+    face.clear();
+    for (std::size_t i = offset[f]; i < offset[f + 1]; ++i) {
+      const int w = id[static_cast<std::size_t>(raw.face_indices[i])];
+      if (face.empty() || face.back() != w) face.push_back(w);
+    }
+    while (face.size() > 1 && face.back() == face.front()) face.pop_back();
+    if (face.size() < 3) {
+      ++repair.degenerate_faces;
+      continue;
+    }
+    std::vector<int> sorted = face;
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+      throw face_error(f, "face uses a vertex twice (after welding with tolerance " + number_text(tolerance) +
+                              "); such pinched faces are not supported",
+                       MeshErrorCode::RepeatedVertexInFace);
+    faces.add(face, static_cast<int>(f));
+  }
+  drop_duplicate_faces(faces, repair);
   if (faces.count() == 0)
     throw InputError(name, 0, "no face is left: all " + std::to_string(nf) +
                                   " faces are degenerate once vertices closer than " + number_text(tolerance) +

@@ -319,6 +319,57 @@ StencilTable shape_fit_sample_rows(const SubdivLevel& cage, int levels) {
   return out;
 }
 
+namespace {
+
+/// One solve of a fit iteration: the cage positions minimising the weighted pairings (rows of A:
+/// samples -> targets, weights Ma, W c Ga; rows of B: data points -> their feet, Mb, Gb) plus the
+/// regulariser lambda K and the proximal term mu |P - P_prev|^2. \throw FitError
+void solve_step(const Samples& S, const std::vector<Foot>& foot, const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga,
+                const Eigen::MatrixXd& Mb, const Eigen::MatrixXd& Gb, const SparseMatrix& K, double lambda,
+                double proximal, std::vector<Point3>& P) {
+  const int n = static_cast<int>(P.size()), ns = static_cast<int>(S.vertex.size()), nb = static_cast<int>(foot.size());
+  // Solve (H + lambda K (x) I3 + mu I) P = rhs + mu P_prev, H = sum over the rows (samples,
+  // then data points; each over the cage) of r^T r (x) W.
+  NormalEquations eq(n);
+  auto weight = [](const Eigen::MatrixXd& M, int i) {
+    Eigen::Matrix3d W;
+    W << M(i, 0), M(i, 3), M(i, 4), M(i, 3), M(i, 1), M(i, 5), M(i, 4), M(i, 5), M(i, 2);
+    return W;
+  };
+  for (int i = 0; i < ns; ++i) {
+    const int v = S.vertex[i], o = S.all_rows.offsets[v];
+    eq.add(&S.all_rows.indices[o], &S.all_rows.weights[o], S.all_rows.row_size(v), weight(Ma, i), Ga.row(i).transpose());
+  }
+  RowSum row(n);
+  for (int j = 0; j < nb; ++j) {
+    const Foot& f = foot[j];
+    row.clear();
+    if (f.grid >= 0) {
+      double bu[4], dbu[4], bv[4], dbv[4];
+      bspline(f.u, bu, dbu);
+      bspline(f.v, bv, dbv);
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) row.add(S.to_level, S.grids[f.grid][4 * a + b], bu[a] * bv[b]);
+    } else {
+      for (int k = 0; k < 3; ++k) row.add(S.all_rows, f.tri[k], f.bary[k]);
+    }
+    row.finish();
+    eq.add(row.idx.data(), row.w.data(), static_cast<int>(row.idx.size()), weight(Mb, j), Gb.row(j).transpose());
+  }
+  const double mu = proximal * eq.trace() / (3.0 * n) + 1e-300;
+  const SparseMatrix H = eq.matrix(lambda > 0 ? &K : nullptr, lambda, mu);
+  Eigen::VectorXd rhs = eq.rhs;
+  for (int c = 0; c < 3; ++c)
+    for (int v = 0; v < n; ++v) rhs[c * n + v] += mu * P[v][c];
+  Eigen::SimplicialLDLT<SparseMatrix> ldlt(H);
+  if (ldlt.info() != Eigen::Success) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
+  const Eigen::VectorXd x = ldlt.solve(rhs);
+  if (!x.allFinite()) throw FitError("fit_to_shape: the solve gave non-finite positions", {});
+  for (int v = 0; v < n; ++v) P[v] = {x[v], x[n + v], x[2 * n + v]};
+}
+
+}  // namespace
+
 ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target,
                             const ShapeFitOptions& options, const ShapeFitProgress& progress) {
   const int n = cage.mesh.num_vertices();
@@ -451,44 +502,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       }
     }
 
-    // Solve (H + lambda K (x) I3 + mu I) P = rhs + mu P_prev, H = sum over the rows (samples,
-    // then data points; each over the cage) of r^T r (x) W.
-    NormalEquations eq(n);
-    auto weight = [](const Eigen::MatrixXd& M, int i) {
-      Eigen::Matrix3d W;
-      W << M(i, 0), M(i, 3), M(i, 4), M(i, 3), M(i, 1), M(i, 5), M(i, 4), M(i, 5), M(i, 2);
-      return W;
-    };
-    for (int i = 0; i < ns; ++i) {
-      const int v = S.vertex[i], o = S.all_rows.offsets[v];
-      eq.add(&S.all_rows.indices[o], &S.all_rows.weights[o], S.all_rows.row_size(v), weight(Ma, i), Ga.row(i).transpose());
-    }
-    RowSum row(n);
-    for (int j = 0; j < nb; ++j) {
-      const Foot& f = foot[j];
-      row.clear();
-      if (f.grid >= 0) {
-        double bu[4], dbu[4], bv[4], dbv[4];
-        bspline(f.u, bu, dbu);
-        bspline(f.v, bv, dbv);
-        for (int a = 0; a < 4; ++a)
-          for (int b = 0; b < 4; ++b) row.add(S.to_level, S.grids[f.grid][4 * a + b], bu[a] * bv[b]);
-      } else {
-        for (int k = 0; k < 3; ++k) row.add(S.all_rows, f.tri[k], f.bary[k]);
-      }
-      row.finish();
-      eq.add(row.idx.data(), row.w.data(), static_cast<int>(row.idx.size()), weight(Mb, j), Gb.row(j).transpose());
-    }
-    const double mu = options.proximal * eq.trace() / (3.0 * n) + 1e-300;
-    const SparseMatrix H = eq.matrix(lambda > 0 ? &K : nullptr, lambda, mu);
-    Eigen::VectorXd rhs = eq.rhs;
-    for (int c = 0; c < 3; ++c)
-      for (int v = 0; v < n; ++v) rhs[c * n + v] += mu * P[v][c];
-    Eigen::SimplicialLDLT<SparseMatrix> ldlt(H);
-    if (ldlt.info() != Eigen::Success) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
-    const Eigen::VectorXd x = ldlt.solve(rhs);
-    if (!x.allFinite()) throw FitError("fit_to_shape: the solve gave non-finite positions", {});
-    for (int v = 0; v < n; ++v) P[v] = {x[v], x[n + v], x[2 * n + v]};
+    solve_step(S, foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal, P);
     result.iterations = it + 1;
   }
   const ShapeFitIteration& last = result.history.back();
