@@ -86,6 +86,34 @@ def make_cage(source, doc=None, name="Cage"):
     return obj
 
 
+def make_fitted_cage(cage, target, smoothing=1e-4, max_iterations=30, doc=None, name="FittedCage"):
+    """A parametric FittedCage object: the Cage object `cage` (its topology and tags) with its
+    vertices fitted so that its limit surface follows `target` (a Mesh::Feature, or an object
+    whose shape's vertices are taken as points), as `subd2nurbs fit` does. It is a Cage (convert
+    it with make_nurbs) and refits when the cage, the target, Smoothing or MaxIterations change.
+    Its Iterations, Stop, DistanceBefore and DistanceAfter say how the fit went. Raises (document
+    unchanged) when the fit fails."""
+    if not features.is_cage(cage):
+        raise TypeError("make_fitted_cage: expected a Cage object")
+    if target is None or not hasattr(target, "Document"):
+        raise TypeError("make_fitted_cage: expected a Mesh::Feature or a shape as the target")
+    doc = doc or cage.Document
+    with _Transaction(doc, "Fit cage to mesh"):
+        obj = doc.addObject("Part::FeaturePython", name)
+        try:
+            features.FittedCageFeature(obj)
+            obj.Source = cage
+            obj.Target = target
+            obj.Smoothing = float(smoothing)
+            obj.MaxIterations = int(max_iterations)
+            _show_and_recompute(obj, features.ViewProviderCage, "fitted cage", hide=cage)
+        except Exception:
+            doc.removeObject(obj.Name)  # also without undo (headless): the document as it was
+            doc.recompute()
+            raise
+    return obj
+
+
 def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **settings):
     """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
     Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around

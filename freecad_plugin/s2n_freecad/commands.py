@@ -125,8 +125,38 @@ class ColorMap(_OnSelectedNurbs):
         api.make_color_map(obj)
 
 
+class FitCageToMesh:
+    def GetResources(self):
+        return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Cage.svg"),
+                "MenuText": "Fit cage to mesh",
+                "ToolTip": "Select a Cage and a Mesh (or a shape): a parametric FittedCage whose limit surface "
+                           "follows the mesh, with the cage's topology and tags (refits when either changes)"}
+
+    @staticmethod
+    def _selection():
+        sel = Gui.Selection.getSelection()
+        cages = [o for o in sel if features.is_cage(o)]
+        targets = [o for o in sel if not features.is_cage(o)]
+        return (cages[0], targets[0]) if len(cages) == 1 and len(targets) == 1 else None
+
+    def IsActive(self):
+        return App.ActiveDocument is not None and self._selection() is not None
+
+    def Activated(self):
+        cage, target = self._selection()
+        try:
+            obj = api.make_fitted_cage(cage, target, name=cage.Label + "_fitted")
+        except Exception as e:
+            _report_failure("Fit cage to mesh", e)
+            return
+        App.Console.PrintMessage("Subd2Nurbs: %s: %d iterations (%s), two-sided distance %.3g -> %.3g of the "
+                                 "target's size\n" % (obj.Label, obj.Iterations, obj.Stop, obj.DistanceBefore,
+                                                      obj.DistanceAfter))
+
+
 COMMANDS = {
     "Subd2Nurbs_ImportCage": ImportCage(),
+    "Subd2Nurbs_FitCage": FitCageToMesh(),
     "Subd2Nurbs_Convert": ConvertToNurbs(),
     "Subd2Nurbs_CheckQuality": CheckQuality(),
     "Subd2Nurbs_ColorMap": ColorMap(),

@@ -248,6 +248,62 @@ class CageFeature(_Feature):
         obj.Placement = placement
 
 
+class FittedCageFeature(CageFeature):
+    """Proxy of a FittedCage object: a Cage whose vertices are fitted to a target (a Mesh::Feature,
+    or any object with a shape whose vertices are taken as a point cloud) by subd2nurbs.fit (the
+    same fit as `subd2nurbs fit`). It is a Cage: a NURBS object converts it like any other, and it
+    refits when its source Cage, its target or its fit properties change."""
+
+    TYPE = "Subd2Nurbs::FittedCage"
+    SOURCE = ("Source", "Fit", "The Cage whose topology and tags are kept")
+
+    @staticmethod
+    def setup(obj):
+        CageFeature.setup(obj)
+        g = "Fit"
+        _add(obj, "App::PropertyLink", "Target", g, "The mesh (or shape) the cage's limit surface is fitted to")
+        _add(obj, "App::PropertyFloat", "Smoothing", g,
+             "Weight of the thin-plate energy against the data (>= 0; as fit --smoothing)")
+        _add(obj, "App::PropertyInteger", "MaxIterations", g, "Closest-point iterations at most (>= 1)")
+        _add(obj, "App::PropertyInteger", "Iterations", g, "Iterations the last fit took", read_only=True)
+        _add(obj, "App::PropertyString", "Stop", g, "Why the last fit stopped", read_only=True)
+        _add(obj, "App::PropertyFloat", "DistanceBefore", g,
+             "Two-sided max distance of the source cage's limit to the target (relative to its diagonal)",
+             read_only=True)
+        _add(obj, "App::PropertyFloat", "DistanceAfter", g,
+             "Two-sided max distance of the fitted cage's limit to the target (relative to its diagonal)",
+             read_only=True)
+
+    @staticmethod
+    def target_arrays(target):
+        """(points (n, 3), triangles (m, 3) or None) of a Mesh::Feature or a shape's vertices."""
+        if target.isDerivedFrom("Mesh::Feature"):
+            points, facets = target.Mesh.Topology
+            return (np.array([[p.x, p.y, p.z] for p in points], dtype=np.float64),
+                    np.array([list(f) for f in facets], dtype=np.int64) if facets else None)
+        shape = getattr(target, "Shape", None)
+        if shape is None or not shape.Vertexes:
+            raise TypeError("%s is neither a Mesh nor a shape with vertices" % target.Label)
+        return np.array([[v.X, v.Y, v.Z] for v in shape.Vertexes], dtype=np.float64), None
+
+    def execute(self, obj):
+        if obj.Source is None or obj.Target is None:
+            raise ValueError("%s: a Source cage and a Target are needed" % obj.Label)
+        source = cage_of(obj.Source)
+        points, triangles = self.target_arrays(obj.Target)
+        with settings_named_by_property():
+            fitted, info = subd2nurbs.fit(source, points, triangles=triangles, smoothing=obj.Smoothing,
+                                          max_iterations=obj.MaxIterations)
+        CageFeature.store(obj, fitted, getattr(obj.Source, "SourceFile", ""))
+        obj.Iterations = int(info["iterations"])
+        obj.Stop = str(info["stop"])
+        two_sided = lambda d: max(d["limit_to_target"]["max"], d["target_to_limit"]["max"])
+        obj.DistanceBefore = float(two_sided(info["before"]))
+        obj.DistanceAfter = float(two_sided(info["after"]))
+        obj.Placement = App.Placement()  # the fitted coordinates are global (the source's placement applied)
+        CageFeature.execute(self, obj)
+
+
 def is_cage(obj):
     return isinstance(getattr(obj, "Proxy", None), CageFeature)
 
@@ -296,11 +352,12 @@ class _Progress:
 
 
 #: The property of each converter setting (subd2nurbs.SettingsError.setting) on a NURBS object
-#: (the settings table), a ColorMap object (its colouring and samples) or a Cage object (its
-#: subdivision options): the converter's rules name it so.
+#: (the settings table), a ColorMap object (its colouring and samples), a Cage object (its
+#: subdivision options) or a FittedCage (its fit's): the converter's rules name it so.
 PROPERTY_OF_SETTING = dict({row["name"]: row["property"]["name"] for row in SETTING_ROWS},
                            preview="Coloring", preview_samples="Samples", boundary="Boundary",
-                           crease_method="CreaseMethod", triangles="TriangleRule")
+                           crease_method="CreaseMethod", triangles="TriangleRule", smoothing="Smoothing",
+                           max_iterations="MaxIterations")
 
 
 def convert_cage(cage, settings, progress=True):

@@ -342,6 +342,51 @@ class Workbench(unittest.TestCase):
         self.assertEqual(features.settings_of({"Level": 2, "Tolerance": 0.0, "MaxMemoryMiB": 2.0}),
                          {"level": 2, "max_memory": 2.0 * 1024 * 1024})
 
+    def test_fitted_cage_follows_the_mesh_and_refits(self):
+        """Fit cage to mesh: a perturbed torus cage fitted to a mesh of the true cage's refined
+        surface comes closer to it (the fit's own two-sided measure, and FreeCAD's distance of the
+        NURBS solid to the mesh's points); moving the mesh refits; a bad target leaves the
+        document unchanged."""
+        import numpy as np
+        path = corpus("catmark_torus_creases0")
+        truth = subd2nurbs.read_cage(path)
+        fine = subd2nurbs.refine(truth, 3)
+        tris = [[f[0], f[k], f[k + 1]] for f in fine.faces for k in (1, 2)]
+        mesh_obj = self.doc.addObject("Mesh::Feature", "Scan")
+        mesh_obj.Mesh = Mesh.Mesh([[list(fine.vertices[i]) for i in t] for t in tris])
+        rng = np.random.default_rng(2)
+        diag = np.linalg.norm(truth.vertices.max(0) - truth.vertices.min(0))
+        moved = subd2nurbs.Cage(truth.vertices + rng.uniform(-0.02, 0.02, truth.vertices.shape) * diag,
+                                truth.faces, truth.creases, truth.corners)
+        cage = s2n.make_cage(moved, doc=self.doc)
+        self.doc.recompute()
+        fitted = s2n.make_fitted_cage(cage, mesh_obj, max_iterations=10)
+        self.assertTrue(features.is_cage(fitted))
+        self.assertGreater(fitted.Iterations, 0)
+        self.assertLess(fitted.DistanceAfter, 0.3 * fitted.DistanceBefore)
+        self.assertEqual(fitted.NumFaces, cage.NumFaces)
+        self.assertEqual(fitted.NumCreases, cage.NumCreases)
+        nurbs = s2n.make_nurbs(fitted, progress=False)
+        self.assertTrue(nurbs.Shape.isValid())
+        # FreeCAD's own measure: the mesh's points are closer to the fitted solid than to the
+        # solid of the perturbed cage.
+        plain = s2n.make_nurbs(cage, progress=False)
+        probe = [App.Vector(*fine.vertices[i]) for i in range(0, len(fine.vertices), 37)]
+        far = lambda shape: max(shape.distToShape(Part.Vertex(p))[0] for p in probe)
+        self.assertLess(far(nurbs.Shape), 0.5 * far(plain.Shape))
+        # The target moves: the fitted cage follows (refit on recompute).
+        before = list(fitted.Coordinates)
+        mesh_obj.Placement = App.Placement(App.Vector(0.01 * diag, 0, 0), App.Rotation())
+        self.doc.recompute()
+        self.assertNotEqual(list(fitted.Coordinates), before)
+        # A target without vertices: an error, the document unchanged.
+        names = sorted(o.Name for o in self.doc.Objects)
+        empty = self.doc.addObject("Part::Feature", "Empty")
+        names.append(empty.Name)
+        with self.assertRaises(Exception):
+            s2n.make_fitted_cage(cage, empty)
+        self.assertEqual(sorted(o.Name for o in self.doc.Objects), sorted(names))
+
     def test_packed_faces_are_the_same_solid(self):
         """Faces = Packed (the default) merges regular regions into one face each: fewer faces,
         the same solid as PerQuad (FreeCAD's own area and volume)."""
