@@ -304,6 +304,24 @@ class Conversion(unittest.TestCase):
                     self.assertEqual(r.report[key], cli[key], key)
                 self.assertEqual(r.report["deviation"]["max"], cli["deviation"]["max"])
 
+    def test_an_unused_vertex_does_not_set_the_model_size(self):
+        """#32 item 2: the model size (and every tolerance scaled by it) is the diagonal of the
+        vertices that faces use; a vertex at 1e6 that no face uses changes none of them."""
+        v, f = cube_cage()
+        alone = s2n.convert(s2n.Cage(v, f))
+        far = s2n.convert(s2n.Cage(np.vstack([v, [[1e6, 1e6, 1e6]]]), f))
+        self.assertAlmostEqual(alone.model_size, math.sqrt(3), places=14)
+        self.assertEqual(far.model_size, alone.model_size)
+        self.assertEqual(far.report["model_size"], alone.report["model_size"])
+        self.assertEqual(far.report["brep"], alone.report["brep"])
+        self.assertEqual(far.report["deviation"], alone.report["deviation"])
+        tol = far.report["deviation"]["tolerance"]
+        self.assertTrue(tol["default"])
+        self.assertTrue(tol["met"])
+        self.assertLess(tol["requested_model_units"], 0.01 * alone.model_size)
+        self.assertLessEqual(far.report["deviation"]["max"], tol["requested_model_units"])
+        self.assertEqual(far.brep_text, alone.brep_text)
+
 
 class Triangles(unittest.TestCase):
     def test_from_triangles_recovers_the_cube_and_converts(self):
