@@ -257,11 +257,14 @@ void check_has_surface(const SubdivLevel& base, const std::vector<Point3>& posit
     throw InvalidMeshError(MeshErrorCode::EmptyMesh, ElementKind::None, -1, -1,
                            "every face of the cage is a hole ('t hole' tags): there is no surface to convert");
   // A cage of zero size (all vertices at one point), or one too small for its distance from
-  // the origin to be resolved in double precision, has no surface a B-rep can hold.
-  Point3 lo = positions.empty() ? Point3{0, 0, 0} : positions[0], hi = lo;
+  // the origin to be resolved in double precision, has no surface a B-rep can hold. The
+  // vertices that faces use count, as for the model size (an unused one has no surface).
+  const PolyMesh& m = base.mesh;
+  Point3 lo = m.num_corners() == 0 ? Point3{0, 0, 0} : positions[m.corner_vertex(0)], hi = lo;
   double far = 0;
-  for (const Point3& p : positions)
+  for (int h = 0; h < m.num_corners(); ++h)
     for (int k = 0; k < 3; ++k) {
+      const Point3& p = positions[m.corner_vertex(h)];
       lo[k] = std::min(lo[k], p[k]);
       hi[k] = std::max(hi[k], p[k]);
       far = std::max(far, std::fabs(p[k]));

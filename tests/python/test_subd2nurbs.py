@@ -321,6 +321,11 @@ class Conversion(unittest.TestCase):
         self.assertLess(tol["requested_model_units"], 0.01 * alone.model_size)
         self.assertLessEqual(far.report["deviation"]["max"], tol["requested_model_units"])
         self.assertEqual(far.brep_text, alone.brep_text)
+        # A cage whose faces all sit at one point has no surface, whatever unused vertex is far away.
+        point = np.vstack([np.zeros((8, 3)), [[1, 1, 1]]])
+        with self.assertRaises(s2n.CageError) as e:
+            s2n.convert(s2n.Cage(point, f))
+        self.assertIn("all its vertices coincide", str(e.exception))
 
 
 class Triangles(unittest.TestCase):
