@@ -88,6 +88,7 @@ const char* to_string(DiagnosticCode code) {
     case DiagnosticCode::PacksRejected: return "packs_rejected";
     case DiagnosticCode::PoleNotPolar: return "pole_not_polar";
     case DiagnosticCode::PolesSeparated: return "poles_separated";
+    case DiagnosticCode::TinyPart: return "tiny_part";
   }
   return "?";
 }
@@ -457,6 +458,54 @@ void pole_notes(const Run& r) {
               -1, "", ""});
 }
 
+/// A warning for each connected part of the cage smaller than kMinPartTolerances B-rep
+/// tolerances across (#32 item 1). OCCT tells no distances apart below its precision (1e-7, the
+/// floor of the B-rep tolerance): such a part passes the in-memory check, but OCCT's STEP and
+/// IGES readers merge its edges away (measured: a 1e-12 cube beside a unit cube reads back
+/// as an invalid shape without it).
+void tiny_part_warnings(const Run& r) {
+  constexpr double kMinPartTolerances = 10;
+  const PolyMesh& m = r.base.mesh;
+  const std::vector<Point3>& x = r.c.cage;
+  std::vector<int> parent(m.num_vertices());
+  for (int v = 0; v < m.num_vertices(); ++v) parent[v] = v;
+  const auto root = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int i = 1; i < m.face_size(f); ++i) parent[root(m.face_vertices(f)[i])] = root(m.face_vertices(f)[0]);
+  struct Part {
+    int first_face = -1, faces = 0;
+    Point3 lo, hi;
+  };
+  std::vector<Part> part(m.num_vertices());
+  for (int f = 0; f < m.num_faces(); ++f) {
+    Part& p = part[root(m.face_vertices(f)[0])];
+    if (p.faces++ == 0) {
+      p.first_face = f;
+      p.lo = p.hi = x[m.face_vertices(f)[0]];
+    }
+    for (int i = 0; i < m.face_size(f); ++i)
+      for (int k = 0; k < 3; ++k) {
+        p.lo[k] = std::min(p.lo[k], x[m.face_vertices(f)[i]][k]);
+        p.hi[k] = std::max(p.hi[k], x[m.face_vertices(f)[i]][k]);
+      }
+  }
+  const double tolerance = occt::brep_tolerance(r.c.build.set.model_size);
+  for (const Part& p : part) {
+    if (p.faces == 0) continue;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (p.hi[k] - p.lo[k]) * (p.hi[k] - p.lo[k]);
+    if (std::sqrt(d2) >= kMinPartTolerances * tolerance) continue;
+    r.warn(DiagnosticCode::TinyPart,
+           "the part of the cage with face " + std::to_string(p.first_face) + " (" + std::to_string(p.faces) +
+               " faces) is " + short_number(std::sqrt(d2)) + " across, less than " +
+               short_number(kMinPartTolerances) + " x the B-rep tolerance " + short_number(tolerance) +
+               ": OCCT may lose it or report the shape invalid when the STEP / IGES file is read");
+  }
+}
+
 }  // namespace
 
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -523,6 +572,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   c.polar = settings.patch.polar;
   c.cap_options = settings.patch.cap;
   pole_notes(run);
+  tiny_part_warnings(run);
 
   if (settings.build_brep) {
     t = Clock::now();

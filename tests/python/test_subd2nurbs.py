@@ -501,6 +501,34 @@ class Writing(unittest.TestCase):
             self.assertIn("dir.step", str(cm.exception))
             self.assertEqual(sorted(os.listdir(d)), ["a.brep", "a.iges", "a.step", "a.stp", "cli.step"])
 
+    def test_tiny_parts_read_back_as_solids_or_are_named(self):
+        """#32 item 1: boxes at and below OCCT's precision (1e-7) written as STEP and read back by
+        OCCT's STEPControl_Reader are valid solids of positive volume, or the conversion warns
+        about the part (tiny_part) that is smaller than 10 B-rep tolerances."""
+        v, f = cube_cage()
+        f = np.array(f)
+        scaled = lambda s: v * np.array(s)
+        cages = {
+            "unit cube and a 1e-12 cube": (np.vstack([v, scaled(1e-12) + [3, 0, 0]]), np.vstack([f, f + 8])),
+            "1 x 1e-9 x 1 box": (scaled((1, 1e-9, 1)), f),
+            "1e8 x 1e-8 x 1 box": (scaled((1e8, 1e-8, 1)), f),
+            "cube of size 2e-6": (scaled(2e-6), f),
+        }
+        tiny = {}
+        for name, (pv, pf) in cages.items():
+            r = s2n.convert(s2n.Cage(pv, pf.tolist()))
+            tiny[name] = [d["message"] for d in r.diagnostics if d["code"] == "tiny_part"]
+            with tempfile.TemporaryDirectory() as d:
+                path = os.path.join(d, "t.step")
+                r.write(path)
+                m = s2n.file_summary(path)
+            if not (m["valid"] and m["volume"] > 0):
+                self.assertTrue(tiny[name], "%s: invalid STEP without a warning: %s" % (name, m["check_message"]))
+        self.assertEqual(len(tiny["unit cube and a 1e-12 cube"]), 1)
+        self.assertIn("face 6 (6 faces)", tiny["unit cube and a 1e-12 cube"][0])
+        for name in ("1 x 1e-9 x 1 box", "1e8 x 1e-8 x 1 box", "cube of size 2e-6"):
+            self.assertEqual(tiny[name], [], name)
+
 
 class BoundTypes(unittest.TestCase):
     """The compiled part's bound types (issue #15): the settings as one object checked by the
