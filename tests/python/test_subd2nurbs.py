@@ -529,6 +529,19 @@ class Writing(unittest.TestCase):
         for name in ("1 x 1e-9 x 1 box", "1e8 x 1e-8 x 1 box", "cube of size 2e-6"):
             self.assertEqual(tiny[name], [], name)
 
+    def test_a_flat_closed_part_is_named(self):
+        """#32: a cube flattened onto a plane converts to a closed B-rep of zero volume; the
+        conversion warns (flat_part). The unit cube and a 1 x 1e-9 x 1 box get no such warning."""
+        v, f = cube_cage()
+        flat = s2n.convert(s2n.Cage(v * [1, 1, 0], f), allow_invalid=True)
+        warned = [d["message"] for d in flat.diagnostics if d["code"] == "flat_part"]
+        self.assertEqual(len(warned), 1)
+        self.assertIn("face 0 (6 faces) encloses no volume", warned[0])
+        self.assertTrue(any("encloses no volume" in w for w in flat.warnings))
+        self.assertTrue(any("encloses no volume" in w for w in flat.report["warnings"]))
+        for cage in (s2n.Cage(v, f), s2n.Cage(v * [1, 1e-9, 1], f)):
+            self.assertEqual([d for d in s2n.convert(cage).diagnostics if d["code"] == "flat_part"], [])
+
 
 class BoundTypes(unittest.TestCase):
     """The compiled part's bound types (issue #15): the settings as one object checked by the
