@@ -89,6 +89,8 @@ const char* to_string(DiagnosticCode code) {
     case DiagnosticCode::PacksRejected: return "packs_rejected";
     case DiagnosticCode::PoleNotPolar: return "pole_not_polar";
     case DiagnosticCode::PolesSeparated: return "poles_separated";
+    case DiagnosticCode::TinyPart: return "tiny_part";
+    case DiagnosticCode::FlatPart: return "flat_part";
   }
   return "?";
 }
@@ -259,11 +261,14 @@ void check_has_surface(const SubdivLevel& base, const std::vector<Point3>& posit
     throw InvalidMeshError(MeshErrorCode::EmptyMesh, ElementKind::None, -1, -1,
                            "every face of the cage is a hole ('t hole' tags): there is no surface to convert");
   // A cage of zero size (all vertices at one point), or one too small for its distance from
-  // the origin to be resolved in double precision, has no surface a B-rep can hold.
-  Point3 lo = positions.empty() ? Point3{0, 0, 0} : positions[0], hi = lo;
+  // the origin to be resolved in double precision, has no surface a B-rep can hold. The
+  // vertices that faces use count, as for the model size (an unused one has no surface).
+  const PolyMesh& m = base.mesh;
+  Point3 lo = m.num_corners() == 0 ? Point3{0, 0, 0} : positions[m.corner_vertex(0)], hi = lo;
   double far = 0;
-  for (const Point3& p : positions)
+  for (int h = 0; h < m.num_corners(); ++h)
     for (int k = 0; k < 3; ++k) {
+      const Point3& p = positions[m.corner_vertex(h)];
       lo[k] = std::min(lo[k], p[k]);
       hi[k] = std::max(hi[k], p[k]);
       far = std::max(far, std::fabs(p[k]));
@@ -456,6 +461,71 @@ void pole_notes(const Run& r) {
               -1, "", ""});
 }
 
+/// Warnings about connected parts of the cage (#32 items 1 and 6):
+/// - tiny_part: a part less than kMinPartTolerances B-rep tolerances across. OCCT tells no
+///   distances apart below its precision (1e-7, the floor of the B-rep tolerance): such a part
+///   passes the in-memory check, but OCCT's STEP and IGES readers merge its edges away
+///   (measured: a 1e-12 cube beside a unit cube reads back as an invalid shape without it).
+/// - flat_part: in a closed model, a part whose cage encloses no volume (|volume| at most
+///   kFlatVolume x its diagonal cubed, e.g. a cube flattened onto a plane): its solid has zero
+///   volume.
+void part_warnings(const Run& r) {
+  constexpr double kMinPartTolerances = 10;
+  constexpr double kFlatVolume = 1e-12;
+  const PolyMesh& m = r.base.mesh;
+  const std::vector<Point3>& x = r.c.cage;
+  std::vector<int> parent(m.num_vertices());
+  for (int v = 0; v < m.num_vertices(); ++v) parent[v] = v;
+  const auto root = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int i = 1; i < m.face_size(f); ++i) parent[root(m.face_vertices(f)[i])] = root(m.face_vertices(f)[0]);
+  struct Part {
+    int first_face = -1, faces = 0;
+    Point3 lo, hi;
+    double volume = 0;  ///< six times the signed volume of the cage's faces (fans of triangles)
+  };
+  std::vector<Part> part(m.num_vertices());
+  for (int f = 0; f < m.num_faces(); ++f) {
+    const int* fv = m.face_vertices(f);
+    Part& p = part[root(fv[0])];
+    if (p.faces++ == 0) {
+      p.first_face = f;
+      p.lo = p.hi = x[fv[0]];
+    }
+    for (int i = 0; i < m.face_size(f); ++i)
+      for (int k = 0; k < 3; ++k) {
+        p.lo[k] = std::min(p.lo[k], x[fv[i]][k]);
+        p.hi[k] = std::max(p.hi[k], x[fv[i]][k]);
+      }
+    const Point3& a = x[fv[0]];
+    for (int i = 1; i + 1 < m.face_size(f); ++i) {
+      const Point3 &b = x[fv[i]], &c = x[fv[i + 1]];
+      p.volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                  a[2] * (b[0] * c[1] - b[1] * c[0]);
+    }
+  }
+  const double tolerance = occt::brep_tolerance(r.c.build.set.model_size);
+  for (const Part& p : part) {
+    if (p.faces == 0) continue;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (p.hi[k] - p.lo[k]) * (p.hi[k] - p.lo[k]);
+    const double size = std::sqrt(d2);
+    const std::string which =
+        "the part of the cage with face " + std::to_string(p.first_face) + " (" + std::to_string(p.faces) + " faces)";
+    if (size < kMinPartTolerances * tolerance)
+      r.warn(DiagnosticCode::TinyPart,
+             which + " is " + short_number(size) + " across, less than " + short_number(kMinPartTolerances) +
+                 " x the B-rep tolerance " + short_number(tolerance) +
+                 ": OCCT may lose it or report the shape invalid when the STEP / IGES file is read");
+    else if (r.c.build.set.closed && std::fabs(p.volume / 6) <= kFlatVolume * size * size * size)
+      r.warn(DiagnosticCode::FlatPart, which + " encloses no volume (cage volume " + short_number(p.volume / 6) +
+                                           "): its solid is flat, of zero volume");
+  }
+}
+
 }  // namespace
 
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -522,6 +592,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   c.polar = settings.patch.polar;
   c.cap_options = settings.patch.cap;
   pole_notes(run);
+  part_warnings(run);
 
   if (settings.build_brep) {
     t = Clock::now();

@@ -111,7 +111,7 @@ const char* to_string(Severity severity);  ///< "note", "warning"
 
 /// What a diagnostic is about; to_string gives a stable name ("pole_not_polar").
 enum class DiagnosticCode { InterpolationSingular, ToleranceCapped, ToleranceNotMet, PacksRejected, PoleNotPolar,
-                            PolesSeparated };
+                            PolesSeparated, TinyPart, FlatPart };
 const char* to_string(DiagnosticCode code);
 
 /// Something the conversion reports besides its result, in its own words: no program name and

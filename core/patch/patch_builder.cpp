@@ -349,12 +349,16 @@ KnotVector reversed(const KnotVector& kv) {
   return r;
 }
 
-/// The model size: the bounding-box diagonal of the cage's points (not empty).
-double bounding_diagonal(const std::vector<Point3>& positions) {
-  Eigen::Vector3d lo = to_eigen(positions[0]), hi = lo;
-  for (const Point3& q : positions) {
-    lo = lo.cwiseMin(to_eigen(q));
-    hi = hi.cwiseMax(to_eigen(q));
+/// The model size: the bounding-box diagonal of the cage's points that at least one face uses
+/// (an unused vertex far away must not set the tolerances, #32 item 2); 1 for a cage without
+/// faces.
+double bounding_diagonal(const PolyMesh& m, const std::vector<Point3>& positions) {
+  if (m.num_corners() == 0) return 1.0;
+  Eigen::Vector3d lo = to_eigen(positions[m.corner_vertex(0)]), hi = lo;
+  for (int h = 0; h < m.num_corners(); ++h) {
+    const Eigen::Vector3d q = to_eigen(positions[m.corner_vertex(h)]);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
   }
   return (hi - lo).norm();
 }
@@ -391,7 +395,7 @@ bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point
   }
   out.info.separated_poles = chosen;
   out.info.rejected_poles = left;  // the level-1 cage has no other all-triangle vertices
-  out.set.model_size = bounding_diagonal(positions);  // of the cage, not of its level 1
+  out.set.model_size = bounding_diagonal(base.mesh, positions);  // of the cage, not of its level 1
   return true;
 }
 
@@ -673,7 +677,7 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
   const SubdivLevel& la = out.refinement.levels[a];
   const PolyMesh& ma = la.mesh;
   const std::vector<Point3>& xa = out.coarse_positions;
-  const double model_size = positions.empty() ? 1.0 : bounding_diagonal(positions);
+  const double model_size = bounding_diagonal(base.mesh, positions);
 
   out.vertex_extra.assign(ma.num_vertices(), std::max(0, options.extra_levels));
   for (int v = 0; v < ma.num_vertices() && v < static_cast<int>(options.vertex_extra_levels.size()); ++v)

@@ -61,6 +61,15 @@ void set_items(py::dict& d, const char* key, const Value& value, const Rest&... 
   if constexpr (sizeof...(rest) > 0) set_items(d, rest...);
 }
 
+/// f() run without the interpreter lock, so that other Python threads run meanwhile and several
+/// threads convert in parallel (#32 item 5). f must not touch Python objects; an exception
+/// from f propagates with the lock taken back.
+template <class F>
+auto without_gil(F&& f) {
+  py::gil_scoped_release unlocked;
+  return f();
+}
+
 // --- errors ---------------------------------------------------------------------------------
 
 const char* element_name(ElementKind k) {
@@ -283,8 +292,11 @@ py::tuple refine(const DoubleArray& positions, const IntArray& face_sizes, const
                             "refining " + std::to_string(base.mesh.num_faces()) + " faces to level " +
                                 std::to_string(levels),
                             "use fewer levels");
-  const Refinement r = refine_uniform(base, levels);
-  const std::vector<Point3> last = r.positions(std::vector<Point3>(in.positions.begin(), in.positions.end())).back();
+  const auto [r, last] = without_gil([&] {
+    Refinement refined = refine_uniform(base, levels);
+    std::vector<Point3> x = refined.positions(std::vector<Point3>(in.positions.begin(), in.positions.end())).back();
+    return std::make_pair(std::move(refined), std::move(x));
+  });
   const PolyMesh& m = r.levels.back().mesh;
   std::vector<int> sizes(static_cast<size_t>(m.num_faces())), indices;
   indices.reserve(static_cast<size_t>(m.num_corners()));
@@ -433,7 +445,10 @@ struct Conversion {
 
   py::object text() {
     if (!result.has_brep) return py::none();
-    if (!brep_text) brep_text = occt::brep_text(result.brep.shape);
+    if (!brep_text) {
+      std::string made = without_gil([&] { return occt::brep_text(result.brep.shape); });
+      if (!brep_text) brep_text = std::move(made);  // with the lock: another thread may have made it
+    }
     return py::str(*brep_text);
   }
 
@@ -511,7 +526,7 @@ struct Conversion {
     } catch (const std::invalid_argument&) {
       throw pipeline::SettingsError("path", "must end in .step, .stp, .iges, .igs or .brep: '" + path + "'");
     }
-    occt::write_shape(result.brep.shape, path, format, step);
+    without_gil([&] { occt::write_shape(result.brep.shape, path, format, step); });
   }
 };
 
@@ -524,22 +539,29 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
   auto conversion = std::make_shared<Conversion>();
-  conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
   const std::vector<Point3> points(in.positions.begin(), in.positions.end());
 
+  // The conversion runs without_gil; the progress callback takes the lock back for each call.
   pipeline::ConversionProgress callbacks;
   std::string current, key;
+  const auto report = [&](double fraction) {
+    py::gil_scoped_acquire locked;
+    progress(current, fraction, key);
+  };
   if (progress) {
     callbacks.stage = [&](pipeline::Stage stage, const std::string& s) {
       current = s;
       key = pipeline::to_string(stage);
-      progress(s, 0.0, key);
+      report(0.0);
     };
-    callbacks.brep_fraction = [&](double f) { progress(current, f, key); };
+    callbacks.brep_fraction = report;
   }
   pipeline::ConversionResult& c = conversion->result;
-  c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
-                        load_warnings ? *load_warnings : diagnostics_text(diagnostics));
+  without_gil([&] {
+    conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
+    c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
+                          load_warnings ? *load_warnings : diagnostics_text(diagnostics));
+  });
   c.input = input_name;
   if (c.has_brep) c.output.format = "BREP";
   return conversion;
@@ -559,12 +581,14 @@ py::dict fair_cage(const DoubleArray& positions, const IntArray& face_sizes, con
   pipeline::validate_fairing(fo.weight, fo.energy);
   const KeepSet ks = pipeline::keep_set(keep);
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
-  const SubdivLevel level = SubdivLevel::from_input(in);
-  const std::vector<Point3> start(in.positions.begin(), in.positions.end());
-  fo.keep = kept_vertices(level, ks);
-  std::vector<Point3> targets;
-  limit_rows(level).rows.apply(start, targets);
-  const FairResult r = fair(level, start, targets, fo);
+  const FairResult r = without_gil([&] {
+    const SubdivLevel level = SubdivLevel::from_input(in);
+    const std::vector<Point3> start(in.positions.begin(), in.positions.end());
+    fo.keep = kept_vertices(level, ks);
+    std::vector<Point3> targets;
+    limit_rows(level).rows.apply(start, targets);
+    return fair(level, start, targets, fo);
+  });
   py::dict d;
   set_items(d, "vertices", points_array(r.positions), "energy_before", r.energy_before,
                "energy_after", r.energy_after, "limit_moved_max", r.residual.max,
@@ -623,7 +647,7 @@ py::dict fit_cage(const DoubleArray& positions, const IntArray& face_sizes, cons
 
 /// OCCT's own measurement of BREP text: counts, validity, area, volume.
 py::dict brep_summary(const std::string& text) {
-  const occt::ShapeSummary s = occt::summarize(occt::read_brep_text(text));
+  const occt::ShapeSummary s = without_gil([&] { return occt::summarize(occt::read_brep_text(text)); });
   py::dict d;
   set_items(d, "solids", s.solids, "shells", s.shells, "faces", s.faces, "edges", s.edges,
                "free_edges", s.free_edges, "valid", s.valid, "check_message", s.check_message, "area", s.area,
@@ -633,7 +657,7 @@ py::dict brep_summary(const std::string& text) {
 
 /// OCCT's measurement of a STEP / IGES / BREP file.
 py::dict file_summary(const std::string& path) {
-  return brep_summary(occt::brep_text(occt::read_shape(path)));
+  return brep_summary(without_gil([&] { return occt::brep_text(occt::read_shape(path)); }));
 }
 
 }  // namespace

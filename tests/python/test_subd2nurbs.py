@@ -304,6 +304,29 @@ class Conversion(unittest.TestCase):
                     self.assertEqual(r.report[key], cli[key], key)
                 self.assertEqual(r.report["deviation"]["max"], cli["deviation"]["max"])
 
+    def test_an_unused_vertex_does_not_set_the_model_size(self):
+        """#32 item 2: the model size (and every tolerance scaled by it) is the diagonal of the
+        vertices that faces use; a vertex at 1e6 that no face uses changes none of them."""
+        v, f = cube_cage()
+        alone = s2n.convert(s2n.Cage(v, f))
+        far = s2n.convert(s2n.Cage(np.vstack([v, [[1e6, 1e6, 1e6]]]), f))
+        self.assertAlmostEqual(alone.model_size, math.sqrt(3), places=14)
+        self.assertEqual(far.model_size, alone.model_size)
+        self.assertEqual(far.report["model_size"], alone.report["model_size"])
+        self.assertEqual(far.report["brep"], alone.report["brep"])
+        self.assertEqual(far.report["deviation"], alone.report["deviation"])
+        tol = far.report["deviation"]["tolerance"]
+        self.assertTrue(tol["default"])
+        self.assertTrue(tol["met"])
+        self.assertLess(tol["requested_model_units"], 0.01 * alone.model_size)
+        self.assertLessEqual(far.report["deviation"]["max"], tol["requested_model_units"])
+        self.assertEqual(far.brep_text, alone.brep_text)
+        # A cage whose faces all sit at one point has no surface, whatever unused vertex is far away.
+        point = np.vstack([np.zeros((8, 3)), [[1, 1, 1]]])
+        with self.assertRaises(s2n.CageError) as e:
+            s2n.convert(s2n.Cage(point, f))
+        self.assertIn("all its vertices coincide", str(e.exception))
+
 
 class Triangles(unittest.TestCase):
     def test_from_triangles_recovers_the_cube_and_converts(self):
@@ -478,6 +501,47 @@ class Writing(unittest.TestCase):
             self.assertIn("dir.step", str(cm.exception))
             self.assertEqual(sorted(os.listdir(d)), ["a.brep", "a.iges", "a.step", "a.stp", "cli.step"])
 
+    def test_tiny_parts_read_back_as_solids_or_are_named(self):
+        """#32 item 1: boxes at and below OCCT's precision (1e-7) written as STEP and read back by
+        OCCT's STEPControl_Reader are valid solids of positive volume, or the conversion warns
+        about the part (tiny_part) that is smaller than 10 B-rep tolerances."""
+        v, f = cube_cage()
+        f = np.array(f)
+        scaled = lambda s: v * np.array(s)
+        cages = {
+            "unit cube and a 1e-12 cube": (np.vstack([v, scaled(1e-12) + [3, 0, 0]]), np.vstack([f, f + 8])),
+            "1 x 1e-9 x 1 box": (scaled((1, 1e-9, 1)), f),
+            "1e8 x 1e-8 x 1 box": (scaled((1e8, 1e-8, 1)), f),
+            "cube of size 2e-6": (scaled(2e-6), f),
+        }
+        tiny = {}
+        for name, (pv, pf) in cages.items():
+            r = s2n.convert(s2n.Cage(pv, pf.tolist()))
+            tiny[name] = [d["message"] for d in r.diagnostics if d["code"] == "tiny_part"]
+            with tempfile.TemporaryDirectory() as d:
+                path = os.path.join(d, "t.step")
+                r.write(path)
+                m = s2n.file_summary(path)
+            if not (m["valid"] and m["volume"] > 0):
+                self.assertTrue(tiny[name], "%s: invalid STEP without a warning: %s" % (name, m["check_message"]))
+        self.assertEqual(len(tiny["unit cube and a 1e-12 cube"]), 1)
+        self.assertIn("face 6 (6 faces)", tiny["unit cube and a 1e-12 cube"][0])
+        for name in ("1 x 1e-9 x 1 box", "1e8 x 1e-8 x 1 box", "cube of size 2e-6"):
+            self.assertEqual(tiny[name], [], name)
+
+    def test_a_flat_closed_part_is_named(self):
+        """#32: a cube flattened onto a plane converts to a closed B-rep of zero volume; the
+        conversion warns (flat_part). The unit cube and a 1 x 1e-9 x 1 box get no such warning."""
+        v, f = cube_cage()
+        flat = s2n.convert(s2n.Cage(v * [1, 1, 0], f), allow_invalid=True)
+        warned = [d["message"] for d in flat.diagnostics if d["code"] == "flat_part"]
+        self.assertEqual(len(warned), 1)
+        self.assertIn("face 0 (6 faces) encloses no volume", warned[0])
+        self.assertTrue(any("encloses no volume" in w for w in flat.warnings))
+        self.assertTrue(any("encloses no volume" in w for w in flat.report["warnings"]))
+        for cage in (s2n.Cage(v, f), s2n.Cage(v * [1, 1e-9, 1], f)):
+            self.assertEqual([d for d in s2n.convert(cage).diagnostics if d["code"] == "flat_part"], [])
+
 
 class BoundTypes(unittest.TestCase):
     """The compiled part's bound types (issue #15): the settings as one object checked by the
@@ -642,6 +706,74 @@ class SettingsTable(unittest.TestCase):
         with self.assertRaises(s2n.SettingsError) as e:
             s2n._setting_value(row, "seven")
         self.assertEqual((e.exception.setting, e.exception.rule), ("dummy_setting", "must be an integer"))
+
+
+def _without_timings(report):
+    return {k: x for k, x in report.items() if not k.endswith("_ms")}
+
+
+class Threads(unittest.TestCase):
+    """#32 item 5: convert runs without the interpreter lock, so threads convert in parallel
+    with the results of sequential runs; the progress callback still runs in Python."""
+
+    NAMES = ("catmark_cube_creases0", "catmark_nonquads", "catmark_torus", "catmark_pyramid")
+
+    def test_threads_give_the_sequential_results(self):
+        from concurrent.futures import ThreadPoolExecutor
+        cages = [s2n.read_obj(corpus(n)) for n in self.NAMES]
+        sequential = [s2n.convert(c) for c in cages]
+        with ThreadPoolExecutor(4) as pool:
+            threaded = list(pool.map(s2n.convert, cages))
+        for name, a, b in zip(self.NAMES, sequential, threaded):
+            self.assertEqual(a.brep_text, b.brep_text, name)
+            self.assertEqual(_without_timings(a.report), _without_timings(b.report), name)
+
+    def test_other_threads_run_during_a_conversion(self):
+        """Another Python thread keeps running while a conversion runs: its longest pause is a
+        small part of the conversion's time (with the lock held it was all of it: 2.3 of 2.3 s
+        for catmark_car)."""
+        import threading
+        import time
+        pause = [0.0]
+        stop = threading.Event()
+
+        def spin():
+            last = time.perf_counter()
+            while not stop.is_set():
+                now = time.perf_counter()
+                pause[0] = max(pause[0], now - last)
+                last = now
+
+        cage = s2n.read_obj(corpus("catmark_car"))
+        s2n.convert(cage, level=0)  # OCCT's first-use initialisation, outside the measurement
+        t = threading.Thread(target=spin)
+        t.start()
+        try:
+            time.sleep(0.05)
+            pause[0] = 0.0
+            start = time.perf_counter()
+            s2n.convert(cage, level=1)
+            elapsed = time.perf_counter() - start
+        finally:
+            stop.set()
+            t.join()
+        self.assertLess(pause[0], 0.5 * elapsed, "paused %.3f s of %.3f s" % (pause[0], elapsed))
+
+    def test_progress_and_errors_from_a_thread(self):
+        from concurrent.futures import ThreadPoolExecutor
+        stages = []
+        with ThreadPoolExecutor(2) as pool:
+            done = pool.submit(s2n.convert, s2n.read_obj(corpus("catmark_cube")),
+                               progress=lambda s, x: stages.append((s.key, x)))
+            v, f = cube_cage()
+            flipped = [list(reversed(f[0]))] + f[1:]  # raised by the core, without the lock
+            bad = pool.submit(s2n.convert, s2n.Cage(v, flipped))
+            done.result()
+            with self.assertRaises(s2n.CageError) as e:
+                bad.result()
+            self.assertEqual(e.exception.code, "inconsistent-orientation")
+        self.assertEqual({k for k, _ in stages} - {"fit"}, {"patches", "deviation", "packing", "continuity", "brep"})
+        self.assertEqual(max(x for k, x in stages if k == "brep"), 1.0)
 
 
 class Versions(unittest.TestCase):
