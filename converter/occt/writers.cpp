@@ -1,5 +1,6 @@
 #include "converter/occt/writers.h"
 
+#include <APIHeaderSection_MakeHeader.hxx>
 #include <BRepTools.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESControl_Writer.hxx>
@@ -8,13 +9,17 @@
 
 
 #include <BRep_Builder.hxx>
+#include <TCollection_HAsciiString.hxx>
 
 #include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <sstream>
 #include <stdexcept>
 
@@ -59,6 +64,24 @@ Format format_from_path(const std::string& path) {
 
 namespace {
 
+/// The STEP header's time stamp from SOURCE_DATE_EPOCH (seconds since 1970, UTC; the
+/// reproducible-builds convention), so that the same input gives a byte-identical file; empty
+/// (OCCT's clock time) when the variable is unset or not a number.
+std::string source_date_stamp() {
+  const char* text = std::getenv("SOURCE_DATE_EPOCH");
+  if (text == nullptr || *text == '\0') return {};
+  char* end = nullptr;
+  errno = 0;
+  const long long seconds = std::strtoll(text, &end, 10);
+  if (*end != '\0' || errno != 0 || seconds < 0) return {};
+  const std::time_t t = static_cast<std::time_t>(seconds);
+  std::tm utc{};
+  if (gmtime_r(&t, &utc) == nullptr) return {};
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%S", &utc);
+  return stamp;
+}
+
 void write_step(const TopoDS_Shape& shape, const std::string& file, const std::string& path,
                 StepSchema schema) {
   detail::StaticSettings settings;
@@ -77,6 +100,11 @@ void write_step(const TopoDS_Shape& shape, const std::string& file, const std::s
     STEPControl_Writer writer;
     if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone)
       throw ExportError("step-transfer", -1, "the STEP translator refused the shape");
+    const std::string stamp = source_date_stamp();
+    if (!stamp.empty()) {
+      APIHeaderSection_MakeHeader header(writer.Model());
+      header.SetTimeStamp(new TCollection_HAsciiString(stamp.c_str()));
+    }
     if (writer.Write(file.c_str()) != IFSelect_RetDone)
       throw WriteError(path, "the STEP writer could not write the file");
   });

@@ -1,0 +1,844 @@
+"""Batch conversion of a library of cages and meshes: ``subd2nurbs-batch`` /
+``python3 -m subd2nurbs.batch`` / :func:`run`.
+
+Every file is converted by the ``subd2nurbs convert`` command line in a process of its own, with
+a wall-time limit (``--timeout``) and an address-space limit (RLIMIT_AS, plus the converter's own
+``--max-memory`` estimate), so a crash, a hang or running out of memory costs that file only::
+
+    subd2nurbs-batch models/ -o out/                      # local pool, one worker per core
+    subd2nurbs-batch models/ -o out/ --workers 4 --timeout 600 --tolerance 1e-3
+    subd2nurbs-batch --manifest list.csv -o out/          # input, output, per-file settings
+    subd2nurbs-batch models/ -o out/ --scheduler tcp://head:8786   # a Dask cluster
+    subd2nurbs-batch models/ -o out/ --dask-local 2       # a Dask cluster on this machine
+
+The output tree mirrors the input tree: ``out/a/b/part.step`` and its report
+``out/a/b/part.report.json`` for ``models/a/b/part.obj``. ``out/summary.json`` and
+``out/summary.csv`` hold a row per input (docs/formats.md, "Batch summary"). A re-run with the same
+output folder skips the files whose input and settings are unchanged and whose output exists
+(failed files too, unless ``--retry-failed``).
+
+The Python API::
+
+    from subd2nurbs import batch
+    summary = batch.run(["models/"], "out/", {"tolerance": 1e-3}, workers=2)
+    summary.counts          # {"ok": 85, "invalid-input": 2}
+    summary.files[0]        # the summary row of the first input (a dict)
+
+Dask (Debian ``python3-distributed``) is optional: without it the local pool works.
+"""
+
+import argparse
+import csv
+import ctypes
+import ctypes.util
+import hashlib
+import io
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+#: The extensions of the files a folder contributes (the readers of ``subd2nurbs convert``).
+EXTENSIONS = (".obj", ".glb", ".gltf", ".stl", ".ply", ".off")
+
+#: Output formats (the extension of the converted file).
+FORMATS = ("step", "iges", "brep", "json")
+
+#: The failure class of each exit code of ``subd2nurbs convert`` (converter/pipeline/errors.cpp).
+EXIT_CLASSES = {1: "usage", 2: "invalid-input", 3: "write-failure", 4: "internal-error"}
+
+#: Failure classes the batch itself assigns.
+TIMEOUT = "timeout"            # killed at the wall-time limit
+CRASH = "crash"                # ended by a signal (segmentation fault, abort, the OOM killer)
+OUT_OF_MEMORY = "out-of-memory"  # the converter ran out of memory under the address-space limit
+NO_OUTPUT = "no-output"        # exit code 0 but no output or report
+INTERRUPTED = "interrupted"    # the batch was interrupted before the file was finished
+START_FAILURE = "start-failure"  # the converter could not be started
+
+#: The columns of summary.csv, in order.
+CSV_COLUMNS = ("input", "output", "status", "exit_code", "message", "faces", "poles", "deviation",
+               "deviation_relative", "g1_angle_deg", "time_s", "peak_memory_mb", "input_hash", "settings_hash")
+
+SUMMARY_FORMAT = "subd2nurbs-batch-summary"
+JOURNAL = ".subd2nurbs-batch.journal"
+KILL_GRACE_S = 3.0
+MESSAGE_LIMIT = 500
+
+#: Settings of ``convert`` that a batch does not pass (it writes no preview; samples is check's).
+_NOT_BATCH_SETTINGS = ("samples", "preview", "preview_samples", "brep")
+
+
+class BatchError(Exception):
+    """A batch that cannot start: no inputs, a bad manifest, an unknown setting, no converter."""
+
+
+# --- settings --------------------------------------------------------------------------------
+
+def settings_rows():
+    """The rows of the converter's settings table a batch passes on: {name: row} (name, type,
+    cli flag, help)."""
+    from . import _subd2nurbs
+    return {row["name"]: row for row in _subd2nurbs.settings_table()
+            if row["cli"] and row["name"] not in _NOT_BATCH_SETTINGS}
+
+
+def _truthy(value):
+    if isinstance(value, str):
+        word = value.strip().lower()
+        if word in ("1", "true", "yes", "on"):
+            return True
+        if word in ("", "0", "false", "no", "off"):
+            return False
+        raise BatchError("a flag setting takes true/false, not %r" % value)
+    return bool(value)
+
+
+def normalized_settings(settings, rows=None):
+    """`settings` ({name: value}, names as in docs/settings.md) with None / empty values dropped,
+    values as the command line spells them (text; flags True), sorted by name. Unknown names are
+    refused."""
+    rows = settings_rows() if rows is None else rows
+    out = {}
+    for name, value in (settings or {}).items():
+        if name not in rows:
+            raise BatchError("unknown setting %r (the settings of convert: %s)" % (name, ", ".join(sorted(rows))))
+        if value is None or (isinstance(value, str) and value.strip() == ""):
+            continue
+        if rows[name]["type"] == "flag":
+            if _truthy(value):
+                out[name] = True
+            continue
+        if isinstance(value, bool):
+            value = "on" if value else "off"
+        out[name] = value if isinstance(value, str) else repr(value) if isinstance(value, float) else str(value)
+    return dict(sorted(out.items()))
+
+
+def settings_args(settings, rows=None):
+    """The command-line arguments of normalized settings."""
+    rows = settings_rows() if rows is None else rows
+    args = []
+    for name, value in settings.items():
+        flag = rows[name]["cli"]
+        args += [flag] if value is True else [flag, value]
+    return args
+
+
+def settings_hash(settings, fmt):
+    text = json.dumps({"format": fmt, "settings": settings}, sort_keys=True)
+    return "sha256:" + hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def file_hash(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return "sha256:" + h.hexdigest()
+
+
+def memory_bytes(text):
+    """'512M', '2G', '1048576' -> bytes (K/M/G/T are powers of 1024)."""
+    if isinstance(text, (int, float)):
+        return int(text)
+    t = text.strip().upper().rstrip("B").rstrip("I")
+    scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}.get(t[-1:], 1)
+    try:
+        return int(float(t[:-1] if scale > 1 else t) * scale)
+    except ValueError:
+        raise BatchError("bad memory size %r (bytes, or with K/M/G/T)" % text) from None
+
+
+# --- the jobs --------------------------------------------------------------------------------
+
+class Job:
+    """One input: where it is, where its output and report go (relative to the output folder)
+    and its own settings."""
+
+    def __init__(self, input_path, rel, settings):
+        self.input = input_path
+        self.rel = rel              # the input's path relative to its root: the tree mirrored
+        self.output = None          # relative to the output folder
+        self.report = None
+        self.settings = settings
+
+
+def _walk(root):
+    found = []
+    for folder, dirs, files in os.walk(root):
+        dirs.sort()
+        for name in sorted(files):
+            if os.path.splitext(name)[1].lower() in EXTENSIONS:
+                found.append(os.path.join(folder, name))
+    return found
+
+
+def _jobs_from_paths(paths, settings):
+    jobs = []
+    folders = [p for p in paths if os.path.isdir(p)]
+    for p in paths:
+        if os.path.isdir(p):
+            prefix = "" if len(folders) == 1 else os.path.basename(os.path.normpath(p))
+            for f in _walk(p):
+                jobs.append(Job(f, os.path.join(prefix, os.path.relpath(f, p)), dict(settings)))
+        elif os.path.isfile(p):
+            jobs.append(Job(p, os.path.basename(p), dict(settings)))
+        else:
+            raise BatchError("%s: no such file or folder" % p)
+    return jobs
+
+
+def _manifest_rows(path):
+    with open(path, newline="", encoding="utf-8") as f:
+        text = f.read()
+    if path.lower().endswith(".json"):
+        data = json.loads(text)
+        rows = data.get("files") if isinstance(data, dict) else data
+        if not isinstance(rows, list):
+            raise BatchError("%s: a JSON manifest is a list of {input, output, settings} objects "
+                             "(or an object with such a 'files' list)" % path)
+        out = []
+        for i, row in enumerate(rows):
+            if isinstance(row, str):
+                row = {"input": row}
+            if not isinstance(row, dict) or not isinstance(row.get("input"), str):
+                raise BatchError("%s: entry %d has no 'input'" % (path, i))
+            extra = {k: v for k, v in row.items() if k not in ("input", "output", "settings")}
+            settings = dict(row.get("settings") or {}, **extra)
+            out.append((i + 1, row["input"], row.get("output"), settings))
+        return out
+    reader = csv.DictReader(io.StringIO(text))
+    if not reader.fieldnames or "input" not in reader.fieldnames:
+        raise BatchError("%s: a CSV manifest needs a header line with an 'input' column" % path)
+    out = []
+    for row in reader:
+        settings = {k: v for k, v in row.items() if k not in ("input", "output") and k is not None}
+        out.append((reader.line_num, row["input"], row.get("output") or None, settings))
+    return out
+
+
+def _jobs_from_manifest(path, settings, rows):
+    base = os.path.dirname(os.path.abspath(path))
+    jobs = []
+    for line, input_path, output, own in _manifest_rows(path):
+        full = input_path if os.path.isabs(input_path) else os.path.join(base, input_path)
+        rel = os.path.relpath(full, base)
+        if rel.startswith(".."):
+            rel = os.path.basename(full)
+        try:
+            merged = dict(settings, **normalized_settings(own, rows))
+        except BatchError as e:
+            raise BatchError("%s:%d: %s" % (path, line, e)) from None
+        job = Job(full, rel, merged)
+        job.output = output
+        jobs.append(job)
+    return jobs
+
+
+def _place_outputs(jobs, fmt):
+    """Output and report names mirroring the input tree; inputs that would share an output
+    (part.obj and part.ply) keep their extension in it (part.obj.step)."""
+    stems = {}
+    for job in jobs:
+        stem = os.path.splitext(job.rel)[0]
+        stems[stem] = stems.get(stem, 0) + 1
+    for job in jobs:
+        stem = os.path.splitext(job.rel)[0]
+        if stems[stem] > 1:
+            stem = job.rel
+        if job.output is None:
+            job.output = stem + "." + fmt
+        else:
+            stem = os.path.splitext(job.output)[0]
+        job.report = stem + ".report.json"
+    seen = {}
+    for job in jobs:
+        if job.output in seen:
+            raise BatchError("%s and %s would both be written to %s" % (seen[job.output], job.input, job.output))
+        seen[job.output] = job.input
+
+
+def collect_jobs(inputs, settings, fmt="step", manifest=None, rows=None):
+    """The jobs of folders / files `inputs` and of a manifest, each with its output names."""
+    rows = settings_rows() if rows is None else rows
+    base = normalized_settings(settings, rows)
+    jobs = _jobs_from_paths(list(inputs or []), base)
+    if manifest:
+        jobs += _jobs_from_manifest(manifest, base, rows)
+    if not jobs:
+        raise BatchError("no input files (folders are searched for %s)" % ", ".join(EXTENSIONS))
+    _place_outputs(jobs, fmt)
+    return jobs
+
+
+# --- one file, in a process of its own (runs on the pool's threads or on Dask workers) ------
+
+_PR_SET_PDEATHSIG = 1
+_libc = None
+
+
+def _load_libc():
+    global _libc
+    if _libc is None:
+        try:
+            _libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        except OSError:
+            _libc = False
+    return _libc
+
+
+def _limits(memory):
+    libc = _load_libc()  # loaded before the fork: the child only calls into it
+
+    def apply():
+        if libc:
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)  # ends (its temporaries removed) with its starter
+        if memory:
+            import resource
+            resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    return apply
+
+
+_running = set()          # the converters running in this process (for interrupting them)
+_running_lock = threading.Lock()
+_stopping = threading.Event()  # set when the batch is interrupted: start no more converters
+
+
+def _kill_group(proc, first=signal.SIGTERM):
+    """SIGTERM to the converter's process group (it removes its temporary files), SIGKILL after
+    a grace period."""
+    for sig in (first, signal.SIGKILL):
+        try:
+            os.killpg(proc.pid, sig)
+        except (ProcessLookupError, PermissionError):
+            return
+        if sig == signal.SIGKILL:
+            return
+        deadline = time.monotonic() + KILL_GRACE_S
+        while time.monotonic() < deadline:
+            try:
+                os.killpg(proc.pid, 0)
+            except ProcessLookupError:
+                return
+            time.sleep(0.05)
+
+
+def terminate_running():
+    """Stops every converter this process is running (the batch was interrupted)."""
+    with _running_lock:
+        _stopping.set()
+        procs = list(_running)
+    for proc in procs:
+        proc.subd2nurbs_interrupted = True
+        threading.Thread(target=_kill_group, args=(proc,), daemon=True).start()
+
+
+def _message(stderr_text):
+    lines = [l.strip() for l in stderr_text.splitlines() if l.strip()]
+    errors = [l for l in lines if "error" in l.lower() or "out of memory" in l.lower()]
+    text = " | ".join(errors or lines[-3:])
+    return text if len(text) <= MESSAGE_LIMIT else text[:MESSAGE_LIMIT - 3] + "..."
+
+
+def _measures(report):
+    """The summary's columns taken from a convert report."""
+    faces = report.get("faces") or {}
+    deviation = report.get("deviation") or {}
+    continuity = report.get("continuity") or {}
+    return {"faces": faces.get("total"), "poles": faces.get("poles"), "deviation": deviation.get("max"),
+            "deviation_relative": deviation.get("relative"),
+            "g1_angle_deg": continuity.get("max_normal_angle_deg")}
+
+
+def convert_one(task):
+    """Converts one file with the command line in a process of its own and returns its summary
+    row. `task`: cli, input, output and report (absolute paths), args (the settings' arguments),
+    timeout (s, 0: none), memory (bytes of address space, 0: none). Pure and idempotent (the
+    outputs are written atomically), so a backend may run it again elsewhere."""
+    for path in (task["output"], task["report"]):
+        os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    command = [task["cli"], "convert", task["input"], "-o", task["output"], "--report", task["report"], "-q"]
+    command += task["args"]
+    row = {"status": None, "exit_code": None, "message": "", "faces": None, "poles": None, "deviation": None,
+           "deviation_relative": None, "g1_angle_deg": None, "time_s": None, "peak_memory_mb": None}
+    if _stopping.is_set():
+        row.update(status=INTERRUPTED, message="the batch was interrupted")
+        return row
+    err = tempfile.TemporaryFile()
+    start = time.monotonic()
+    try:
+        proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
+                                preexec_fn=_limits(task.get("memory") or 0), start_new_session=True)
+    except OSError as e:
+        err.close()
+        row.update(status=START_FAILURE, message="cannot start %s: %s" % (task["cli"], e.strerror or e))
+        return row
+    proc.subd2nurbs_interrupted = False
+    with _running_lock:
+        _running.add(proc)
+    waited = []
+    waiter = threading.Thread(target=lambda: waited.append(os.wait4(proc.pid, 0)), daemon=True)
+    waiter.start()
+    timeout = task.get("timeout") or None
+    waiter.join(timeout)
+    timed_out = waiter.is_alive()
+    if timed_out:
+        _kill_group(proc)
+        waiter.join()
+    elapsed = time.monotonic() - start
+    with _running_lock:
+        _running.discard(proc)
+    _, status, usage = waited[0]
+    proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
+    err.seek(0)
+    stderr_text = err.read(1 << 20).decode("utf-8", "replace")
+    err.close()
+    row["time_s"] = round(elapsed, 3)
+    row["peak_memory_mb"] = round(usage.ru_maxrss / 1024.0, 1)  # KiB on Linux
+    code = proc.returncode
+    if proc.subd2nurbs_interrupted:
+        row.update(status=INTERRUPTED, message="the batch was interrupted")
+    elif timed_out:
+        row.update(status=TIMEOUT, message="killed after the time limit of %g s" % timeout)
+    elif code < 0:
+        name = signal.Signals(-code).name if -code in signal.valid_signals() else str(-code)
+        row.update(status=CRASH, exit_code=code,
+                   message=("killed by %s" % name) + (": " + _message(stderr_text) if stderr_text.strip() else ""))
+    elif code != 0:
+        message = _message(stderr_text)
+        status = EXIT_CLASSES.get(code, "exit-%d" % code)
+        if code == 4 and ("out of memory" in stderr_text or "malloc failed" in stderr_text):
+            status = OUT_OF_MEMORY
+        elif code in (126, 127):  # the shell's or the loader's: not found, not executable, no libraries
+            status = START_FAILURE
+        row.update(status=status, exit_code=code, message=message)
+    else:
+        try:
+            with open(task["report"], encoding="utf-8") as f:
+                report = json.load(f)
+        except (OSError, ValueError) as e:
+            report = None
+            row.update(status=NO_OUTPUT, exit_code=0, message="no readable report: %s" % e)
+        if report is not None:
+            if not os.path.exists(task["output"]):
+                row.update(status=NO_OUTPUT, exit_code=0, message="exit code 0 but no output file")
+            else:
+                row.update(status="ok", exit_code=0, message="; ".join(report.get("warnings") or [])[:MESSAGE_LIMIT])
+                row.update(_measures(report))
+    return row
+
+
+# --- the summary -----------------------------------------------------------------------------
+
+class Summary:
+    """The outcome of a batch: ``files`` (one row per input, in input order), ``counts``
+    ({status: number}), ``converted`` / ``skipped`` (this run), ``interrupted``."""
+
+    def __init__(self, files, settings, fmt, converted, skipped, interrupted, backend):
+        self.files = files
+        self.settings = settings
+        self.format = fmt
+        self.converted = converted
+        self.skipped = skipped
+        self.interrupted = interrupted
+        self.backend = backend
+        self.counts = {}
+        for row in files:
+            self.counts[row["status"]] = self.counts.get(row["status"], 0) + 1
+
+    @property
+    def ok(self):
+        return self.counts.get("ok", 0)
+
+    @property
+    def failed(self):
+        return len(self.files) - self.ok
+
+    def to_json(self):
+        return {"format": SUMMARY_FORMAT, "version": 1, "output_format": self.format, "settings": self.settings,
+                "counts": dict(sorted(self.counts.items())),
+                "run": {"converted": self.converted, "skipped": self.skipped, "interrupted": self.interrupted,
+                        "backend": self.backend},
+                "files": self.files}
+
+    def write(self, outdir):
+        _write_atomic(os.path.join(outdir, "summary.json"),
+                      json.dumps(self.to_json(), indent=2, sort_keys=False) + "\n")
+        text = io.StringIO()
+        w = csv.writer(text, lineterminator="\n")
+        w.writerow(CSV_COLUMNS)
+        for row in self.files:
+            w.writerow(["" if row.get(c) is None else row.get(c) for c in CSV_COLUMNS])
+        _write_atomic(os.path.join(outdir, "summary.csv"), text.getvalue())
+
+
+def _write_atomic(path, text):
+    tmp = "%s.%d.tmp" % (path, os.getpid())
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def _previous_rows(outdir):
+    """The rows of the last run in `outdir`: its summary.json, then its journal (the rows of an
+    interrupted run, one JSON line each), keyed by output."""
+    rows = {}
+    try:
+        with open(os.path.join(outdir, "summary.json"), encoding="utf-8") as f:
+            data = json.load(f)
+        if data.get("format") == SUMMARY_FORMAT:
+            rows = {r["output"]: r for r in data.get("files", []) if isinstance(r, dict) and "output" in r}
+    except (OSError, ValueError):
+        pass
+    try:
+        with open(os.path.join(outdir, JOURNAL), encoding="utf-8") as f:
+            for line in f:
+                try:
+                    r = json.loads(line)
+                except ValueError:
+                    continue  # a line cut short by a crash
+                rows[r["output"]] = r
+    except OSError:
+        pass
+    return rows
+
+
+def _resumable(prev, row, outdir, retry_failed):
+    if not prev or prev.get("input_hash") != row["input_hash"] or prev.get("settings_hash") != row["settings_hash"]:
+        return False
+    status = prev.get("status")
+    if status == "ok":
+        return all(os.path.exists(os.path.join(outdir, prev[k])) for k in ("output", "report"))
+    if status in (INTERRUPTED, START_FAILURE, None):
+        return False
+    return not retry_failed
+
+
+# --- progress --------------------------------------------------------------------------------
+
+class Progress:
+    """A bar on a terminal (done / failed / ETA), else a line per file."""
+
+    def __init__(self, total, stream=None, quiet=False):
+        self.stream = stream or sys.stderr
+        self.tty = self.stream.isatty()
+        self.total = total
+        self.quiet = quiet
+        self.done = 0
+        self.failed = 0
+        self.start = time.monotonic()
+        self.to_do = total
+
+    def skipped(self, n):
+        self.done += n
+        self.to_do = self.total - self.done
+        if n and not self.quiet:
+            self._print("subd2nurbs-batch: %d of %d files unchanged since the last run, skipped" % (n, self.total))
+
+    def _print(self, line):
+        if self.tty:
+            self.stream.write("\r\033[K")
+        self.stream.write(line + "\n")
+        self.stream.flush()
+
+    def file(self, input_path, row):
+        self.done += 1
+        ok = row["status"] == "ok"
+        self.failed += not ok
+        if self.quiet:
+            return
+        if self.tty:
+            if not ok:
+                self._print("subd2nurbs-batch: %s: %s: %s" % (input_path, row["status"], row["message"]))
+            converted = self.done - (self.total - self.to_do)
+            elapsed = time.monotonic() - self.start
+            left = self.total - self.done
+            eta = elapsed / converted * left if converted else 0
+            width = 30
+            filled = int(width * self.done / max(1, self.total))
+            self.stream.write("\r\033[K[%s%s] %d/%d done, %d failed, ETA %d:%02d" % (
+                "#" * filled, "." * (width - filled), self.done, self.total, self.failed, eta // 60, eta % 60))
+            self.stream.flush()
+        else:
+            self.stream.write("subd2nurbs-batch: [%d/%d] %s %s%s\n" % (
+                self.done, self.total, row["status"], input_path,
+                "" if ok else ": " + row["message"]))
+            self.stream.flush()
+
+    def finish(self):
+        if self.tty and not self.quiet:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+# --- the backends ----------------------------------------------------------------------------
+
+class LocalPool:
+    """Threads of this process, each running one converter process at a time."""
+
+    name = "local"
+
+    def __init__(self, workers):
+        from concurrent.futures import ThreadPoolExecutor
+        self.workers = workers
+        self.executor = ThreadPoolExecutor(max_workers=workers)
+
+    def run(self, tasks):
+        from concurrent.futures import as_completed
+        futures = {self.executor.submit(convert_one, task): key for key, task in tasks}
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+
+    def interrupt(self):
+        self.executor.shutdown(wait=False, cancel_futures=True)
+        terminate_running()
+
+    def close(self):
+        self.executor.shutdown(wait=True)
+
+
+def _import_distributed():
+    try:
+        import distributed
+        return distributed
+    except ImportError:
+        raise BatchError("--scheduler and --dask-local need Dask's distributed package: "
+                         "apt-get install python3-distributed (or pip install distributed)") from None
+
+
+class DaskBackend:
+    """The same tasks on a Dask cluster: a scheduler's address, or a local cluster of `local`
+    worker processes with one thread each. The files are read and written by the workers on a
+    shared path; the rows come back. A lost worker's tasks are run again by Dask on another."""
+
+    name = "dask"
+
+    def __init__(self, scheduler=None, local=0):
+        distributed = _import_distributed()
+        self.cluster = None
+        if scheduler:
+            self.client = distributed.Client(scheduler, timeout="60s")
+        else:
+            self.cluster = distributed.LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
+                                                    dashboard_address=None)
+            self.client = distributed.Client(self.cluster)
+        self.futures = []
+
+    def run(self, tasks):
+        from distributed import as_completed
+        keys = {}
+        for key, task in tasks:
+            # A key of the task's content: the same file and settings is the same task (pure).
+            digest = hashlib.sha256(json.dumps(task, sort_keys=True).encode()).hexdigest()[:24]
+            future = self.client.submit(convert_one, task, key="subd2nurbs-convert-" + digest, pure=False,
+                                        retries=1)
+            keys[future.key] = key
+            self.futures.append(future)
+        for future in as_completed(self.futures):
+            yield keys[future.key], future.result()
+
+    def interrupt(self):
+        try:
+            self.client.cancel(self.futures)
+        except Exception:
+            pass
+
+    def close(self):
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+# --- the run ---------------------------------------------------------------------------------
+
+def find_cli(cli=None):
+    """The converter: `cli`, $SUBD2NURBS_CLI, or subd2nurbs on PATH."""
+    cli = cli or os.environ.get("SUBD2NURBS_CLI") or shutil.which("subd2nurbs")
+    if not cli:
+        raise BatchError("cannot find the subd2nurbs command line: put it on PATH, set SUBD2NURBS_CLI or use --cli")
+    return os.path.abspath(cli) if os.path.sep in cli else cli
+
+
+def default_memory(workers):
+    """The address-space limit per file: the machine's memory shared by the workers."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError):
+        return 0
+    return total // max(1, workers)
+
+
+def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers=None, dask_local=0,
+        output_format="step", timeout=0, memory=None, retry_failed=False, force=False, cli=None, progress=None,
+        quiet=True):
+    """Converts every file of `inputs` (folders, searched recursively, or files) and of
+    `manifest` (CSV or JSON) into `outdir`, mirroring the input tree, and writes
+    outdir/summary.json and summary.csv. `settings`: {name: value} of docs/settings.md for every
+    file (a manifest row overrides them). `scheduler`: a Dask scheduler address
+    (``tcp://host:port``), or None for the local pool of `workers` processes (default: one per
+    core); `dask_local`: a local Dask cluster of that many workers instead. `timeout` (s) and
+    `memory` (bytes or "2G"; default the machine's memory / workers; 0: no limit) bound each
+    file. Returns the :class:`Summary`. KeyboardInterrupt stops the converters, writes the
+    summary of what is done (the rest "interrupted") and is raised again."""
+    rows = settings_rows()
+    if output_format not in FORMATS:
+        raise BatchError("unknown output format %r (%s)" % (output_format, ", ".join(FORMATS)))
+    jobs = collect_jobs(inputs, settings, output_format, manifest, rows)
+    cli = find_cli(cli)
+    if not workers:
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    memory = default_memory(dask_local or workers) if memory is None else memory_bytes(memory)
+    os.makedirs(outdir, exist_ok=True)
+    outdir = os.path.abspath(outdir)
+    base_settings = normalized_settings(settings, rows)
+
+    _stopping.clear()
+    previous = {} if force else _previous_rows(outdir)
+    results = [None] * len(jobs)
+    tasks = []
+    for i, job in enumerate(jobs):
+        args = settings_args(job.settings, rows)
+        if memory and "max_memory" not in job.settings:
+            args += ["--max-memory", str(memory * 3 // 4)]  # refused by estimate before the OS limit
+        row = {"input": job.input, "output": job.output, "report": job.report, "status": None,
+               "input_hash": file_hash(job.input) if os.path.isfile(job.input) else None,
+               "settings_hash": settings_hash(job.settings, output_format)}
+        if job.settings != base_settings:
+            row["settings"] = job.settings
+        prev = previous.get(job.output)
+        if _resumable(prev, row, outdir, retry_failed):
+            results[i] = dict(prev, input=job.input)
+            continue
+        results[i] = row
+        tasks.append((i, {"cli": cli, "input": os.path.abspath(job.input),
+                          "output": os.path.join(outdir, job.output), "report": os.path.join(outdir, job.report),
+                          "args": args, "timeout": timeout, "memory": memory}))
+
+    skipped = len(jobs) - len(tasks)
+    if progress is None:
+        progress = Progress(len(jobs), quiet=quiet)
+    progress.skipped(skipped)
+    journal_path = os.path.join(outdir, JOURNAL)
+    if not previous and os.path.exists(journal_path):
+        os.remove(journal_path)
+    backend = None
+    interrupted = False
+    try:
+        if tasks:
+            if scheduler or dask_local:
+                backend = DaskBackend(scheduler, dask_local)
+            else:
+                backend = LocalPool(workers)
+        with open(journal_path, "a", encoding="utf-8") as journal:
+            try:
+                for i, outcome in (backend.run(tasks) if backend else ()):
+                    row = results[i]
+                    row.update(outcome)
+                    if row["status"] != INTERRUPTED:
+                        journal.write(json.dumps(row) + "\n")
+                        journal.flush()
+                    progress.file(row["input"], row)
+            except KeyboardInterrupt:
+                interrupted = True
+                if backend:
+                    backend.interrupt()
+    finally:
+        progress.finish()
+        for row in results:
+            if row["status"] is None:
+                row.update(status=INTERRUPTED, message="the batch was interrupted before this file")
+        summary = Summary(results, base_settings, output_format, len(tasks) - sum(
+            r["status"] == INTERRUPTED for r in results), skipped, interrupted,
+            backend.name if backend else "none")
+        summary.write(outdir)
+        if not interrupted:
+            try:
+                os.remove(journal_path)
+            except OSError:
+                pass
+        if backend:
+            try:
+                backend.close()
+            except Exception:
+                pass
+    if interrupted:
+        raise KeyboardInterrupt
+    return summary
+
+
+# --- the command line ------------------------------------------------------------------------
+
+def _parser(rows):
+    p = argparse.ArgumentParser(
+        prog="subd2nurbs-batch",
+        description="Convert a library of cages and meshes with subd2nurbs convert, each file in a process of "
+                    "its own with a time and memory limit; writes OUTDIR/summary.json and summary.csv.",
+        epilog="Exit codes: 0 every file converted, 1 usage error, 2 some files failed (see the summary), "
+               "130 interrupted (run again to resume).")
+    p.add_argument("inputs", nargs="*", metavar="INPUT", help="folders (searched recursively for %s) or files"
+                   % " ".join(EXTENSIONS))
+    p.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="output folder (mirrors the input tree)")
+    p.add_argument("--manifest", metavar="FILE", help="CSV or JSON list: input, output, per-file settings")
+    p.add_argument("--format", default="step", choices=FORMATS, help="output format (default step)")
+    p.add_argument("--workers", type=int, metavar="N", help="local converter processes (default: one per core)")
+    p.add_argument("--timeout", type=float, default=0, metavar="S", help="wall-time limit per file (0: none)")
+    p.add_argument("--memory-limit", metavar="SIZE",
+                   help="address-space limit per file, e.g. 4G (default: the machine's memory / workers; 0: none)")
+    p.add_argument("--retry-failed", action="store_true", help="convert again the files that failed last time")
+    p.add_argument("--force", action="store_true", help="convert every file, ignoring the last run")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler's workers")
+    p.add_argument("--dask-local", type=int, default=0, metavar="N", help="run on a local Dask cluster of N workers")
+    p.add_argument("--cli", metavar="PATH", help="the subd2nurbs command line (default $SUBD2NURBS_CLI or PATH)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+    g = p.add_argument_group("conversion settings (those of subd2nurbs convert, docs/settings.md)")
+    for name, row in rows.items():
+        if row["type"] == "flag":
+            g.add_argument(row["cli"], dest="setting_" + name, action="store_true", help=row["help"])
+        else:
+            g.add_argument(row["cli"], dest="setting_" + name, metavar="VALUE", help=row["help"])
+    return p
+
+
+def main(argv=None):
+    try:
+        rows = settings_rows()
+    except ImportError as e:
+        sys.stderr.write("subd2nurbs-batch: cannot load the subd2nurbs module: %s\n" % e)
+        return 1
+    args = _parser(rows).parse_args(argv)
+    settings = {name: getattr(args, "setting_" + name) for name in rows}
+    settings = {k: v for k, v in settings.items() if v not in (None, False)}
+    if args.scheduler and args.dask_local:
+        sys.stderr.write("subd2nurbs-batch: --scheduler and --dask-local exclude each other\n")
+        return 1
+    if not args.inputs and not args.manifest:
+        sys.stderr.write("subd2nurbs-batch: no input: give folders or files, or --manifest\n")
+        return 1
+    try:
+        summary = run(args.inputs, args.output, settings, args.scheduler, manifest=args.manifest,
+                      workers=args.workers, dask_local=args.dask_local, output_format=args.format,
+                      timeout=args.timeout, memory=args.memory_limit, retry_failed=args.retry_failed,
+                      force=args.force, cli=args.cli, quiet=args.quiet)
+    except BatchError as e:
+        sys.stderr.write("subd2nurbs-batch: %s\n" % e)
+        return 1
+    except KeyboardInterrupt:
+        sys.stderr.write("subd2nurbs-batch: interrupted; the summary lists what is done; run the same command "
+                         "again to convert the rest\n")
+        return 130
+    if not args.quiet:
+        sys.stderr.write("subd2nurbs-batch: %d files: %s; %d converted, %d skipped; summary in %s\n" % (
+            len(summary.files), ", ".join("%d %s" % (n, s) for s, n in sorted(summary.counts.items())),
+            summary.converted, summary.skipped, os.path.join(args.output, "summary.json")))
+    return 0 if summary.failed == 0 else 2
+
+
+if __name__ == "__main__":
+    # Through the package's module, not __main__: Dask pickles convert_one by its module name.
+    from subd2nurbs.batch import main as _main
+    sys.exit(_main())

@@ -1,0 +1,415 @@
+"""subd2nurbs.batch (issue #30): a library converted file by file, each in a process of its own.
+
+Oracles: the corpus' known non-manifold shapes (tests/common/corpus.h) fail with the exit code of
+invalid input and every other shape converts; hand-made hostile files fail with the exit codes
+docs (subd2nurbs --help) gives them; a converted file is byte-identical to a plain
+`subd2nurbs convert` of the same file (SOURCE_DATE_EPOCH fixes the STEP time stamp) and its
+summary row holds the numbers of that run's report; a converter that hangs is killed at the time
+limit (its process is gone afterwards); an interrupted run resumed converts exactly the files the
+first one had not finished and ends with the outputs of an uninterrupted run.
+
+Environment: SUBD2NURBS_CLI (the command line), SUBD2NURBS_CORPUS_DIR, PYTHONPATH (build/python).
+"""
+import csv
+import filecmp
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+from subd2nurbs import batch
+
+CLI = os.environ["SUBD2NURBS_CLI"]
+CORPUS = os.environ["SUBD2NURBS_CORPUS_DIR"]
+HERE = os.path.dirname(os.path.abspath(__file__))
+EPOCH = "1700000000"
+# Cheap settings for the many runs of the tests: the coarsest level, B-rep and report as usual.
+FAST = {"level": 0}
+
+
+def non_manifold_shapes():
+    """The corpus shapes the converter must refuse as invalid input (tests/common/corpus.h)."""
+    with open(os.path.join(HERE, "..", "common", "corpus.h"), encoding="utf-8") as f:
+        names = re.findall(r'\{"(catmark_\w+)", MeshErrorCode::', f.read())
+    assert len(names) >= 5, names
+    return set(names)
+
+
+# Hostile files and the exit code `subd2nurbs --help` documents for them.
+HOSTILE = {
+    "hostile/empty.obj": ("", 2),
+    "hostile/bad_index.obj": ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n", 2),
+    "hostile/garbage.obj": ("v 0 zero 0\nf 1 2 3\n", 2),
+    "hostile/nested/non_manifold.obj": (
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 0 1 1\n"
+        "f 1 2 3 4\nf 1 4 6 5\nf 1 4 3 2\n", 2),
+    "hostile/binary.stl": ("\x00\x01\x02solid nonsense" * 3, 2),
+}
+
+
+def make_tree(root):
+    """root/corpus/*.obj (the 87 shapes) and root/hostile/... (HOSTILE)."""
+    shutil.copytree(CORPUS, os.path.join(root, "corpus"), ignore=shutil.ignore_patterns("*.md", "*.txt"))
+    for rel, (text, _) in HOSTILE.items():
+        path = os.path.join(root, rel)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "w", encoding="latin-1") as f:
+            f.write(text)
+
+
+def env():
+    e = dict(os.environ, SOURCE_DATE_EPOCH=EPOCH)
+    return e
+
+
+def batch_command(*args):
+    return [sys.executable, "-m", "subd2nurbs.batch", "--cli", CLI] + list(args)
+
+
+def stable(row):
+    """A summary row without what differs between runs: time, memory, where the input tree lies
+    (also in the messages)."""
+    rel = os.path.splitext(row["output"])[0] + os.path.splitext(row["input"])[1]  # ROOT/rel is the input
+    root = row["input"][:len(row["input"]) - len(rel)]
+    out = {k: v for k, v in row.items() if k not in ("time_s", "peak_memory_mb", "input")}
+    out["message"] = out["message"].replace(root, "ROOT/")[:300]  # cut at 500 characters with the root
+    return out
+
+
+def outputs(outdir):
+    """Relative paths of the converted files (not reports, summaries or journals)."""
+    found = []
+    for folder, _, files in os.walk(outdir):
+        for name in files:
+            if name.endswith(".step"):
+                found.append(os.path.relpath(os.path.join(folder, name), outdir))
+    return sorted(found)
+
+
+def wait_for(predicate, what, timeout=300):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.1)
+    raise AssertionError("gave up waiting for " + what)
+
+
+def journal_lines(outdir):
+    try:
+        with open(os.path.join(outdir, batch.JOURNAL), encoding="utf-8") as f:
+            return sum(1 for line in f if line.endswith("\n"))
+    except OSError:
+        return 0
+
+
+SHARED = {}
+
+
+def setUpModule():
+    """One uninterrupted local run over corpus + hostile files, shared by the tests."""
+    os.environ["SOURCE_DATE_EPOCH"] = EPOCH
+    tmp = tempfile.mkdtemp(prefix="s2n-batch-")
+    inputs = os.path.join(tmp, "in")
+    make_tree(inputs)
+    reference = os.path.join(tmp, "reference")
+    summary = batch.run([inputs], reference, FAST, workers=2, cli=CLI, timeout=300)
+    SHARED.update(tmp=tmp, inputs=inputs, reference=reference, summary=summary)
+
+
+def tearDownModule():
+    shutil.rmtree(SHARED["tmp"], ignore_errors=True)
+
+
+class BatchTestCase(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        for key, value in SHARED.items():
+            setattr(cls, key, value)
+
+    def reference_json(self):
+        with open(os.path.join(self.reference, "summary.json"), encoding="utf-8") as f:
+            return json.load(f)
+
+
+class LocalPool(BatchTestCase):
+    def test_status_of_every_file(self):
+        refused = non_manifold_shapes()
+        rows = {r["output"]: r for r in self.summary.files}
+        corpus = sorted(n for n in os.listdir(CORPUS) if n.endswith(".obj"))
+        self.assertEqual(len(corpus), 87)
+        self.assertEqual(len(rows), 87 + len(HOSTILE))
+        for name in corpus:
+            stem = name[:-4]
+            row = rows[os.path.join("corpus", stem + ".step")]
+            if stem in refused:
+                self.assertEqual((row["status"], row["exit_code"]), ("invalid-input", 2), row)
+                self.assertIn(name, row["message"])  # the message names the file
+            else:
+                self.assertEqual((row["status"], row["exit_code"]), ("ok", 0), row)
+        for rel, (_, code) in HOSTILE.items():
+            row = rows[os.path.splitext(rel)[0] + ".step"]
+            self.assertEqual(row["exit_code"], code, row)
+            self.assertEqual(row["status"], batch.EXIT_CLASSES[code], row)
+            self.assertFalse(os.path.exists(os.path.join(self.reference, row["output"])), row)
+        self.assertEqual(self.summary.counts, {"ok": 87 - len(refused), "invalid-input": len(refused) + len(HOSTILE)})
+
+    def test_summary_files(self):
+        data = self.reference_json()
+        self.assertEqual(data["format"], "subd2nurbs-batch-summary")
+        self.assertEqual([r["output"] for r in data["files"]], [r["output"] for r in self.summary.files])
+        with open(os.path.join(self.reference, "summary.csv"), newline="", encoding="utf-8") as f:
+            table = list(csv.DictReader(f))
+        self.assertEqual(len(table), len(data["files"]))
+        for line, row in zip(table, data["files"]):
+            self.assertEqual(line["status"], row["status"])
+            self.assertEqual(line["input_hash"], row["input_hash"])
+            self.assertEqual(line["exit_code"], str(row["exit_code"]))
+        # The hash is the input's SHA-256.
+        import hashlib
+        first = data["files"][0]
+        with open(first["input"], "rb") as f:
+            self.assertEqual(first["input_hash"], "sha256:" + hashlib.sha256(f.read()).hexdigest())
+
+    def test_outputs_equal_plain_convert(self):
+        """Mirrored tree; the output byte-identical to a plain `subd2nurbs convert` and the
+        summary's numbers those of its report."""
+        plain = os.path.join(self.tmp, "plain")
+        os.makedirs(plain, exist_ok=True)
+        for stem in ("catmark_cube", "catmark_torus", "catmark_pole8"):
+            out, rep = os.path.join(plain, stem + ".step"), os.path.join(plain, stem + ".json")
+            subprocess.run([CLI, "convert", os.path.join(CORPUS, stem + ".obj"), "-o", out, "--report", rep,
+                            "-q", "--level", "0"], check=True, env=env())
+            ours = os.path.join(self.reference, "corpus", stem + ".step")
+            self.assertTrue(filecmp.cmp(out, ours, shallow=False), stem)
+            with open(rep, encoding="utf-8") as f:
+                report = json.load(f)
+            row = next(r for r in self.summary.files if r["output"] == os.path.join("corpus", stem + ".step"))
+            self.assertEqual(row["faces"], report["faces"]["total"])
+            self.assertEqual(row["poles"], report["faces"]["poles"])
+            self.assertEqual(row["deviation"], report["deviation"]["max"])
+            self.assertEqual(row["g1_angle_deg"], report["continuity"]["max_normal_angle_deg"])
+            self.assertGreater(row["peak_memory_mb"], 1)
+            self.assertTrue(os.path.exists(os.path.join(self.reference, row["report"])))
+
+    def test_resume_skips_unchanged(self):
+        """A second run into a copy converts nothing and has the same rows; per-file settings of
+        a manifest; --retry-failed converts again exactly the files that failed."""
+        again = os.path.join(self.tmp, "again")
+        shutil.copytree(self.reference, again)
+        s = batch.run([self.inputs], again, FAST, workers=2, cli=CLI)
+        self.assertEqual((s.converted, s.skipped), (0, len(s.files)))
+        self.assertEqual([stable(r) for r in s.files], [stable(r) for r in self.summary.files])
+        # Another setting: every file again (here only two files, through a manifest).
+        manifest = os.path.join(self.inputs, "two.csv")
+        with open(manifest, "w", encoding="utf-8") as f:
+            f.write("input,output,level,max_faces\ncorpus/catmark_cube.obj,,,\n"
+                    "corpus/catmark_torus.obj,torus_small.step,1,10\n")
+        m = batch.run([], os.path.join(self.tmp, "manifest"), FAST, manifest=manifest, workers=2, cli=CLI)
+        rows = {r["output"]: r for r in m.files}
+        self.assertEqual(rows["corpus/catmark_cube.step"]["status"], "ok")
+        # max_faces 10: refused by the resource limits, exit code 1.
+        self.assertEqual((rows["torus_small.step"]["status"], rows["torus_small.step"]["exit_code"]), ("usage", 1))
+        self.assertEqual(rows["torus_small.step"]["settings"], {"level": "1", "max_faces": "10"})
+        # Failed files are skipped unless --retry-failed.
+        failed = sum(r["status"] != "ok" for r in s.files)
+        s2 = batch.run([self.inputs], again, FAST, workers=2, cli=CLI, retry_failed=True)
+        self.assertEqual(s2.converted, failed)
+
+    def test_unknown_setting_refused(self):
+        with self.assertRaisesRegex(batch.BatchError, "unknown setting 'levle'"):
+            batch.run([self.inputs], os.path.join(self.tmp, "x"), {"levle": 1}, cli=CLI)
+
+
+FAKE_CONVERTER = """#!/bin/sh
+# The real converter, except for inputs named hang* (sleeps) and crash* (dies of SIGSEGV).
+case "$(basename "$2")" in
+  hang*) echo $$ >> "{pids}"; exec sleep 1000 ;;
+  crash*) kill -SEGV $$ ;;
+esac
+exec "{cli}" "$@"
+"""
+
+
+class Limits(unittest.TestCase):
+    def test_hang_killed_crash_classified(self):
+        tmp = tempfile.mkdtemp(prefix="s2n-batch-limits-")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        inputs = os.path.join(tmp, "in")
+        os.makedirs(inputs)
+        for name in ("hang1.obj", "hang2.obj", "crash.obj", "cube.obj"):
+            shutil.copy(os.path.join(CORPUS, "catmark_cube.obj"), os.path.join(inputs, name))
+        pids = os.path.join(tmp, "pids")
+        fake = os.path.join(tmp, "fake-subd2nurbs")
+        with open(fake, "w", encoding="utf-8") as f:
+            f.write(FAKE_CONVERTER.replace("{pids}", pids).replace("{cli}", CLI))
+        os.chmod(fake, 0o755)
+        s = batch.run([inputs], os.path.join(tmp, "out"), FAST, workers=2, cli=fake, timeout=2)
+        rows = {r["output"]: r for r in s.files}
+        self.assertEqual(rows["hang1.step"]["status"], "timeout")
+        self.assertEqual(rows["hang2.step"]["status"], "timeout")
+        self.assertEqual(rows["crash.step"]["status"], "crash")
+        self.assertIn("SIGSEGV", rows["crash.step"]["message"])
+        self.assertEqual(rows["cube.step"]["status"], "ok")
+        with open(pids, encoding="utf-8") as f:
+            hung = [int(line) for line in f]
+        self.assertEqual(len(hung), 2)
+        for pid in hung:  # killed, not left running
+            with self.assertRaises(ProcessLookupError):
+                os.kill(pid, 0)
+
+    def test_memory_limit(self):
+        """An address-space limit too small for the conversion (the car needs about 300 MB of
+        address space at level 0) fails that file only, as out of memory (exit code 4); the
+        converter's own estimate is set out of the way (max_memory 1G)."""
+        tmp = tempfile.mkdtemp(prefix="s2n-batch-mem-")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        s = batch.run([os.path.join(CORPUS, "catmark_car.obj"), os.path.join(CORPUS, "catmark_cube.obj")], tmp,
+                      dict(FAST, max_memory="1G"), workers=1, cli=CLI, memory="120M")
+        car, cube = s.files
+        self.assertEqual((car["status"], car["exit_code"]), ("out-of-memory", 4), car)
+        self.assertFalse(os.path.exists(os.path.join(tmp, "catmark_car.step")))
+        self.assertEqual(cube["status"], "ok", cube)
+
+
+# The slowest shapes (over 0.5 s each), left out of the runs that compare backends and resume
+# (two thirds of the time).
+HEAVY = ("catmark_pole360", "catmark_rook", "catmark_car", "catmark_bishop", "catmark_lefthanded",
+         "catmark_smoothtris0", "catmark_smoothtris1", "catmark_pole64", "catmark_pawn", "catmark_helmet",
+         "catmark_righthanded", "catmark_chaikin1", "catmark_val2_foldover", "catmark_xord_interior",
+         "catmark_gregory_test7")
+
+
+def light_tree(root):
+    """The shared input tree without HEAVY (same relative paths)."""
+    if not os.path.isdir(root):
+        shutil.copytree(SHARED["inputs"], root, ignore=shutil.ignore_patterns(*[h + ".obj" for h in HEAVY]))
+    return root
+
+
+def check_like_reference(test, outdir, files):
+    """The rows of a run over the light tree are the reference run's; its outputs are
+    byte-identical to the reference's."""
+    reference = {r["output"]: stable(r) for r in test.reference_json()["files"]}
+    test.assertEqual(len(files), len(reference) - len(HEAVY))
+    for row in files:
+        test.assertEqual(stable(row), reference[row["output"]])
+    for rel in outputs(outdir):
+        test.assertTrue(filecmp.cmp(os.path.join(outdir, rel), os.path.join(test.reference, rel), shallow=False), rel)
+    test.assertEqual(len(outputs(outdir)), sum(r["status"] == "ok" for r in files))
+
+
+def dask_program(name):
+    path = shutil.which(name) or os.path.join(os.path.dirname(sys.executable), name)
+    if not os.path.exists(path):
+        raise AssertionError("%s not found: install python3-distributed (scripts/bootstrap.sh)" % name)
+    return path
+
+
+class Dask(BatchTestCase):
+    """A real cluster on 127.0.0.1: dask-scheduler and 2 dask-workers (no nanny, one thread
+    each), on ports the scheduler picks (--port 0, the address read from its scheduler file)."""
+
+    @classmethod
+    def setUpClass(cls):
+        super().setUpClass()
+        cls.cluster = tempfile.mkdtemp(prefix="s2n-dask-")
+        cls.scheduler_file = os.path.join(cls.cluster, "scheduler.json")
+        cls.logs = []
+        cls.procs = {}
+        worker_env = dict(os.environ, SOURCE_DATE_EPOCH=EPOCH)
+        cls.procs["scheduler"] = cls.start(
+            [dask_program("dask-scheduler"), "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+             "--scheduler-file", cls.scheduler_file], worker_env)
+        wait_for(lambda: os.path.exists(cls.scheduler_file), "the scheduler file", 120)
+        for name in ("w1", "w2"):
+            cls.procs[name] = cls.start(
+                [dask_program("dask-worker"), "--scheduler-file", cls.scheduler_file, "--nthreads", "1",
+                 "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--name", name,
+                 "--local-directory", os.path.join(cls.cluster, name)], worker_env)
+        import distributed
+        with distributed.Client(scheduler_file=cls.scheduler_file, timeout="120s") as client:
+            client.wait_for_workers(2, timeout=120)
+            cls.address = client.scheduler.address
+
+    @classmethod
+    def start(cls, command, environment):
+        log = open(os.path.join(cls.cluster, os.path.basename(command[0]) + "-%d.log" % len(cls.logs)), "w")
+        cls.logs.append(log)
+        return subprocess.Popen(command, env=environment, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+
+    @classmethod
+    def tearDownClass(cls):
+        for proc in reversed(list(cls.procs.values())):
+            if proc.poll() is None:
+                proc.terminate()
+        for proc in cls.procs.values():
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        for log in cls.logs:
+            log.close()
+        shutil.rmtree(cls.cluster, ignore_errors=True)
+
+    def test_1_same_as_local_pool(self):
+        out = os.path.join(self.tmp, "dask")
+        s = batch.run([light_tree(os.path.join(self.tmp, "light"))], out, FAST, scheduler=self.address, cli=CLI)
+        self.assertEqual(s.backend, "dask")
+        self.assertEqual(s.converted, len(s.files))
+        check_like_reference(self, out, s.files)
+
+    def test_2_lost_worker(self):
+        """SIGKILL to one worker mid-run: its task runs again on the other; every file done."""
+        out = os.path.join(self.tmp, "dask-lost")
+        args = batch_command(light_tree(os.path.join(self.tmp, "light")), "-o", out, "--scheduler", self.address,
+                             "--level", "0")
+        run = subprocess.Popen(args, env=env(), stderr=subprocess.DEVNULL)
+        wait_for(lambda: journal_lines(out) >= 10 or run.poll() is not None, "10 files converted")
+        self.assertIsNone(run.poll(), "the batch ended before the worker was killed")
+        self.procs["w1"].kill()
+        self.procs["w1"].wait()
+        self.assertEqual(run.wait(timeout=600), 2)  # some inputs fail, as in the reference
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            data = json.load(f)
+        self.assertEqual(data["run"]["converted"], len(data["files"]))
+        check_like_reference(self, out, data["files"])
+
+
+class Interrupt(BatchTestCase):
+    def test_sigint_then_resume(self):
+        out = os.path.join(self.tmp, "interrupted")
+        light = light_tree(os.path.join(self.tmp, "light"))
+        args = batch_command(light, "-o", out, "--workers", "2", "--level", "0")
+        first = subprocess.Popen(args, env=env(), stderr=subprocess.DEVNULL)
+        wait_for(lambda: journal_lines(out) >= 20 or first.poll() is not None, "20 files converted")
+        self.assertIsNone(first.poll(), "the batch ended before it was interrupted")
+        first.send_signal(signal.SIGINT)
+        self.assertEqual(first.wait(timeout=120), 130)
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            part = json.load(f)
+        self.assertTrue(part["run"]["interrupted"])
+        left = [r["output"] for r in part["files"] if r["status"] == "interrupted"]
+        self.assertTrue(left)
+        # No temporary file of a killed converter is left behind.
+        leftovers = [n for _, _, files in os.walk(out) for n in files if n.endswith(".tmp")]
+        self.assertEqual(leftovers, [])
+        second = subprocess.run(args, env=env(), stderr=subprocess.DEVNULL)
+        self.assertEqual(second.returncode, 2)  # some inputs fail, as in the reference
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            final = json.load(f)
+        self.assertEqual(final["run"]["converted"], len(left))
+        self.assertEqual(final["run"]["skipped"], len(final["files"]) - len(left))
+        check_like_reference(self, out, final["files"])
+
+
+if __name__ == "__main__":
+    unittest.main()
