@@ -12,6 +12,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libosd-dev                       # OpenSubdiv: the Catmull-Clark oracle in tests and benchmarks
   pybind11-dev python3-dev python3-numpy   # the Python module (built for /usr/bin/python3)
+  python3-distributed              # Dask: subd2nurbs-batch --scheduler / --dask-local and its tests
   # OCCT 7.6 (target subd2nurbs::occt). data-exchange-dev pulls in ocaf-dev and
   # visualization-dev, whose CMake targets OCCT's DataExchange config insists on;
   # libtbb-dev because the OCCT targets link /usr/lib/x86_64-linux-gnu/libtbb.so by path.

@@ -622,7 +622,10 @@ class DaskBackend:
         distributed = _import_distributed()
         self.cluster = None
         if scheduler:
-            self.client = distributed.Client(scheduler, timeout="60s")
+            try:
+                self.client = distributed.Client(scheduler, timeout="60s")
+            except (OSError, TimeoutError) as e:
+                raise BatchError("cannot reach the Dask scheduler at %s: %s" % (scheduler, e)) from None
         else:
             self.cluster = distributed.LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
                                                     dashboard_address=None)
@@ -682,17 +685,22 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
     file (a manifest row overrides them). `scheduler`: a Dask scheduler address
     (``tcp://host:port``), or None for the local pool of `workers` processes (default: one per
     core); `dask_local`: a local Dask cluster of that many workers instead. `timeout` (s) and
-    `memory` (bytes or "2G"; default the machine's memory / workers; 0: no limit) bound each
-    file. Returns the :class:`Summary`. KeyboardInterrupt stops the converters, writes the
+    `memory` (bytes or "2G"; default the machine's memory / workers, none on a remote
+    cluster; 0: no limit) bound each file. Returns the :class:`Summary`. KeyboardInterrupt stops the converters, writes the
     summary of what is done (the rest "interrupted") and is raised again."""
     rows = settings_rows()
+    if scheduler or dask_local:
+        _import_distributed()  # before any work: says how to install it
     if output_format not in FORMATS:
         raise BatchError("unknown output format %r (%s)" % (output_format, ", ".join(FORMATS)))
     jobs = collect_jobs(inputs, settings, output_format, manifest, rows)
     cli = find_cli(cli)
     if not workers:
         workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    memory = default_memory(dask_local or workers) if memory is None else memory_bytes(memory)
+    if memory is None:  # a remote worker's converter keeps its own default (3/4 of its memory)
+        memory = 0 if scheduler else default_memory(dask_local or workers)
+    else:
+        memory = memory_bytes(memory)
     os.makedirs(outdir, exist_ok=True)
     outdir = os.path.abspath(outdir)
     base_settings = normalized_settings(settings, rows)
@@ -788,7 +796,8 @@ def _parser(rows):
     p.add_argument("--workers", type=int, metavar="N", help="local converter processes (default: one per core)")
     p.add_argument("--timeout", type=float, default=0, metavar="S", help="wall-time limit per file (0: none)")
     p.add_argument("--memory-limit", metavar="SIZE",
-                   help="address-space limit per file, e.g. 4G (default: the machine's memory / workers; 0: none)")
+                   help="address-space limit per file, e.g. 4G (default: the machine's memory / workers; none with "
+                        "--scheduler; 0: none)")
     p.add_argument("--retry-failed", action="store_true", help="convert again the files that failed last time")
     p.add_argument("--force", action="store_true", help="convert every file, ignoring the last run")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler's workers")
@@ -804,6 +813,10 @@ def _parser(rows):
     return p
 
 
+def _stop_on_signal(signum, frame):
+    raise KeyboardInterrupt
+
+
 def main(argv=None):
     try:
         rows = settings_rows()
@@ -811,6 +824,7 @@ def main(argv=None):
         sys.stderr.write("subd2nurbs-batch: cannot load the subd2nurbs module: %s\n" % e)
         return 1
     args = _parser(rows).parse_args(argv)
+    signal.signal(signal.SIGTERM, _stop_on_signal)  # as Ctrl-C: stop the converters, write the summary
     settings = {name: getattr(args, "setting_" + name) for name in rows}
     settings = {k: v for k, v in settings.items() if v not in (None, False)}
     if args.scheduler and args.dask_local:

@@ -188,6 +188,8 @@ class LocalPool(BatchTestCase):
                             "-q", "--level", "0"], check=True, env=env())
             ours = os.path.join(self.reference, "corpus", stem + ".step")
             self.assertTrue(filecmp.cmp(out, ours, shallow=False), stem)
+            with open(ours, encoding="utf-8") as f:  # SOURCE_DATE_EPOCH 1700000000, in UTC
+                self.assertIn("'2023-11-14T22:13:20'", f.read(1000))
             with open(rep, encoding="utf-8") as f:
                 report = json.load(f)
             row = next(r for r in self.summary.files if r["output"] == os.path.join("corpus", stem + ".step"))
@@ -221,6 +223,23 @@ class LocalPool(BatchTestCase):
         failed = sum(r["status"] != "ok" for r in s.files)
         s2 = batch.run([self.inputs], again, FAST, workers=2, cli=CLI, retry_failed=True)
         self.assertEqual(s2.converted, failed)
+
+    def test_dask_missing(self):
+        """Without Dask's distributed package the local pool works and --scheduler says how to
+        install it."""
+        saved = sys.modules.get("distributed")
+        sys.modules["distributed"] = None  # import distributed raises ImportError
+        try:
+            with self.assertRaisesRegex(batch.BatchError, "apt-get install python3-distributed"):
+                batch.run([os.path.join(CORPUS, "catmark_cube.obj")], os.path.join(self.tmp, "nodask"), FAST,
+                          scheduler="tcp://127.0.0.1:1", cli=CLI)
+            s = batch.run([os.path.join(CORPUS, "catmark_cube.obj")], os.path.join(self.tmp, "nodask"), FAST, cli=CLI)
+            self.assertEqual(s.counts, {"ok": 1})
+        finally:
+            if saved is None:
+                del sys.modules["distributed"]
+            else:
+                sys.modules["distributed"] = saved
 
     def test_unknown_setting_refused(self):
         with self.assertRaisesRegex(batch.BatchError, "unknown setting 'levle'"):

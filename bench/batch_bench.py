@@ -1,0 +1,141 @@
+#!/usr/bin/python3
+"""Throughput of subd2nurbs-batch (issue #30): files per minute on a folder of models with the
+local pool of 1 and 2 workers and a Dask cluster of 2 workers (dask-scheduler + 2 dask-workers on
+127.0.0.1, one thread each, started here), against a plain loop of `subd2nurbs convert IN -o
+OUT.step --report OUT.json -q` over the same files (the same work, one process at a time).
+
+Every configuration runs REPEATS times, the configurations interleaved; medians of the wall
+time. Peak memory: the largest converter process (its maximum resident set, from the summary's
+peak_memory_mb or the loop's wait4) and the driver's own (the batch's Python process, threads
+included; the loop's driver is this script's child, negligible). Prints a Markdown table. Not a
+unit test: the numbers depend on the machine and its load.
+
+    PYTHONPATH=build/python /usr/bin/python3 bench/batch_bench.py build/subd2nurbs tests/data/corpus \
+        [--repeats 3] [--level N]
+"""
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+DRIVER = r"""
+import json, resource, sys, time
+from subd2nurbs import batch
+args = json.loads(sys.argv[1])
+start = time.perf_counter()
+s = batch.run([args["input"]], args["out"], args["settings"], args.get("scheduler"), workers=args.get("workers"),
+              cli=args["cli"])
+wall = time.perf_counter() - start
+print(json.dumps({"wall": wall, "driver_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+                  "converter_mb": max(r["peak_memory_mb"] or 0 for r in s.files), "ok": s.ok,
+                  "files": len(s.files)}))
+"""
+
+LOOP = r"""
+import json, os, resource, subprocess, sys, time
+args = json.loads(sys.argv[1])
+names = sorted(n for n in os.listdir(args["input"]) if n.endswith(".obj"))
+start = time.perf_counter()
+ok = 0
+for n in names:
+    stem = os.path.join(args["out"], n[:-4])
+    r = subprocess.run([args["cli"], "convert", os.path.join(args["input"], n), "-o", stem + ".step", "--report",
+                        stem + ".report.json", "-q"] + args["extra"], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
+    ok += r.returncode == 0
+wall = time.perf_counter() - start
+print(json.dumps({"wall": wall, "driver_mb": 0, "ok": ok, "files": len(names),
+                  "converter_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0}))
+"""
+
+
+def dask_cluster(tmp):
+    scheduler_file = os.path.join(tmp, "scheduler.json")
+    log = open(os.path.join(tmp, "dask.log"), "w")
+    procs = [subprocess.Popen([shutil.which("dask-scheduler"), "--host", "127.0.0.1", "--port", "0",
+                               "--no-dashboard", "--scheduler-file", scheduler_file], stdout=log,
+                              stderr=subprocess.STDOUT)]
+    deadline = time.monotonic() + 120
+    while not os.path.exists(scheduler_file):
+        if time.monotonic() > deadline:
+            raise RuntimeError("dask-scheduler did not start")
+        time.sleep(0.1)
+    for name in ("w1", "w2"):
+        procs.append(subprocess.Popen([shutil.which("dask-worker"), "--scheduler-file", scheduler_file, "--nthreads",
+                                       "1", "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--name", name,
+                                       "--local-directory", os.path.join(tmp, name)], stdout=log,
+                                      stderr=subprocess.STDOUT))
+    import distributed
+    with distributed.Client(scheduler_file=scheduler_file, timeout="120s") as client:
+        client.wait_for_workers(2, timeout=120)
+        address = client.scheduler.address
+    return address, procs, log
+
+
+def measure(code, args):
+    out = subprocess.run([sys.executable, "-c", code, json.dumps(args)], check=True, stdout=subprocess.PIPE,
+                         text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("cli")
+    ap.add_argument("input", help="a folder of .obj files (not searched recursively by the loop)")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--level", help="convert --level (default: the tolerance's choice)")
+    a = ap.parse_args()
+    cli = os.path.abspath(a.cli)
+    settings = {"level": a.level} if a.level else {}
+    extra = ["--level", a.level] if a.level else []
+    tmp = tempfile.mkdtemp(prefix="s2n-batch-bench-")
+    address, procs, log = dask_cluster(tmp)
+    configs = [("plain `convert` loop", LOOP, {"extra": extra}),
+               ("local pool, 1 worker", DRIVER, {"workers": 1, "settings": settings}),
+               ("local pool, 2 workers", DRIVER, {"workers": 2, "settings": settings}),
+               ("Dask cluster, 2 workers", DRIVER, {"scheduler": address, "settings": settings})]
+    results = {name: [] for name, _, _ in configs}
+    try:
+        for rep in range(a.repeats):
+            for name, code, extra_args in configs:
+                out = os.path.join(tmp, "out")
+                shutil.rmtree(out, ignore_errors=True)
+                os.makedirs(out)
+                r = measure(code, dict(extra_args, input=os.path.abspath(a.input), out=out, cli=cli))
+                results[name].append(r)
+                print("rep %d %-26s %.1f s, %d/%d ok" % (rep + 1, name, r["wall"], r["ok"], r["files"]),
+                      file=sys.stderr)
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            p.wait()
+        log.close()
+        shutil.rmtree(tmp, ignore_errors=True)
+    files = results[configs[0][0]][0]["files"]
+    wall = {name: statistics.median(r["wall"] for r in rs) for name, rs in results.items()}
+    one = wall["local pool, 1 worker"]
+    loop = wall["plain `convert` loop"]
+    load = os.getloadavg()[0]
+    print("| run (%d files, %d ok) | wall (s) | files / min | speed-up vs 1 worker | vs the loop | "
+          "largest converter (MB) | driver (MB) |" % (files, results["local pool, 1 worker"][0]["ok"]))
+    print("|---|---|---|---|---|---|---|")
+    for name, _, _ in configs:
+        rs = results[name]
+        print("| %s | %.1f | %.1f | %s | %+.1f %% | %.0f | %s |" % (
+            name, wall[name], 60 * files / wall[name], "-" if name.startswith("plain") else "%.2fx" % (one / wall[name]),
+            100 * (wall[name] - loop) / loop, max(r["converter_mb"] for r in rs),
+            "-" if name.startswith("plain") else "%.0f" % max(r["driver_mb"] for r in rs)))
+    print()
+    print("%d runs of each, medians; %d CPUs; 1-minute load average at the end %.1f." % (
+        a.repeats, os.cpu_count(), load))
+
+
+if __name__ == "__main__":
+    main()
