@@ -34,6 +34,7 @@ s = batch.run([args["input"]], args["out"], args["settings"], args.get("schedule
 wall = time.perf_counter() - start
 print(json.dumps({"wall": wall, "driver_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
                   "converter_mb": max(r["peak_memory_mb"] or 0 for r in s.files), "ok": s.ok,
+                  "converter_s": sum(r["time_s"] or 0 for r in s.files),
                   "files": len(s.files)}))
 """
 
@@ -43,14 +44,17 @@ args = json.loads(sys.argv[1])
 names = sorted(n for n in os.listdir(args["input"]) if n.endswith(".obj"))
 start = time.perf_counter()
 ok = 0
+busy = 0.0
 for n in names:
     stem = os.path.join(args["out"], n[:-4])
+    t0 = time.monotonic()
     r = subprocess.run([args["cli"], "convert", os.path.join(args["input"], n), "-o", stem + ".step", "--report",
                         stem + ".report.json", "-q"] + args["extra"], stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL)
+    busy += time.monotonic() - t0
     ok += r.returncode == 0
 wall = time.perf_counter() - start
-print(json.dumps({"wall": wall, "driver_mb": 0, "ok": ok, "files": len(names),
+print(json.dumps({"wall": wall, "driver_mb": 0, "ok": ok, "files": len(names), "converter_s": busy,
                   "converter_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0}))
 """
 
@@ -123,14 +127,22 @@ def main():
     one = wall["local pool, 1 worker"]
     loop = wall["plain `convert` loop"]
     load = os.getloadavg()[0]
-    print("| run (%d files, %d ok) | wall (s) | files / min | speed-up vs 1 worker | vs the loop | "
-          "largest converter (MB) | driver (MB) |" % (files, results["local pool, 1 worker"][0]["ok"]))
-    print("|---|---|---|---|---|---|---|")
+    print("| run (%d files, %d ok) | wall (s) | files / min | speed-up vs 1 worker | wall vs the loop | "
+          "converters' wall, sum (s) | own time per file | largest converter (MB) | driver (MB) |"
+          % (files, results["local pool, 1 worker"][0]["ok"]))
+    print("|---|---|---|---|---|---|---|---|---|")
     for name, _, _ in configs:
         rs = results[name]
-        print("| %s | %.1f | %.1f | %s | %+.1f %% | %.0f | %s |" % (
+        serial = name.startswith("plain") or name.endswith("1 worker")
+        # Own time: what the driver adds between conversions, within each run (wall - the
+        # converters' walls, one at a time), so the machine's load between runs cancels out.
+        own = statistics.median((r["wall"] - r["converter_s"]) / files for r in rs)
+        busy = statistics.median(r["converter_s"] for r in rs)
+        print("| %s | %.1f | %.1f | %s | %+.1f %% | %.1f | %s | %.0f | %s |" % (
             name, wall[name], 60 * files / wall[name], "-" if name.startswith("plain") else "%.2fx" % (one / wall[name]),
-            100 * (wall[name] - loop) / loop, max(r["converter_mb"] for r in rs),
+            100 * (wall[name] - loop) / loop, busy,
+            "%.1f ms (%.1f %%)" % (1000 * own, 100 * own * files / busy) if serial else "-",
+            max(r["converter_mb"] for r in rs),
             "-" if name.startswith("plain") else "%.0f" % max(r["driver_mb"] for r in rs)))
     print()
     print("%d runs of each, medians; %d CPUs; 1-minute load average at the end %.1f." % (

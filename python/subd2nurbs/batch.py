@@ -659,6 +659,13 @@ class DaskBackend:
 
 # --- the run ---------------------------------------------------------------------------------
 
+def _size(path):
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
+
+
 def find_cli(cli=None):
     """The converter: `cli`, $SUBD2NURBS_CLI, or subd2nurbs on PATH."""
     cli = cli or os.environ.get("SUBD2NURBS_CLI") or shutil.which("subd2nurbs")
@@ -686,8 +693,9 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
     (``tcp://host:port``), or None for the local pool of `workers` processes (default: one per
     core); `dask_local`: a local Dask cluster of that many workers instead. `timeout` (s) and
     `memory` (bytes or "2G"; default the machine's memory / workers, none on a remote
-    cluster; 0: no limit) bound each file. Returns the :class:`Summary`. KeyboardInterrupt stops the converters, writes the
-    summary of what is done (the rest "interrupted") and is raised again."""
+    cluster; 0: no limit) bound each file. Returns the :class:`Summary`. KeyboardInterrupt
+    stops the converters, writes the summary of what is done (the rest "interrupted") and is
+    raised again."""
     rows = settings_rows()
     if scheduler or dask_local:
         _import_distributed()  # before any work: says how to install it
@@ -727,6 +735,8 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
                           "output": os.path.join(outdir, job.output), "report": os.path.join(outdir, job.report),
                           "args": args, "timeout": timeout, "memory": memory}))
 
+    # Largest inputs first: a long conversion started last would leave the other workers idle.
+    tasks.sort(key=lambda t: -_size(t[1]["input"]))
     skipped = len(jobs) - len(tasks)
     if progress is None:
         progress = Progress(len(jobs), quiet=quiet)
