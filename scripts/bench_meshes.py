@@ -222,7 +222,7 @@ def fmt(x, spec):
 
 
 def print_table(results, reps):
-    print("## 11. Mesh path: ours against QuadriFlow (scripts/bench_meshes.py)\n")
+    print("## 12. Mesh path: ours against QuadriFlow (scripts/bench_meshes.py)\n")
     print("`subd2nurbs convert MESH -o X.step` (release build, 2 cores; medians of %d runs). QuadriFlow is "
           "Blender 3.4's, asked for as many quads as our cage has, sharp features and boundaries preserved; its "
           "quads are then fitted to the mesh by `subd2nurbs fit` (15 iterations) and converted, so that both "

@@ -123,11 +123,17 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
         continue;  // no limit there (a hole's side)
       }
       const double surface = angle_deg(a.normal, b.normal);
+      // The closest mesh feature edge running along the curve (within 30 degrees of its
+      // direction: near a corner the closest edge may belong to another curve).
+      const Point3 along = cross(a.normal, b.normal);
       double best = INFINITY, mesh_angle = 0;
       for (const MeshFeatureEdge& me : mesh_edges) {
+        const Point3 dir = sub(me.b, me.a);
+        if (norm(along) > 0.1 && norm(dir) > 0 && std::abs(dot(along, dir)) < 0.866 * norm(along) * norm(dir)) continue;
         const double d = segment_distance2(a.p, me.a, me.b);
         if (d < best) best = d, mesh_angle = me.angle;
       }
+      if (!std::isfinite(best)) continue;
       const double diff = std::abs(surface - mesh_angle);
       sum += diff;
       ++s.samples;
@@ -172,8 +178,8 @@ void validate(const MeshPathSettings& s) {
 }
 
 int automatic_target_faces(const MeshInput& mesh) {
-  // Quads for the mesh's area at an edge length of 1/40 of the bounding-box diagonal, within
-  // 100 .. 4000: a closed box of side a (diagonal a sqrt 3) gets 6 a^2 / (a sqrt 3 / 40)^2 = 3200.
+  // Quads for the mesh's area at an edge length of 1/25 of the bounding-box diagonal, within
+  // 100 .. 1500: a closed box of side a (diagonal a sqrt 3) gets 6 a^2 / (a sqrt 3 / 25)^2 = 1250.
   Point3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
   std::vector<char> used(mesh.positions.size(), 0);
   for (int v : mesh.face_indices) used[static_cast<std::size_t>(v)] = 1;
@@ -191,8 +197,8 @@ int automatic_target_faces(const MeshInput& mesh) {
     off += n;
   }
   if (!(diag > 0)) return 100;
-  const double h = diag / 40;
-  return static_cast<int>(std::clamp(area / (h * h), 100.0, 4000.0));
+  const double h = diag / 25;
+  return static_cast<int>(std::clamp(area / (h * h), 100.0, 1500.0));
 }
 
 InputRoute route_input(const LoadedCage& read, const std::string& path, InputKind requested) {
@@ -250,9 +256,11 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   validate(settings);
   MeshCage out;
   MeshPathReport& rep = out.report;
-  MeshInput tri = mesh.input;  // the shape: triangles, without tags
+  MeshInput tri = mesh.input;  // the shape: triangles; infinitely sharp creases are the user's features
   triangulate(tri);
-  tri.creases.clear();
+  tri.creases.erase(std::remove_if(tri.creases.begin(), tri.creases.end(),
+                                   [](const CreaseTag& c) { return c.sharpness < kInfiniteSharpness; }),
+                    tri.creases.end());
   tri.corners.clear();
   tri.holes.clear();
   rep.input_vertices = tri.num_vertices();

@@ -75,7 +75,7 @@ InputRoute route_input(const LoadedCage& read, const std::string& path, InputKin
 /// The normal angle across a kept feature curve of the fitted surface against the mesh's
 /// dihedral angle there (both in degrees, as the angle between the two sides' normals).
 struct FeatureAngleStats {
-  int samples = 0;            ///< points measured (3 per feature edge of the cage)
+  int samples = 0;            ///< points measured (3 per feature edge of the cage, where a mesh feature edge runs along)
   double max_difference = 0;  ///< max |surface angle - mesh angle|, degrees
   double mean_difference = 0;
   int where_edge = -1;        ///< the worst cage feature edge (index into cage.creases)
@@ -112,7 +112,9 @@ struct MeshPathProgress {
 };
 
 /// The mesh's features, an all-quad cage of it, and the cage fitted to it (see the file comment).
-/// Polygons are fan-triangulated first; tags are ignored.
+/// Polygons are fan-triangulated first; infinitely sharp crease tags (an OBJ's `t crease` with
+/// sharpness >= 10 given with --input mesh) are features the user tagged, kept whatever their
+/// angle; other tags are ignored.
 /// \throw SettingsError (settings), Error (remesh or fit impossible, cancelled)
 MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, const MeshPathProgress& progress = {});
 

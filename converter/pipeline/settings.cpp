@@ -282,7 +282,7 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
   }
   {
     SettingRow& r = add_row(t, "target_faces", SettingType::Integer, {});
-    r.default_text = "from the mesh's area: edges of about 1/40 of the diagonal";
+    r.default_text = "from the mesh's area: edges of about 1/25 of the diagonal, 100 .. 1500 quads";
     r.help = "Mesh input: the number of quads of the cage made from the mesh (about)";
     r.cli = "--target-faces";
     r.property = {"TargetFaces", "Mesh", "Mesh input: quads of the cage (about; 0: automatic)", {}, true};

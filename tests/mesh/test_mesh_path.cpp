@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepBndLib.hxx>
+#include <Bnd_Box.hxx>
+#include <ShapeAnalysis_Surface.hxx>
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepCheck_Analyzer.hxx>
@@ -153,6 +156,37 @@ double max_distance(const std::vector<gp_Pnt>& points, const TopoDS_Shape& shape
   return worst;
 }
 
+/// Largest distance from `points` (every `stride`-th) to the faces of `shape`, each point
+/// projected onto the faces whose bounding boxes (enlarged by `reach`) hold it
+/// (ShapeAnalysis_Surface keeps a grid per surface, so repeated projections stay cheap). A point
+/// near no face counts as `reach`.
+double max_distance_to_faces(const std::vector<gp_Pnt>& points, const TopoDS_Shape& shape, double reach,
+                             std::size_t stride = 1) {
+  struct FaceData {
+    Handle(ShapeAnalysis_Surface) surface;
+    Bnd_Box box;
+  };
+  std::vector<FaceData> faces;
+  for (TopExp_Explorer ex(shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    FaceData f;
+    f.surface = new ShapeAnalysis_Surface(BRep_Tool::Surface(TopoDS::Face(ex.Current())));
+    BRepBndLib::Add(ex.Current(), f.box);
+    f.box.Enlarge(reach);
+    faces.push_back(f);
+  }
+  double worst = 0;
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    double best = reach;
+    for (FaceData& f : faces) {
+      if (f.box.IsOut(points[i])) continue;
+      f.surface->ValueOfUV(points[i], 1e-9);
+      best = std::min(best, f.surface->Gap());
+    }
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
 double volume(const TopoDS_Shape& s) {
   GProp_GProps g;
   BRepGProp::VolumeProperties(s, g);
@@ -205,7 +239,8 @@ void check_against(const TopoDS_Shape& exact, const Triangles& mesh, const Conve
   // nodes to ours.
   const double to_exact = max_distance(grid_points(c.shape, 5), exact);
   std::vector<gp_Pnt> nodes = mesh.points;
-  const double from_exact = max_distance(nodes, c.shape, std::max<std::size_t>(1, nodes.size() / 300));
+  const double from_exact =
+      max_distance_to_faces(nodes, c.shape, 10 * tolerance_rel * diag, std::max<std::size_t>(1, nodes.size() / 400));
   EXPECT_LT(to_exact, tolerance_rel * diag) << "relative " << to_exact / diag;
   EXPECT_LT(from_exact, tolerance_rel * diag) << "relative " << from_exact / diag;
   std::printf("  %zu triangles -> %d quads, %g B-rep faces; surface->exact %.3g, exact->surface %.3g of the diagonal; "
@@ -227,7 +262,7 @@ TEST(MeshPath, BoxWithDrilledHole) {
   ASSERT_EQ(euler_characteristic(mesh), 0);  // genus 1
   const std::string stl = dir.file("part.stl");
   write_stl(mesh, stl);
-  const Converted c = convert(stl, dir);
+  const Converted c = convert(stl, dir, "--target-faces 300");
   check_against(exact, mesh, c, 2e-3);
   // Every sharp edge kept: the normal jump across the cage's feature curves is the mesh's
   // dihedral there (90 degrees at the box's and the hole's rims) within 3 degrees.
@@ -242,7 +277,7 @@ TEST(MeshPath, CylinderSideStaysOnTheCylinder) {
   const Triangles mesh = tessellate(exact, 0.005);
   const std::string stl = dir.file("cylinder.stl");
   write_stl(mesh, stl);
-  const Converted c = convert(stl, dir);
+  const Converted c = convert(stl, dir, "--target-faces 250");
   check_against(exact, mesh, c, 2e-3);
   // Points of our surface away from the caps: on the cylinder within the tolerance.
   const double diag = diagonal(mesh);
@@ -273,7 +308,7 @@ TEST(MeshPath, BoxWithFilletedSlot) {
   const Triangles mesh = tessellate(exact, 0.01);
   const std::string stl = dir.file("slot.stl");
   write_stl(mesh, stl);
-  const Converted c = convert(stl, dir);
+  const Converted c = convert(stl, dir, "--target-faces 400");
   check_against(exact, mesh, c, 2e-3);
 }
 
