@@ -169,8 +169,11 @@ def main():
     for name in ("plate_holes.STL", "featuretype.STL"):
         meshes.append((name, os.path.join(REAL, name), os.path.join(REAL, name), [], None))
     scan = os.path.join(tmp, "blub_limit.stl")
-    cage_faces = limit_scan(exe, os.path.join(REAL, "blub_control_mesh.obj"), 12, scan, tmp)
-    meshes.append(("blub limit scan", scan, scan, ["--input", "mesh"], cage_faces))
+    # 112 quads x 18 x 18 x 2 = 72 576 triangles (a scan of the size of the Stanford bunny), cage
+    # of at most 2 x the original's faces asked for
+    cage_faces = limit_scan(exe, os.path.join(REAL, "blub_control_mesh.obj"), 18, scan, tmp)
+    meshes.append(("blub limit scan", scan, scan, ["--input", "mesh", "--target-faces", str(2 * cage_faces)],
+                   cage_faces))
     results = []
     for name, src, blend_src, extra, original in meshes:
         rows = []

@@ -361,6 +361,17 @@ TEST(MeshPath, DenseTriangleMeshIsAMesh) {
       << info.out;
   const CommandResult as_cage = run_command(kExe + " info " + quote(stl) + " --input cage");
   EXPECT_NE(as_cage.out.find("path         cage: the input was declared a cage"), std::string::npos) << as_cage.out;
+  // The mesh settings' rules, before any work, naming the flag; nothing written.
+  const std::string out = dir.file("never.step");
+  for (const auto& [args, words] : {std::pair<std::string, std::string>{"--target-faces -3", "--target-faces must be >= 0"},
+                                    {"--edge-length -1", "--edge-length must be a number >= 0"},
+                                    {"--feature-angle 200", "--feature-angle must be between 0 and 180"},
+                                    {"--fit-to " + quote(stl), "--fit-to fits a cage"}}) {
+    const CommandResult bad = run_command(kExe + " convert " + quote(stl) + " -o " + quote(out) + " " + args);
+    EXPECT_EQ(bad.exit_code, 1) << args << "\n" << bad.err;
+    EXPECT_NE(bad.err.find(words), std::string::npos) << args << "\n" << bad.err;
+  }
+  EXPECT_FALSE(std::ifstream(out).good());
 }
 
 }  // namespace
