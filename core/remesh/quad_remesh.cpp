@@ -689,196 +689,210 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
         for (int v = fl.n - 1; v >= 0; --v) smooth_cross_vertex(fl, v);
       check(0.1 + 0.3 * (it + 1) / iterations);
     }
-    init_position_field(d, fl, check_quiet);
-    for (int it = 0; it < iterations; ++it) {
-      if (it % 2 == 0)
-        for (int v = 0; v < fl.n; ++v) smooth_position_vertex(d, fl, v);
-      else
-        for (int v = fl.n - 1; v >= 0; --v) smooth_position_vertex(d, fl, v);
-      check(0.4 + 0.3 * (it + 1) / iterations);
-    }
-    st.field_seconds = seconds_since(t0);
-    auto t1 = Clock::now();
-
-    // Collapse every edge whose ends share a lattice point (link condition, features kept).
-    Collapser col(d, fl);
-    // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
-    // along their chains); each grows from its centre, the vertex of highest priority, by
-    // collapsing its neighbours into it ring by ring.
-    auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
-    std::vector<int> cluster(fl.n);
-    std::iota(cluster.begin(), cluster.end(), 0);
-    for (int u = 0; u < fl.n; ++u)
-      for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
-        int v = fl.adj[i];
-        if (v < u || !same_point(u, v)) continue;
-        bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
-        if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
-        cluster[find_root(cluster, u)] = find_root(cluster, v);
+    // Position field and extraction; when the lattice's irregularities gave clearly more faces
+    // than asked for, once more with the spacing scaled by the square root of the excess.
+    for (int attempt = 0;; ++attempt) {
+      result.cage = MeshInput{};
+      auto t_position = Clock::now();
+      init_position_field(d, fl, check_quiet);
+      for (int it = 0; it < iterations; ++it) {
+        if (it % 2 == 0)
+          for (int v = 0; v < fl.n; ++v) smooth_position_vertex(d, fl, v);
+        else
+          for (int v = fl.n - 1; v >= 0; --v) smooth_position_vertex(d, fl, v);
+        check(0.4 + 0.3 * (it + 1) / iterations);
       }
-    std::vector<int> centre_of(fl.n, -1);
-    for (int u = 0; u < fl.n; ++u) {
-      int r = find_root(cluster, u);
-      if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
-    }
-    for (int pass = 0; pass < 200; ++pass) {
-      int changed = 0;
+      st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
+      auto t1 = Clock::now();
+
+      // Collapse every edge whose ends share a lattice point (link condition, features kept).
+      Collapser col(d, fl);
+      // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
+      // along their chains); each grows from its centre, the vertex of highest priority, by
+      // collapsing its neighbours into it ring by ring.
+      auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
+      std::vector<int> cluster(fl.n);
+      std::iota(cluster.begin(), cluster.end(), 0);
+      for (int u = 0; u < fl.n; ++u)
+        for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
+          int v = fl.adj[i];
+          if (v < u || !same_point(u, v)) continue;
+          bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
+          if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
+          cluster[find_root(cluster, u)] = find_root(cluster, v);
+        }
+      std::vector<int> centre_of(fl.n, -1);
       for (int u = 0; u < fl.n; ++u) {
-        int c = centre_of[find_root(cluster, u)];
-        int tmp[2];
-        if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
-          continue;
-        if (col.can_collapse(u, c)) {
-          col.collapse(u, c);
-          ++changed;
+        int r = find_root(cluster, u);
+        if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
+      }
+      for (int pass = 0; pass < 200; ++pass) {
+        int changed = 0;
+        for (int u = 0; u < fl.n; ++u) {
+          int c = centre_of[find_root(cluster, u)];
+          int tmp[2];
+          if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
+            continue;
+          if (col.can_collapse(u, c)) {
+            col.collapse(u, c);
+            ++changed;
+          }
+        }
+        check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
+        if (changed == 0) break;
+      }
+      std::vector<int> nu, cands;
+      for (int pass = 0; pass < 200; ++pass) {
+        int changed = 0;
+        for (int u = 0; u < fl.n; ++u) {
+          if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
+          col.neighbours(u, nu);
+          cands.clear();
+          for (int v : nu)
+            if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
+          std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
+          for (int v : cands)
+            if (col.can_collapse(u, v)) {
+              col.collapse(u, v);
+              ++changed;
+              break;
+            }
+        }
+        check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
+        if (changed == 0) break;
+      }
+
+      // The coarse triangle mesh.
+      std::vector<int> coarse_of(fl.n, -1), dense_of;
+      for (int v = 0; v < fl.n; ++v)
+        if (col.alive[v] && !col.vf[v].empty()) {
+          coarse_of[v] = static_cast<int>(dense_of.size());
+          dense_of.push_back(v);
+        }
+      std::vector<Tri> tris;
+      for (size_t i = 0; i < col.f.size(); ++i)
+        if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
+      int nc = static_cast<int>(dense_of.size());
+      auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
+
+      // Pair triangles into quads across "diagonal" edges (lattice displacement (±1, ±1)).
+      std::unordered_map<std::uint64_t, int> half;
+      for (size_t i = 0; i < tris.size(); ++i)
+        for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+      struct Pair {
+        double score;
+        int f, g, k;
+      };
+      std::vector<Pair> pairs;
+      auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
+        int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
+        int w = -1;
+        for (int j = 0; j < 3; ++j)
+          if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
+        quad = {x, w, y, z};
+      };
+      for (size_t i = 0; i < tris.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+          int x = tris[i][k], y = tris[i][(k + 1) % 3];
+          auto it = half.find(half_key(y, x));
+          if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
+          std::array<int, 4> quad;
+          quad_of(int(i), k, it->second, quad);
+          V3 c[4];
+          for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
+          double quality = quad_quality(c);
+          if (quality < 0.2) continue;
+          int dx = dense_of[x], dy = dense_of[y];
+          V3 disp = fl.o[dy] - fl.o[dx];
+          V3 tx = fl.normal[dx].cross(fl.q[dx]);
+          double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
+          bool diagonal = a == 1 && b == 1;
+          pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
+        }
+      std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+        return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
+      });
+      std::vector<char> paired(tris.size(), 0);
+      std::vector<std::vector<int>> polygons;
+      for (const Pair& pr : pairs) {
+        if (paired[pr.f] || paired[pr.g]) continue;
+        paired[pr.f] = paired[pr.g] = 1;
+        std::array<int, 4> quad;
+        quad_of(pr.f, pr.k, pr.g, quad);
+        polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
+      }
+      st.coarse_quads = static_cast<int>(polygons.size());
+      for (size_t i = 0; i < tris.size(); ++i)
+        if (!paired[i]) polygons.push_back({tris[i][0], tris[i][1], tris[i][2]});
+      st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
+      check(0.92);
+
+      // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface.
+      Projector proj(d, fl);
+      MeshInput& cage = result.cage;
+      cage.options = mesh.options;
+      for (int v = 0; v < nc; ++v) {
+        const V3& x = d.p[dense_of[v]];
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+      }
+      std::unordered_map<std::uint64_t, int> midpoint;
+      std::vector<std::uint64_t> feature_keys;
+      auto mid = [&](int a, int b) {
+        auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
+        if (!inserted) return it->second;
+        bool feat = coarse_feature(a, b);
+        int da = std::min(dense_of[a], dense_of[b]);
+        V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
+        it->second = static_cast<int>(cage.positions.size());
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+        if (feat) {
+          feature_keys.push_back(edge_key(a, it->second));
+          feature_keys.push_back(edge_key(it->second, b));
+        }
+        return it->second;
+      };
+      for (const auto& poly : polygons) {
+        int m = static_cast<int>(poly.size());
+        V3 centre = V3::Zero();
+        int start = dense_of[poly[0]];
+        for (int v : poly) {
+          centre += d.p[dense_of[v]];
+          start = std::min(start, dense_of[v]);
+        }
+        V3 x = proj.project(centre / m, start, false);
+        int c = static_cast<int>(cage.positions.size());
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+        std::vector<int> mids(m);
+        for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
+        for (int k = 0; k < m; ++k) {
+          cage.face_sizes.push_back(4);
+          cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
         }
       }
-      check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
-      if (changed == 0) break;
+      std::sort(feature_keys.begin(), feature_keys.end());
+      for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
+      for (int v = 0; v < nc; ++v)
+        if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
+      st.extract_seconds += seconds_since(t1);
+      double ratio = result.cage.num_faces() * h * h / area;
+      st.attempts = attempt + 1;
+      if (attempt == 0 && ratio > 1.15) {
+        s *= std::sqrt(ratio);
+        fl.s = s;
+        continue;
+      }
+      break;
     }
-    std::vector<int> nu, cands;
-    for (int pass = 0; pass < 200; ++pass) {
-      int changed = 0;
-      for (int u = 0; u < fl.n; ++u) {
-        if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
-        col.neighbours(u, nu);
-        cands.clear();
-        for (int v : nu)
-          if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
-        std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
-        for (int v : cands)
-          if (col.can_collapse(u, v)) {
-            col.collapse(u, v);
-            ++changed;
-            break;
-          }
-      }
-      check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
-      if (changed == 0) break;
-    }
-
-    // The coarse triangle mesh.
-    std::vector<int> coarse_of(fl.n, -1), dense_of;
-    for (int v = 0; v < fl.n; ++v)
-      if (col.alive[v] && !col.vf[v].empty()) {
-        coarse_of[v] = static_cast<int>(dense_of.size());
-        dense_of.push_back(v);
-      }
-    std::vector<Tri> tris;
-    for (size_t i = 0; i < col.f.size(); ++i)
-      if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
-    int nc = static_cast<int>(dense_of.size());
-    auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
-
-    // Pair triangles into quads across "diagonal" edges (lattice displacement (±1, ±1)).
-    std::unordered_map<std::uint64_t, int> half;
-    for (size_t i = 0; i < tris.size(); ++i)
-      for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
-    struct Pair {
-      double score;
-      int f, g, k;
-    };
-    std::vector<Pair> pairs;
-    auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
-      int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
-      int w = -1;
-      for (int j = 0; j < 3; ++j)
-        if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
-      quad = {x, w, y, z};
-    };
-    for (size_t i = 0; i < tris.size(); ++i)
-      for (int k = 0; k < 3; ++k) {
-        int x = tris[i][k], y = tris[i][(k + 1) % 3];
-        auto it = half.find(half_key(y, x));
-        if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
-        std::array<int, 4> quad;
-        quad_of(int(i), k, it->second, quad);
-        V3 c[4];
-        for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
-        double quality = quad_quality(c);
-        if (quality < 0.2) continue;
-        int dx = dense_of[x], dy = dense_of[y];
-        V3 disp = fl.o[dy] - fl.o[dx];
-        V3 tx = fl.normal[dx].cross(fl.q[dx]);
-        double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
-        bool diagonal = a == 1 && b == 1;
-        pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
-      }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-      return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
-    });
-    std::vector<char> paired(tris.size(), 0);
-    std::vector<std::vector<int>> polygons;
-    for (const Pair& pr : pairs) {
-      if (paired[pr.f] || paired[pr.g]) continue;
-      paired[pr.f] = paired[pr.g] = 1;
-      std::array<int, 4> quad;
-      quad_of(pr.f, pr.k, pr.g, quad);
-      polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
-    }
-    st.coarse_quads = static_cast<int>(polygons.size());
-    for (size_t i = 0; i < tris.size(); ++i)
-      if (!paired[i]) polygons.push_back({tris[i][0], tris[i][1], tris[i][2]});
-    st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
-    check(0.92);
-
-    // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface.
-    Projector proj(d, fl);
-    MeshInput& cage = result.cage;
-    cage.options = mesh.options;
-    for (int v = 0; v < nc; ++v) {
-      const V3& x = d.p[dense_of[v]];
-      cage.positions.push_back({x.x(), x.y(), x.z()});
-    }
-    std::unordered_map<std::uint64_t, int> midpoint;
-    std::vector<std::uint64_t> feature_keys;
-    auto mid = [&](int a, int b) {
-      auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
-      if (!inserted) return it->second;
-      bool feat = coarse_feature(a, b);
-      int da = std::min(dense_of[a], dense_of[b]);
-      V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
-      it->second = static_cast<int>(cage.positions.size());
-      cage.positions.push_back({x.x(), x.y(), x.z()});
-      if (feat) {
-        feature_keys.push_back(edge_key(a, it->second));
-        feature_keys.push_back(edge_key(it->second, b));
-      }
-      return it->second;
-    };
-    for (const auto& poly : polygons) {
-      int m = static_cast<int>(poly.size());
-      V3 centre = V3::Zero();
-      int start = dense_of[poly[0]];
-      for (int v : poly) {
-        centre += d.p[dense_of[v]];
-        start = std::min(start, dense_of[v]);
-      }
-      V3 x = proj.project(centre / m, start, false);
-      int c = static_cast<int>(cage.positions.size());
-      cage.positions.push_back({x.x(), x.y(), x.z()});
-      std::vector<int> mids(m);
-      for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
-      for (int k = 0; k < m; ++k) {
-        cage.face_sizes.push_back(4);
-        cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
-      }
-    }
-    std::sort(feature_keys.begin(), feature_keys.end());
-    for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
-    for (int v = 0; v < nc; ++v)
-      if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
-    st.extract_seconds = seconds_since(t1);
 
     // Checks and statistics: the cage must be a manifold with the input's topology.
     PolyMesh pm;
     try {
-      pm = PolyMesh::build(cage.num_vertices(), cage.face_sizes, cage.face_indices);
+      pm = PolyMesh::build(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
     } catch (const Error& e) {
       throw Error(ErrorKind::Fit, std::string("quad remesh: the extracted cage is not a valid mesh: ") + e.what());
     }
     Topology ti = topology(mesh.num_vertices(), mesh.face_sizes, mesh.face_indices);
-    Topology tc = topology(cage.num_vertices(), cage.face_sizes, cage.face_indices);
+    Topology tc = topology(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
     st.euler_input = ti.euler;
     st.euler_cage = tc.euler;
     st.boundaries_input = ti.boundaries;
@@ -891,12 +905,12 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
                                       std::to_string(tc.components) + " components) differs from the mesh's (" +
                                       std::to_string(ti.euler) + ", " + std::to_string(ti.boundaries) + ", " +
                                       std::to_string(ti.components) + ")");
-    st.faces = cage.num_faces();
-    st.vertices = cage.num_vertices();
-    st.feature_edges = static_cast<int>(cage.creases.size());
-    st.corners = static_cast<int>(cage.corners.size());
-    std::vector<char> is_corner(cage.num_vertices(), 0);
-    for (const auto& c : cage.corners) is_corner[c.vertex] = 1;
+    st.faces = result.cage.num_faces();
+    st.vertices = result.cage.num_vertices();
+    st.feature_edges = static_cast<int>(result.cage.creases.size());
+    st.corners = static_cast<int>(result.cage.corners.size());
+    std::vector<char> is_corner(result.cage.num_vertices(), 0);
+    for (const auto& c : result.cage.corners) is_corner[c.vertex] = 1;
     for (int v = 0; v < pm.num_vertices(); ++v) {
       if (pm.is_unused_vertex(v) || is_corner[v]) continue;
       int regular = pm.is_boundary_vertex(v) ? 3 : 4;
