@@ -196,6 +196,9 @@ struct Fields {
   int n = 0;
   std::vector<int> offsets, adj;  // CSR neighbours (sorted)
   std::vector<V3> normal, q, o;
+  std::vector<V3> p;              // positions
+  std::vector<V3> anchor;         // corners: where o stays; feature vertices: a point of o's line
+  std::vector<double> weight;     // dense vertices represented (coarse levels)
   std::vector<int> kind;          // 0 free, 1 on a feature chain, 2 corner
   std::vector<V3> tangent;        // feature tangent (kind 1), zero if none
   std::vector<V3> principal;      // principal curvature direction
@@ -206,6 +209,9 @@ struct Fields {
 void build_adjacency(const Dense& d, Fields& fl) {
   int n = static_cast<int>(d.p.size());
   fl.n = n;
+  fl.p = d.p;
+  fl.anchor = d.p;
+  fl.weight.assign(n, 1.0);
   std::vector<std::uint64_t> pairs;
   pairs.reserve(d.t.size() * 6);
   fl.normal.assign(n, V3::Zero());
@@ -284,8 +290,7 @@ void curvature(const Dense& d, Fields& fl, double alignment) {
 }
 
 template <class Check>
-void init_cross_field(const Dense& d, Fields& fl, Check&& check) {
-  (void)d;
+void init_cross_field(Fields& fl, Check&& check) {
   fl.q.assign(fl.n, V3::Zero());
   std::vector<char> set(fl.n, 0);
   std::deque<int> queue;
@@ -347,26 +352,26 @@ void smooth_cross_vertex(Fields& fl, int v) {
   if (l > 1e-12) fl.q[v] = sum / l;
 }
 
-void constrain_position(const Dense& d, Fields& fl, int v) {
+void constrain_position(Fields& fl, int v) {
   if (fl.kind[v] == 2) {
-    fl.o[v] = d.p[v];
+    fl.o[v] = fl.anchor[v];
   } else if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
-    V3 r = fl.o[v] - d.p[v];
-    fl.o[v] = d.p[v] + fl.q[v] * fl.q[v].dot(r);
+    V3 r = fl.o[v] - fl.anchor[v];
+    fl.o[v] = fl.anchor[v] + fl.q[v] * fl.q[v].dot(r);
   }
   V3 t = fl.normal[v].cross(fl.q[v]);
-  fl.o[v] = round_lattice(d.p[v], fl.o[v], fl.q[v], t, fl.s);
+  fl.o[v] = round_lattice(fl.p[v], fl.o[v], fl.q[v], t, fl.s);
 }
 
 template <class Check>
-void init_position_field(const Dense& d, Fields& fl, Check&& check) {
+void init_position_field(Fields& fl, Check&& check) {
   fl.o.assign(fl.n, V3::Zero());
   std::vector<char> set(fl.n, 0);
   std::deque<int> queue;
   for (int v = 0; v < fl.n; ++v)
     if (fl.kind[v] == 2) {
-      fl.o[v] = d.p[v];
-      constrain_position(d, fl, v);
+      fl.o[v] = fl.anchor[v];
+      constrain_position(fl, v);
       set[v] = 1;
       queue.push_back(v);
     }
@@ -378,31 +383,31 @@ void init_position_field(const Dense& d, Fields& fl, Check&& check) {
         int w = fl.adj[i];
         if (set[w]) continue;
         const V3& n = fl.normal[w];
-        fl.o[w] = fl.o[v] - n * n.dot(fl.o[v] - d.p[w]);
-        constrain_position(d, fl, w);
+        fl.o[w] = fl.o[v] - n * n.dot(fl.o[v] - fl.p[w]);
+        constrain_position(fl, w);
         set[w] = 1;
         queue.push_back(w);
       }
     }
     while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
     if (seed >= fl.n) break;
-    fl.o[seed] = d.p[seed];
+    fl.o[seed] = fl.p[seed];
     set[seed] = 1;
     queue.push_back(seed);
     check();
   }
 }
 
-void smooth_position_vertex(const Dense& d, Fields& fl, int v) {
+void smooth_position_vertex(Fields& fl, int v) {
   if (fl.kind[v] == 2) return;
   const V3& n = fl.normal[v];
-  const V3& p = d.p[v];
+  const V3& p = fl.p[v];
   V3 t = n.cross(fl.q[v]);
   V3 sum = fl.o[v];
   double weight = 0;
   for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
     int w = fl.adj[i];
-    V3 m = middle_point(p, n, d.p[w], fl.normal[w]);
+    V3 m = middle_point(p, n, fl.p[w], fl.normal[w]);
     V3 a = round_lattice(m, sum, fl.q[v], t, fl.s);
     V3 b = round_lattice(a, fl.o[w], fl.q[w], fl.normal[w].cross(fl.q[w]), fl.s);  // the same lattice point
     sum = (a * weight + b) / (weight + 1);
@@ -410,7 +415,150 @@ void smooth_position_vertex(const Dense& d, Fields& fl, int v) {
     weight += 1;
   }
   fl.o[v] = sum;
-  constrain_position(d, fl, v);
+  constrain_position(fl, v);
+}
+
+// --- multiresolution (as Instant Meshes): vertices paired along edges level by level --------
+// One coarser level: edges sorted by how well their normals agree, greedily matched; a pair
+// becomes one vertex (weighted mean position, summed normal, the stronger constraint).
+Fields coarsen(const Fields& f, std::vector<int>& parent) {
+  struct Candidate {
+    double score;
+    int u, v;
+  };
+  std::vector<Candidate> edges;
+  for (int u = 0; u < f.n; ++u)
+    for (int i = f.offsets[u]; i < f.offsets[u + 1]; ++i) {
+      int v = f.adj[i];
+      if (v > u && !(f.kind[u] == 2 && f.kind[v] == 2)) edges.push_back({f.normal[u].dot(f.normal[v]), u, v});
+    }
+  std::sort(edges.begin(), edges.end(), [](const Candidate& a, const Candidate& b) {
+    return a.score != b.score ? a.score > b.score : a.u != b.u ? a.u < b.u : a.v < b.v;
+  });
+  parent.assign(f.n, -1);
+  int n = 0;
+  for (const Candidate& e : edges)
+    if (parent[e.u] < 0 && parent[e.v] < 0) parent[e.u] = parent[e.v] = n++;
+  for (int u = 0; u < f.n; ++u)
+    if (parent[u] < 0) parent[u] = n++;
+  Fields c;
+  c.n = n;
+  c.s = f.s;
+  c.p.assign(n, V3::Zero());
+  c.normal.assign(n, V3::Zero());
+  c.weight.assign(n, 0.0);
+  c.kind.assign(n, -1);
+  c.anchor.assign(n, V3::Zero());
+  c.tangent.assign(n, V3::Zero());
+  c.principal.assign(n, V3::Zero());
+  c.principal_weight.assign(n, 0.0);
+  for (int u = 0; u < f.n; ++u) {
+    int a = parent[u];
+    c.p[a] += f.weight[u] * f.p[u];
+    c.normal[a] += f.weight[u] * f.normal[u];
+    c.weight[a] += f.weight[u];
+    if (f.kind[u] > c.kind[a]) {
+      c.kind[a] = f.kind[u];
+      c.anchor[a] = f.anchor[u];
+      c.tangent[a] = f.tangent[u];
+    }
+    if (f.principal_weight[u] > c.principal_weight[a]) {
+      c.principal_weight[a] = f.principal_weight[u];
+      c.principal[a] = f.principal[u];
+    }
+  }
+  for (int a = 0; a < n; ++a) {
+    c.p[a] /= c.weight[a];
+    double l = c.normal[a].norm();
+    c.normal[a] = l > 0 ? V3(c.normal[a] / l) : V3(0, 0, 1);
+    for (V3* t : {&c.tangent[a], &c.principal[a]}) {
+      *t -= c.normal[a] * c.normal[a].dot(*t);
+      double lt = t->norm();
+      *t = lt > 1e-9 ? V3(*t / lt) : V3::Zero();
+    }
+    if (c.kind[a] == 1 && c.tangent[a].norm() == 0) c.kind[a] = 0;
+    if (c.principal[a].norm() == 0) c.principal_weight[a] = 0;
+  }
+  std::vector<std::uint64_t> pairs;
+  for (int u = 0; u < f.n; ++u)
+    for (int i = f.offsets[u]; i < f.offsets[u + 1]; ++i) {
+      int a = parent[u], b = parent[f.adj[i]];
+      if (a != b) pairs.push_back(half_key(a, b));
+    }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  c.offsets.assign(n + 1, 0);
+  for (auto k : pairs) c.offsets[(k >> 32) + 1]++;
+  for (int a = 0; a < n; ++a) c.offsets[a + 1] += c.offsets[a];
+  c.adj.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) c.adj[i] = int(pairs[i] & 0xffffffffu);
+  return c;
+}
+
+struct Hierarchy {
+  std::vector<Fields> levels;             // levels[0] is the dense mesh's
+  std::vector<std::vector<int>> parents;  // parents[l][v]: v's vertex on level l + 1
+};
+
+void build_hierarchy(Hierarchy& h) {
+  while (h.levels.size() < 40 && h.levels.back().n > 64) {
+    std::vector<int> parent;
+    Fields c = coarsen(h.levels.back(), parent);
+    if (c.n > 0.9 * h.levels.back().n) break;
+    h.parents.push_back(std::move(parent));
+    h.levels.push_back(std::move(c));
+  }
+}
+
+template <class Sweep, class Check>
+void sweeps(Fields& fl, int iterations, Sweep&& sweep, Check&& check) {
+  for (int it = 0; it < iterations; ++it) {
+    if (it % 2 == 0)
+      for (int v = 0; v < fl.n; ++v) sweep(fl, v);
+    else
+      for (int v = fl.n - 1; v >= 0; --v) sweep(fl, v);
+    check();
+  }
+}
+
+// Both fields solved coarse to fine: initialised on the coarsest level, smoothed there, carried
+// to each finer level (projected onto its tangent planes, constraints applied) and smoothed again.
+template <class Check>
+void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
+  int top = static_cast<int>(h.levels.size()) - 1;
+  if (cross)
+    init_cross_field(h.levels[top], check);
+  else
+    init_position_field(h.levels[top], check);
+  for (int l = top; l >= 0; --l) {
+    Fields& fl = h.levels[l];
+    if (l < top) {
+      const Fields& up = h.levels[l + 1];
+      const std::vector<int>& parent = h.parents[l];
+      if (cross) {
+        fl.q.resize(fl.n);
+        for (int v = 0; v < fl.n; ++v) {
+          if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
+            fl.q[v] = fl.tangent[v];
+            continue;
+          }
+          V3 q = up.q[parent[v]] - fl.normal[v] * fl.normal[v].dot(up.q[parent[v]]);
+          fl.q[v] = q.norm() > 1e-9 ? V3(q.normalized()) : any_perpendicular(fl.normal[v]);
+        }
+      } else {
+        fl.o.resize(fl.n);
+        for (int v = 0; v < fl.n; ++v) {
+          const V3& o = up.o[parent[v]];
+          fl.o[v] = o - fl.normal[v] * fl.normal[v].dot(o - fl.p[v]);
+          constrain_position(fl, v);
+        }
+      }
+    }
+    if (cross)
+      sweeps(fl, iterations, smooth_cross_vertex, check);
+    else
+      sweeps(fl, iterations, smooth_position_vertex, check);
+  }
 }
 
 // --- extraction by edge collapses -------------------------------------------------------------
@@ -674,34 +822,26 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     st.dense_vertices = static_cast<int>(d.p.size());
     check(0.05);
 
-    Fields fl;
-    fl.s = s;
-    build_adjacency(d, fl);
-    classify(d, fl);
-    curvature(d, fl, options.curvature_alignment);
-    auto check_quiet = [&]() { check(0.1); };
-    init_cross_field(d, fl, check_quiet);
-    int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 60;
-    for (int it = 0; it < iterations; ++it) {
-      if (it % 2 == 0)
-        for (int v = 0; v < fl.n; ++v) smooth_cross_vertex(fl, v);
-      else
-        for (int v = fl.n - 1; v >= 0; --v) smooth_cross_vertex(fl, v);
-      check(0.1 + 0.3 * (it + 1) / iterations);
+    Hierarchy hier;
+    {
+      Fields dense;
+      dense.s = s;
+      build_adjacency(d, dense);
+      classify(d, dense);
+      curvature(d, dense, options.curvature_alignment);
+      hier.levels.push_back(std::move(dense));
     }
+    build_hierarchy(hier);
+    Fields& fl = hier.levels[0];
+    int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
+    solve_fields(hier, iterations, true, [&]() { check(0.25); });
     // Position field and extraction; when the lattice's irregularities gave clearly more faces
     // than asked for, once more with the spacing scaled by the square root of the excess.
     for (int attempt = 0;; ++attempt) {
       result.cage = MeshInput{};
       auto t_position = Clock::now();
-      init_position_field(d, fl, check_quiet);
-      for (int it = 0; it < iterations; ++it) {
-        if (it % 2 == 0)
-          for (int v = 0; v < fl.n; ++v) smooth_position_vertex(d, fl, v);
-        else
-          for (int v = fl.n - 1; v >= 0; --v) smooth_position_vertex(d, fl, v);
-        check(0.4 + 0.3 * (it + 1) / iterations);
-      }
+      for (Fields& level : hier.levels) level.s = s;
+      solve_fields(hier, iterations, false, [&]() { check(0.5); });
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
 
@@ -878,7 +1018,6 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.attempts = attempt + 1;
       if (attempt == 0 && ratio > 1.15) {
         s *= std::sqrt(ratio);
-        fl.s = s;
         continue;
       }
       break;
