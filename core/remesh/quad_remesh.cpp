@@ -938,6 +938,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
           if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
           std::array<int, 4> quad;
           quad_of(int(i), k, it->second, quad);
+          if (quad[1] == quad[3]) continue;  // two triangles sharing two edges
           V3 c[4];
           for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
           double quality = quad_quality(c);
