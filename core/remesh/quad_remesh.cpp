@@ -953,18 +953,68 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
         return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
       });
-      std::vector<char> paired(tris.size(), 0);
-      std::vector<std::vector<int>> polygons;
+      // Greedy matching, best pairs first; then augmenting paths (alternating between unused and
+      // used pairs, breadth first, bounded) from each unpaired triangle to another.
+      int nt = static_cast<int>(tris.size());
+      std::vector<int> mate(nt, -1), mate_k(nt, -1);
+      std::vector<std::array<int, 3>> cand(nt, {-1, -1, -1});  // neighbour across edge k if pairable
       for (const Pair& pr : pairs) {
-        if (paired[pr.f] || paired[pr.g]) continue;
-        paired[pr.f] = paired[pr.g] = 1;
+        cand[pr.f][pr.k] = pr.g;
+        for (int j = 0; j < 3; ++j)
+          if (tris[pr.g][j] == tris[pr.f][(pr.k + 1) % 3]) cand[pr.g][j] = pr.f;
+      }
+      for (const Pair& pr : pairs) {
+        if (mate[pr.f] >= 0 || mate[pr.g] >= 0) continue;
+        mate[pr.f] = pr.g;
+        mate[pr.g] = pr.f;
+      }
+      std::vector<int> from(nt, -1), seen(nt, -1);
+      for (int t = 0; t < nt; ++t) {
+        if (mate[t] >= 0) continue;
+        std::vector<int> queue{t};
+        seen[t] = t;
+        int end_a = -1, end_b = -1;
+        for (size_t head = 0; head < queue.size() && head < 400 && end_b < 0; ++head) {
+          int a = queue[head];
+          for (int k = 0; k < 3 && end_b < 0; ++k) {
+            int b = cand[a][k];
+            if (b < 0 || b == mate[a] || seen[b] == t) continue;
+            if (mate[b] < 0) {
+              end_a = a;
+              end_b = b;
+            } else if (seen[mate[b]] != t) {
+              seen[b] = t;
+              seen[mate[b]] = t;
+              from[mate[b]] = a;
+              queue.push_back(mate[b]);
+            }
+          }
+        }
+        if (end_b < 0) continue;
+        // flip the path: end_b - end_a, then each a's old mate pairs with a's predecessor
+        int a = end_a, b = end_b;
+        while (true) {
+          int old = mate[a];
+          mate[a] = b;
+          mate[b] = a;
+          if (a == t) break;
+          b = old;
+          a = from[a];
+        }
+      }
+      std::vector<std::vector<int>> polygons;
+      for (int f = 0; f < nt; ++f) {
+        int g = mate[f];
+        if (g < f) continue;
+        int k = 0;
+        while (cand[f][k] != g) ++k;
         std::array<int, 4> quad;
-        quad_of(pr.f, pr.k, pr.g, quad);
+        quad_of(f, k, g, quad);
         polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
       }
       st.coarse_quads = static_cast<int>(polygons.size());
-      for (size_t i = 0; i < tris.size(); ++i)
-        if (!paired[i]) polygons.push_back({tris[i][0], tris[i][1], tris[i][2]});
+      for (int f = 0; f < nt; ++f)
+        if (mate[f] < 0) polygons.push_back({tris[f][0], tris[f][1], tris[f][2]});
       st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
       check(0.92);
 
@@ -1017,7 +1067,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.extract_seconds += seconds_since(t1);
       double ratio = result.cage.num_faces() * h * h / area;
       st.attempts = attempt + 1;
-      if (attempt == 0 && ratio > 1.15) {
+      if (attempt == 0 && ratio > 1.3) {
         s *= std::sqrt(ratio);
         continue;
       }
