@@ -196,6 +196,9 @@ struct Fields {
   int n = 0;
   std::vector<int> offsets, adj;  // CSR neighbours (sorted)
   std::vector<V3> normal, q, o;
+  std::vector<V3> p;              // positions
+  std::vector<V3> anchor;         // corners: where o stays; feature vertices: a point of o's line
+  std::vector<double> weight;     // dense vertices represented (coarse levels)
   std::vector<int> kind;          // 0 free, 1 on a feature chain, 2 corner
   std::vector<V3> tangent;        // feature tangent (kind 1), zero if none
   std::vector<V3> principal;      // principal curvature direction
@@ -206,6 +209,9 @@ struct Fields {
 void build_adjacency(const Dense& d, Fields& fl) {
   int n = static_cast<int>(d.p.size());
   fl.n = n;
+  fl.p = d.p;
+  fl.anchor = d.p;
+  fl.weight.assign(n, 1.0);
   std::vector<std::uint64_t> pairs;
   pairs.reserve(d.t.size() * 6);
   fl.normal.assign(n, V3::Zero());
@@ -284,8 +290,7 @@ void curvature(const Dense& d, Fields& fl, double alignment) {
 }
 
 template <class Check>
-void init_cross_field(const Dense& d, Fields& fl, Check&& check) {
-  (void)d;
+void init_cross_field(Fields& fl, Check&& check) {
   fl.q.assign(fl.n, V3::Zero());
   std::vector<char> set(fl.n, 0);
   std::deque<int> queue;
@@ -347,26 +352,26 @@ void smooth_cross_vertex(Fields& fl, int v) {
   if (l > 1e-12) fl.q[v] = sum / l;
 }
 
-void constrain_position(const Dense& d, Fields& fl, int v) {
+void constrain_position(Fields& fl, int v) {
   if (fl.kind[v] == 2) {
-    fl.o[v] = d.p[v];
+    fl.o[v] = fl.anchor[v];
   } else if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
-    V3 r = fl.o[v] - d.p[v];
-    fl.o[v] = d.p[v] + fl.q[v] * fl.q[v].dot(r);
+    V3 r = fl.o[v] - fl.anchor[v];
+    fl.o[v] = fl.anchor[v] + fl.q[v] * fl.q[v].dot(r);
   }
   V3 t = fl.normal[v].cross(fl.q[v]);
-  fl.o[v] = round_lattice(d.p[v], fl.o[v], fl.q[v], t, fl.s);
+  fl.o[v] = round_lattice(fl.p[v], fl.o[v], fl.q[v], t, fl.s);
 }
 
 template <class Check>
-void init_position_field(const Dense& d, Fields& fl, Check&& check) {
+void init_position_field(Fields& fl, Check&& check) {
   fl.o.assign(fl.n, V3::Zero());
   std::vector<char> set(fl.n, 0);
   std::deque<int> queue;
   for (int v = 0; v < fl.n; ++v)
     if (fl.kind[v] == 2) {
-      fl.o[v] = d.p[v];
-      constrain_position(d, fl, v);
+      fl.o[v] = fl.anchor[v];
+      constrain_position(fl, v);
       set[v] = 1;
       queue.push_back(v);
     }
@@ -378,31 +383,31 @@ void init_position_field(const Dense& d, Fields& fl, Check&& check) {
         int w = fl.adj[i];
         if (set[w]) continue;
         const V3& n = fl.normal[w];
-        fl.o[w] = fl.o[v] - n * n.dot(fl.o[v] - d.p[w]);
-        constrain_position(d, fl, w);
+        fl.o[w] = fl.o[v] - n * n.dot(fl.o[v] - fl.p[w]);
+        constrain_position(fl, w);
         set[w] = 1;
         queue.push_back(w);
       }
     }
     while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
     if (seed >= fl.n) break;
-    fl.o[seed] = d.p[seed];
+    fl.o[seed] = fl.p[seed];
     set[seed] = 1;
     queue.push_back(seed);
     check();
   }
 }
 
-void smooth_position_vertex(const Dense& d, Fields& fl, int v) {
+void smooth_position_vertex(Fields& fl, int v) {
   if (fl.kind[v] == 2) return;
   const V3& n = fl.normal[v];
-  const V3& p = d.p[v];
+  const V3& p = fl.p[v];
   V3 t = n.cross(fl.q[v]);
   V3 sum = fl.o[v];
   double weight = 0;
   for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
     int w = fl.adj[i];
-    V3 m = middle_point(p, n, d.p[w], fl.normal[w]);
+    V3 m = middle_point(p, n, fl.p[w], fl.normal[w]);
     V3 a = round_lattice(m, sum, fl.q[v], t, fl.s);
     V3 b = round_lattice(a, fl.o[w], fl.q[w], fl.normal[w].cross(fl.q[w]), fl.s);  // the same lattice point
     sum = (a * weight + b) / (weight + 1);
@@ -410,7 +415,150 @@ void smooth_position_vertex(const Dense& d, Fields& fl, int v) {
     weight += 1;
   }
   fl.o[v] = sum;
-  constrain_position(d, fl, v);
+  constrain_position(fl, v);
+}
+
+// --- multiresolution (as Instant Meshes): vertices paired along edges level by level --------
+// One coarser level: edges sorted by how well their normals agree, greedily matched; a pair
+// becomes one vertex (weighted mean position, summed normal, the stronger constraint).
+Fields coarsen(const Fields& f, std::vector<int>& parent) {
+  struct Candidate {
+    double score;
+    int u, v;
+  };
+  std::vector<Candidate> edges;
+  for (int u = 0; u < f.n; ++u)
+    for (int i = f.offsets[u]; i < f.offsets[u + 1]; ++i) {
+      int v = f.adj[i];
+      if (v > u && !(f.kind[u] == 2 && f.kind[v] == 2)) edges.push_back({f.normal[u].dot(f.normal[v]), u, v});
+    }
+  std::sort(edges.begin(), edges.end(), [](const Candidate& a, const Candidate& b) {
+    return a.score != b.score ? a.score > b.score : a.u != b.u ? a.u < b.u : a.v < b.v;
+  });
+  parent.assign(f.n, -1);
+  int n = 0;
+  for (const Candidate& e : edges)
+    if (parent[e.u] < 0 && parent[e.v] < 0) parent[e.u] = parent[e.v] = n++;
+  for (int u = 0; u < f.n; ++u)
+    if (parent[u] < 0) parent[u] = n++;
+  Fields c;
+  c.n = n;
+  c.s = f.s;
+  c.p.assign(n, V3::Zero());
+  c.normal.assign(n, V3::Zero());
+  c.weight.assign(n, 0.0);
+  c.kind.assign(n, -1);
+  c.anchor.assign(n, V3::Zero());
+  c.tangent.assign(n, V3::Zero());
+  c.principal.assign(n, V3::Zero());
+  c.principal_weight.assign(n, 0.0);
+  for (int u = 0; u < f.n; ++u) {
+    int a = parent[u];
+    c.p[a] += f.weight[u] * f.p[u];
+    c.normal[a] += f.weight[u] * f.normal[u];
+    c.weight[a] += f.weight[u];
+    if (f.kind[u] > c.kind[a]) {
+      c.kind[a] = f.kind[u];
+      c.anchor[a] = f.anchor[u];
+      c.tangent[a] = f.tangent[u];
+    }
+    if (f.principal_weight[u] > c.principal_weight[a]) {
+      c.principal_weight[a] = f.principal_weight[u];
+      c.principal[a] = f.principal[u];
+    }
+  }
+  for (int a = 0; a < n; ++a) {
+    c.p[a] /= c.weight[a];
+    double l = c.normal[a].norm();
+    c.normal[a] = l > 0 ? V3(c.normal[a] / l) : V3(0, 0, 1);
+    for (V3* t : {&c.tangent[a], &c.principal[a]}) {
+      *t -= c.normal[a] * c.normal[a].dot(*t);
+      double lt = t->norm();
+      *t = lt > 1e-9 ? V3(*t / lt) : V3::Zero();
+    }
+    if (c.kind[a] == 1 && c.tangent[a].norm() == 0) c.kind[a] = 0;
+    if (c.principal[a].norm() == 0) c.principal_weight[a] = 0;
+  }
+  std::vector<std::uint64_t> pairs;
+  for (int u = 0; u < f.n; ++u)
+    for (int i = f.offsets[u]; i < f.offsets[u + 1]; ++i) {
+      int a = parent[u], b = parent[f.adj[i]];
+      if (a != b) pairs.push_back(half_key(a, b));
+    }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  c.offsets.assign(n + 1, 0);
+  for (auto k : pairs) c.offsets[(k >> 32) + 1]++;
+  for (int a = 0; a < n; ++a) c.offsets[a + 1] += c.offsets[a];
+  c.adj.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) c.adj[i] = int(pairs[i] & 0xffffffffu);
+  return c;
+}
+
+struct Hierarchy {
+  std::vector<Fields> levels;             // levels[0] is the dense mesh's
+  std::vector<std::vector<int>> parents;  // parents[l][v]: v's vertex on level l + 1
+};
+
+void build_hierarchy(Hierarchy& h) {
+  while (h.levels.size() < 40 && h.levels.back().n > 64) {
+    std::vector<int> parent;
+    Fields c = coarsen(h.levels.back(), parent);
+    if (c.n > 0.9 * h.levels.back().n) break;
+    h.parents.push_back(std::move(parent));
+    h.levels.push_back(std::move(c));
+  }
+}
+
+template <class Sweep, class Check>
+void sweeps(Fields& fl, int iterations, Sweep&& sweep, Check&& check) {
+  for (int it = 0; it < iterations; ++it) {
+    if (it % 2 == 0)
+      for (int v = 0; v < fl.n; ++v) sweep(fl, v);
+    else
+      for (int v = fl.n - 1; v >= 0; --v) sweep(fl, v);
+    check();
+  }
+}
+
+// Both fields solved coarse to fine: initialised on the coarsest level, smoothed there, carried
+// to each finer level (projected onto its tangent planes, constraints applied) and smoothed again.
+template <class Check>
+void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
+  int top = static_cast<int>(h.levels.size()) - 1;
+  if (cross)
+    init_cross_field(h.levels[top], check);
+  else
+    init_position_field(h.levels[top], check);
+  for (int l = top; l >= 0; --l) {
+    Fields& fl = h.levels[l];
+    if (l < top) {
+      const Fields& up = h.levels[l + 1];
+      const std::vector<int>& parent = h.parents[l];
+      if (cross) {
+        fl.q.resize(fl.n);
+        for (int v = 0; v < fl.n; ++v) {
+          if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
+            fl.q[v] = fl.tangent[v];
+            continue;
+          }
+          V3 q = up.q[parent[v]] - fl.normal[v] * fl.normal[v].dot(up.q[parent[v]]);
+          fl.q[v] = q.norm() > 1e-9 ? V3(q.normalized()) : any_perpendicular(fl.normal[v]);
+        }
+      } else {
+        fl.o.resize(fl.n);
+        for (int v = 0; v < fl.n; ++v) {
+          const V3& o = up.o[parent[v]];
+          fl.o[v] = o - fl.normal[v] * fl.normal[v].dot(o - fl.p[v]);
+          constrain_position(fl, v);
+        }
+      }
+    }
+    if (cross)
+      sweeps(fl, iterations, smooth_cross_vertex, check);
+    else
+      sweeps(fl, iterations, smooth_position_vertex, check);
+  }
 }
 
 // --- extraction by edge collapses -------------------------------------------------------------
@@ -674,211 +822,267 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     st.dense_vertices = static_cast<int>(d.p.size());
     check(0.05);
 
-    Fields fl;
-    fl.s = s;
-    build_adjacency(d, fl);
-    classify(d, fl);
-    curvature(d, fl, options.curvature_alignment);
-    auto check_quiet = [&]() { check(0.1); };
-    init_cross_field(d, fl, check_quiet);
-    int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 60;
-    for (int it = 0; it < iterations; ++it) {
-      if (it % 2 == 0)
-        for (int v = 0; v < fl.n; ++v) smooth_cross_vertex(fl, v);
-      else
-        for (int v = fl.n - 1; v >= 0; --v) smooth_cross_vertex(fl, v);
-      check(0.1 + 0.3 * (it + 1) / iterations);
+    Hierarchy hier;
+    {
+      Fields dense;
+      dense.s = s;
+      build_adjacency(d, dense);
+      classify(d, dense);
+      curvature(d, dense, options.curvature_alignment);
+      hier.levels.push_back(std::move(dense));
     }
-    init_position_field(d, fl, check_quiet);
-    for (int it = 0; it < iterations; ++it) {
-      if (it % 2 == 0)
-        for (int v = 0; v < fl.n; ++v) smooth_position_vertex(d, fl, v);
-      else
-        for (int v = fl.n - 1; v >= 0; --v) smooth_position_vertex(d, fl, v);
-      check(0.4 + 0.3 * (it + 1) / iterations);
-    }
-    st.field_seconds = seconds_since(t0);
-    auto t1 = Clock::now();
+    build_hierarchy(hier);
+    Fields& fl = hier.levels[0];
+    int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
+    solve_fields(hier, iterations, true, [&]() { check(0.25); });
+    // Position field and extraction; when the lattice's irregularities gave clearly more faces
+    // than asked for, once more with the spacing scaled by the square root of the excess.
+    for (int attempt = 0;; ++attempt) {
+      result.cage = MeshInput{};
+      auto t_position = Clock::now();
+      for (Fields& level : hier.levels) level.s = s;
+      solve_fields(hier, iterations, false, [&]() { check(0.5); });
+      st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
+      auto t1 = Clock::now();
 
-    // Collapse every edge whose ends share a lattice point (link condition, features kept).
-    Collapser col(d, fl);
-    // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
-    // along their chains); each grows from its centre, the vertex of highest priority, by
-    // collapsing its neighbours into it ring by ring.
-    auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
-    std::vector<int> cluster(fl.n);
-    std::iota(cluster.begin(), cluster.end(), 0);
-    for (int u = 0; u < fl.n; ++u)
-      for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
-        int v = fl.adj[i];
-        if (v < u || !same_point(u, v)) continue;
-        bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
-        if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
-        cluster[find_root(cluster, u)] = find_root(cluster, v);
-      }
-    std::vector<int> centre_of(fl.n, -1);
-    for (int u = 0; u < fl.n; ++u) {
-      int r = find_root(cluster, u);
-      if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
-    }
-    for (int pass = 0; pass < 200; ++pass) {
-      int changed = 0;
+      // Collapse every edge whose ends share a lattice point (link condition, features kept).
+      Collapser col(d, fl);
+      // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
+      // along their chains); each grows from its centre, the vertex of highest priority, by
+      // collapsing its neighbours into it ring by ring.
+      auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
+      std::vector<int> cluster(fl.n);
+      std::iota(cluster.begin(), cluster.end(), 0);
+      for (int u = 0; u < fl.n; ++u)
+        for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
+          int v = fl.adj[i];
+          if (v < u || !same_point(u, v)) continue;
+          bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
+          if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
+          cluster[find_root(cluster, u)] = find_root(cluster, v);
+        }
+      std::vector<int> centre_of(fl.n, -1);
       for (int u = 0; u < fl.n; ++u) {
-        int c = centre_of[find_root(cluster, u)];
-        int tmp[2];
-        if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
-          continue;
-        if (col.can_collapse(u, c)) {
-          col.collapse(u, c);
-          ++changed;
+        int r = find_root(cluster, u);
+        if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
+      }
+      for (int pass = 0; pass < 200; ++pass) {
+        int changed = 0;
+        for (int u = 0; u < fl.n; ++u) {
+          int c = centre_of[find_root(cluster, u)];
+          int tmp[2];
+          if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
+            continue;
+          if (col.can_collapse(u, c)) {
+            col.collapse(u, c);
+            ++changed;
+          }
+        }
+        check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
+        if (changed == 0) break;
+      }
+      std::vector<int> nu, cands;
+      for (int pass = 0; pass < 200; ++pass) {
+        int changed = 0;
+        for (int u = 0; u < fl.n; ++u) {
+          if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
+          col.neighbours(u, nu);
+          cands.clear();
+          for (int v : nu)
+            if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
+          std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
+          for (int v : cands)
+            if (col.can_collapse(u, v)) {
+              col.collapse(u, v);
+              ++changed;
+              break;
+            }
+        }
+        check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
+        if (changed == 0) break;
+      }
+
+      // The coarse triangle mesh.
+      std::vector<int> coarse_of(fl.n, -1), dense_of;
+      for (int v = 0; v < fl.n; ++v)
+        if (col.alive[v] && !col.vf[v].empty()) {
+          coarse_of[v] = static_cast<int>(dense_of.size());
+          dense_of.push_back(v);
+        }
+      std::vector<Tri> tris;
+      for (size_t i = 0; i < col.f.size(); ++i)
+        if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
+      int nc = static_cast<int>(dense_of.size());
+      auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
+
+      // Pair triangles into quads across "diagonal" edges (lattice displacement (±1, ±1)).
+      std::unordered_map<std::uint64_t, int> half;
+      for (size_t i = 0; i < tris.size(); ++i)
+        for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+      struct Pair {
+        double score;
+        int f, g, k;
+      };
+      std::vector<Pair> pairs;
+      auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
+        int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
+        int w = -1;
+        for (int j = 0; j < 3; ++j)
+          if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
+        quad = {x, w, y, z};
+      };
+      for (size_t i = 0; i < tris.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+          int x = tris[i][k], y = tris[i][(k + 1) % 3];
+          auto it = half.find(half_key(y, x));
+          if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
+          std::array<int, 4> quad;
+          quad_of(int(i), k, it->second, quad);
+          if (quad[1] == quad[3]) continue;  // two triangles sharing two edges
+          V3 c[4];
+          for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
+          double quality = quad_quality(c);
+          if (quality < 0.2) continue;
+          int dx = dense_of[x], dy = dense_of[y];
+          V3 disp = fl.o[dy] - fl.o[dx];
+          V3 tx = fl.normal[dx].cross(fl.q[dx]);
+          double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
+          bool diagonal = a == 1 && b == 1;
+          pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
+        }
+      std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+        return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
+      });
+      // Greedy matching, best pairs first; then augmenting paths (alternating between unused and
+      // used pairs, breadth first, bounded) from each unpaired triangle to another.
+      int nt = static_cast<int>(tris.size());
+      std::vector<int> mate(nt, -1), mate_k(nt, -1);
+      std::vector<std::array<int, 3>> cand(nt, {-1, -1, -1});  // neighbour across edge k if pairable
+      for (const Pair& pr : pairs) {
+        cand[pr.f][pr.k] = pr.g;
+        for (int j = 0; j < 3; ++j)
+          if (tris[pr.g][j] == tris[pr.f][(pr.k + 1) % 3]) cand[pr.g][j] = pr.f;
+      }
+      for (const Pair& pr : pairs) {
+        if (mate[pr.f] >= 0 || mate[pr.g] >= 0) continue;
+        mate[pr.f] = pr.g;
+        mate[pr.g] = pr.f;
+      }
+      std::vector<int> from(nt, -1), seen(nt, -1);
+      for (int t = 0; t < nt; ++t) {
+        if (mate[t] >= 0) continue;
+        std::vector<int> queue{t};
+        seen[t] = t;
+        int end_a = -1, end_b = -1;
+        for (size_t head = 0; head < queue.size() && head < 400 && end_b < 0; ++head) {
+          int a = queue[head];
+          for (int k = 0; k < 3 && end_b < 0; ++k) {
+            int b = cand[a][k];
+            if (b < 0 || b == mate[a] || seen[b] == t) continue;
+            if (mate[b] < 0) {
+              end_a = a;
+              end_b = b;
+            } else if (seen[mate[b]] != t) {
+              seen[b] = t;
+              seen[mate[b]] = t;
+              from[mate[b]] = a;
+              queue.push_back(mate[b]);
+            }
+          }
+        }
+        if (end_b < 0) continue;
+        // flip the path: end_b - end_a, then each a's old mate pairs with a's predecessor
+        int a = end_a, b = end_b;
+        while (true) {
+          int old = mate[a];
+          mate[a] = b;
+          mate[b] = a;
+          if (a == t) break;
+          b = old;
+          a = from[a];
         }
       }
-      check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
-      if (changed == 0) break;
-    }
-    std::vector<int> nu, cands;
-    for (int pass = 0; pass < 200; ++pass) {
-      int changed = 0;
-      for (int u = 0; u < fl.n; ++u) {
-        if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
-        col.neighbours(u, nu);
-        cands.clear();
-        for (int v : nu)
-          if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
-        std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
-        for (int v : cands)
-          if (col.can_collapse(u, v)) {
-            col.collapse(u, v);
-            ++changed;
-            break;
-          }
-      }
-      check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
-      if (changed == 0) break;
-    }
-
-    // The coarse triangle mesh.
-    std::vector<int> coarse_of(fl.n, -1), dense_of;
-    for (int v = 0; v < fl.n; ++v)
-      if (col.alive[v] && !col.vf[v].empty()) {
-        coarse_of[v] = static_cast<int>(dense_of.size());
-        dense_of.push_back(v);
-      }
-    std::vector<Tri> tris;
-    for (size_t i = 0; i < col.f.size(); ++i)
-      if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
-    int nc = static_cast<int>(dense_of.size());
-    auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
-
-    // Pair triangles into quads across "diagonal" edges (lattice displacement (±1, ±1)).
-    std::unordered_map<std::uint64_t, int> half;
-    for (size_t i = 0; i < tris.size(); ++i)
-      for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
-    struct Pair {
-      double score;
-      int f, g, k;
-    };
-    std::vector<Pair> pairs;
-    auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
-      int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
-      int w = -1;
-      for (int j = 0; j < 3; ++j)
-        if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
-      quad = {x, w, y, z};
-    };
-    for (size_t i = 0; i < tris.size(); ++i)
-      for (int k = 0; k < 3; ++k) {
-        int x = tris[i][k], y = tris[i][(k + 1) % 3];
-        auto it = half.find(half_key(y, x));
-        if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
+      std::vector<std::vector<int>> polygons;
+      for (int f = 0; f < nt; ++f) {
+        int g = mate[f];
+        if (g < f) continue;
+        int k = 0;
+        while (cand[f][k] != g) ++k;
         std::array<int, 4> quad;
-        quad_of(int(i), k, it->second, quad);
-        V3 c[4];
-        for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
-        double quality = quad_quality(c);
-        if (quality < 0.2) continue;
-        int dx = dense_of[x], dy = dense_of[y];
-        V3 disp = fl.o[dy] - fl.o[dx];
-        V3 tx = fl.normal[dx].cross(fl.q[dx]);
-        double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
-        bool diagonal = a == 1 && b == 1;
-        pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
+        quad_of(f, k, g, quad);
+        polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
       }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-      return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
-    });
-    std::vector<char> paired(tris.size(), 0);
-    std::vector<std::vector<int>> polygons;
-    for (const Pair& pr : pairs) {
-      if (paired[pr.f] || paired[pr.g]) continue;
-      paired[pr.f] = paired[pr.g] = 1;
-      std::array<int, 4> quad;
-      quad_of(pr.f, pr.k, pr.g, quad);
-      polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
-    }
-    st.coarse_quads = static_cast<int>(polygons.size());
-    for (size_t i = 0; i < tris.size(); ++i)
-      if (!paired[i]) polygons.push_back({tris[i][0], tris[i][1], tris[i][2]});
-    st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
-    check(0.92);
+      st.coarse_quads = static_cast<int>(polygons.size());
+      for (int f = 0; f < nt; ++f)
+        if (mate[f] < 0) polygons.push_back({tris[f][0], tris[f][1], tris[f][2]});
+      st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
+      check(0.92);
 
-    // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface.
-    Projector proj(d, fl);
-    MeshInput& cage = result.cage;
-    cage.options = mesh.options;
-    for (int v = 0; v < nc; ++v) {
-      const V3& x = d.p[dense_of[v]];
-      cage.positions.push_back({x.x(), x.y(), x.z()});
+      // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface.
+      Projector proj(d, fl);
+      MeshInput& cage = result.cage;
+      cage.options = mesh.options;
+      for (int v = 0; v < nc; ++v) {
+        const V3& x = d.p[dense_of[v]];
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+      }
+      std::unordered_map<std::uint64_t, int> midpoint;
+      std::vector<std::uint64_t> feature_keys;
+      auto mid = [&](int a, int b) {
+        auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
+        if (!inserted) return it->second;
+        bool feat = coarse_feature(a, b);
+        int da = std::min(dense_of[a], dense_of[b]);
+        V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
+        it->second = static_cast<int>(cage.positions.size());
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+        if (feat) {
+          feature_keys.push_back(edge_key(a, it->second));
+          feature_keys.push_back(edge_key(it->second, b));
+        }
+        return it->second;
+      };
+      for (const auto& poly : polygons) {
+        int m = static_cast<int>(poly.size());
+        V3 centre = V3::Zero();
+        int start = dense_of[poly[0]];
+        for (int v : poly) {
+          centre += d.p[dense_of[v]];
+          start = std::min(start, dense_of[v]);
+        }
+        V3 x = proj.project(centre / m, start, false);
+        int c = static_cast<int>(cage.positions.size());
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+        std::vector<int> mids(m);
+        for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
+        for (int k = 0; k < m; ++k) {
+          cage.face_sizes.push_back(4);
+          cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
+        }
+      }
+      std::sort(feature_keys.begin(), feature_keys.end());
+      for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
+      for (int v = 0; v < nc; ++v)
+        if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
+      st.extract_seconds += seconds_since(t1);
+      double ratio = result.cage.num_faces() * h * h / area;
+      st.attempts = attempt + 1;
+      if (attempt == 0 && ratio > 1.3) {
+        s *= std::sqrt(ratio);
+        continue;
+      }
+      break;
     }
-    std::unordered_map<std::uint64_t, int> midpoint;
-    std::vector<std::uint64_t> feature_keys;
-    auto mid = [&](int a, int b) {
-      auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
-      if (!inserted) return it->second;
-      bool feat = coarse_feature(a, b);
-      int da = std::min(dense_of[a], dense_of[b]);
-      V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
-      it->second = static_cast<int>(cage.positions.size());
-      cage.positions.push_back({x.x(), x.y(), x.z()});
-      if (feat) {
-        feature_keys.push_back(edge_key(a, it->second));
-        feature_keys.push_back(edge_key(it->second, b));
-      }
-      return it->second;
-    };
-    for (const auto& poly : polygons) {
-      int m = static_cast<int>(poly.size());
-      V3 centre = V3::Zero();
-      int start = dense_of[poly[0]];
-      for (int v : poly) {
-        centre += d.p[dense_of[v]];
-        start = std::min(start, dense_of[v]);
-      }
-      V3 x = proj.project(centre / m, start, false);
-      int c = static_cast<int>(cage.positions.size());
-      cage.positions.push_back({x.x(), x.y(), x.z()});
-      std::vector<int> mids(m);
-      for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
-      for (int k = 0; k < m; ++k) {
-        cage.face_sizes.push_back(4);
-        cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
-      }
-    }
-    std::sort(feature_keys.begin(), feature_keys.end());
-    for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
-    for (int v = 0; v < nc; ++v)
-      if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
-    st.extract_seconds = seconds_since(t1);
 
     // Checks and statistics: the cage must be a manifold with the input's topology.
     PolyMesh pm;
     try {
-      pm = PolyMesh::build(cage.num_vertices(), cage.face_sizes, cage.face_indices);
+      pm = PolyMesh::build(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
     } catch (const Error& e) {
       throw Error(ErrorKind::Fit, std::string("quad remesh: the extracted cage is not a valid mesh: ") + e.what());
     }
     Topology ti = topology(mesh.num_vertices(), mesh.face_sizes, mesh.face_indices);
-    Topology tc = topology(cage.num_vertices(), cage.face_sizes, cage.face_indices);
+    Topology tc = topology(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
     st.euler_input = ti.euler;
     st.euler_cage = tc.euler;
     st.boundaries_input = ti.boundaries;
@@ -891,12 +1095,12 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
                                       std::to_string(tc.components) + " components) differs from the mesh's (" +
                                       std::to_string(ti.euler) + ", " + std::to_string(ti.boundaries) + ", " +
                                       std::to_string(ti.components) + ")");
-    st.faces = cage.num_faces();
-    st.vertices = cage.num_vertices();
-    st.feature_edges = static_cast<int>(cage.creases.size());
-    st.corners = static_cast<int>(cage.corners.size());
-    std::vector<char> is_corner(cage.num_vertices(), 0);
-    for (const auto& c : cage.corners) is_corner[c.vertex] = 1;
+    st.faces = result.cage.num_faces();
+    st.vertices = result.cage.num_vertices();
+    st.feature_edges = static_cast<int>(result.cage.creases.size());
+    st.corners = static_cast<int>(result.cage.corners.size());
+    std::vector<char> is_corner(result.cage.num_vertices(), 0);
+    for (const auto& c : result.cage.corners) is_corner[c.vertex] = 1;
     for (int v = 0; v < pm.num_vertices(); ++v) {
       if (pm.is_unused_vertex(v) || is_corner[v]) continue;
       int regular = pm.is_boundary_vertex(v) ? 3 : 4;

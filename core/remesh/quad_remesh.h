@@ -32,6 +32,7 @@ struct QuadRemeshStats {
   int dense_vertices = 0;      ///< vertices of the input after long edges were split (the fields' domain)
   int coarse_triangles = 0;    ///< triangles left unpaired after the extraction (each becomes 3 quads)
   int coarse_quads = 0;        ///< quads paired by the extraction (each becomes 4 quads)
+  int attempts = 0;            ///< position field + extraction runs (2: the first gave > 1.3x the faces asked for)
 };
 
 struct QuadRemeshResult {
