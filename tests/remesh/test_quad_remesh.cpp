@@ -144,6 +144,26 @@ TEST(QuadRemesh, OpenCylinderKeepsItsTwoBoundaries) {
   for (const auto& p : r.cage.positions) EXPECT_NEAR(std::hypot(p[0], p[1]), 1.0, 0.01);
 }
 
+TEST(QuadRemesh, FlatSquareStaysFlatWithItsCornersAndBoundary) {
+  test::MeshBuilder b;
+  b.patch([](double u, double v) { return P3{2 * u - 1, 2 * v - 1, 0}; }, 20, 20);
+  MeshInput m = b.mesh();
+  QuadRemeshResult r = remesh(m, 100);
+  check_cage(m, r, 100);
+  EXPECT_EQ(r.stats.boundaries_cage, 1);
+  for (const auto& p : r.cage.positions) EXPECT_EQ(p[2], 0.0);
+  double perimeter = 0;
+  for (const auto& c : r.cage.creases) {
+    const P3 &a = r.cage.positions[c.v0], &e = r.cage.positions[c.v1];
+    EXPECT_TRUE((std::abs(a[0]) == 1 && a[0] == e[0]) || (std::abs(a[1]) == 1 && a[1] == e[1])) << "tagged edge off the boundary";
+    perimeter += std::hypot(a[0] - e[0], a[1] - e[1]);
+  }
+  EXPECT_NEAR(perimeter, 8.0, 1e-12);
+  std::set<std::array<double, 3>> corners;
+  for (const auto& c : r.cage.corners) corners.insert(r.cage.positions[c.vertex]);
+  EXPECT_EQ(corners, (std::set<std::array<double, 3>>{{-1, -1, 0}, {1, -1, 0}, {-1, 1, 0}, {1, 1, 0}}));
+}
+
 TEST(QuadRemesh, TwoSpheresStayTwoComponents) {
   MeshInput m = test::concat(test::icosphere(3), test::icosphere(3, 0.5, {3, 0, 0}));
   QuadRemeshResult r = remesh(m, 250);
