@@ -278,6 +278,7 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   auto t = Clock::now();
   if (progress.stage) progress.stage("remeshing " + std::to_string(tri.num_faces()) + " triangles into a quad cage");
   QuadRemeshResult rr = quad_remesh(tri, ro, progress.fraction);
+  if (rr.cancelled) throw Error(ErrorKind::Usage, "cancelled");
   rep.remesh_ms = ms_since(t);
   rep.remesh = rr.stats;
   rep.feature_edges_in = static_cast<int>(rr.features.edges.size());
