@@ -40,6 +40,7 @@ struct LoadedCage {
     int quads = 0;             ///< quads recovered from two triangles each
     int triangles_kept = 0;    ///< triangles left as they were
     int fan_vertices = 0;      ///< fan (polar candidate) vertices whose triangles were kept
+    int fan_triangles = 0;     ///< of triangles_kept, those kept because they belong to a fan
   } recovery;
   /// What the mesh readers (STL, PLY, OFF: io/mesh_reader.h) repaired; `applied` is false for
   /// OBJ and glTF, which are taken as they are (glTF welds exact duplicates only).

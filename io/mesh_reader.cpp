@@ -563,6 +563,7 @@ void take_recovered_quads(LoadedCage& cage, QuadRecoveryResult&& result) {
   cage.recovery.quads = result.quads;
   cage.recovery.triangles_kept = result.triangles_kept;
   cage.recovery.fan_vertices = result.fan_vertices;
+  cage.recovery.fan_triangles = result.fan_triangles;
 }
 
 }  // namespace subd2nurbs

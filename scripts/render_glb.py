@@ -5,6 +5,8 @@ from its binary chunk, projected orthographically, rasterised with a z-buffer, a
 gets the interpolated vertex colour times a Lambert term (ambient 0.35) from the normal.
 
     python3 scripts/render_glb.py IN.glb OUT.png [--size 640] [--up y|z] [--azimuth 30] [--elevation 20]
+    python3 scripts/render_glb.py MESH.{off,obj} OUT.png [--edges] ...   a polygon mesh, flat grey
+                                                                          (--edges: its edges drawn)
 
 Used for docs/images/ (see docs/limit.md, "Pictures").
 """
@@ -45,6 +47,47 @@ def read_glb(path):
     return pos, nrm, col, idx
 
 
+def read_polygons(path):
+    """(positions, faces) of an OFF or OBJ file (vertices and faces only)."""
+    pts, faces = [], []
+    if path.lower().endswith(".off"):
+        words = [l.split("#")[0].split() for l in open(path)]
+        words = [w for w in words if w]
+        start = 1 if words[0][0].endswith("OFF") and len(words[0]) == 1 else 0
+        head = words[start] if start else words[0][1:]
+        nv, nf = int(head[0]), int(head[1])
+        body = words[start + 1:]
+        pts = [tuple(map(float, w[:3])) for w in body[:nv]]
+        faces = [[int(x) for x in w[1:1 + int(w[0])]] for w in body[nv:nv + nf]]
+    else:
+        for line in open(path):
+            w = line.split()
+            if w and w[0] == "v":
+                pts.append(tuple(map(float, w[1:4])))
+            elif w and w[0] == "f":
+                faces.append([int(x.split("/")[0]) - 1 for x in w[1:]])
+    return pts, faces
+
+
+def flat_mesh(pts, faces, grey=0.75):
+    """GLB-like arrays of a polygon mesh with flat normals: one vertex per face corner."""
+    pos, nrm, col, idx = [], [], [], []
+    for f in faces:
+        a, b, c = pts[f[0]], pts[f[1]], pts[f[2]]
+        u = [b[k] - a[k] for k in range(3)]
+        v = [c[k] - a[k] for k in range(3)]
+        n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+        ln = math.sqrt(sum(x * x for x in n)) or 1.0
+        base = len(pos) // 3
+        for k in f:
+            pos.extend(pts[k])
+            nrm.extend(x / ln for x in n)
+            col.extend((grey, grey, grey))
+        for t in range(1, len(f) - 1):
+            idx.extend((base, base + t, base + t + 1))
+    return pos, nrm, col, idx
+
+
 def write_png(path, w, h, rgb):
     raw = b"".join(b"\x00" + bytes(rgb[y * w * 3:(y + 1) * w * 3]) for y in range(h))
 
@@ -65,8 +108,19 @@ def main():
     ap.add_argument("--up", choices=["y", "z"], default="y")
     ap.add_argument("--azimuth", type=float, default=30.0)
     ap.add_argument("--elevation", type=float, default=20.0)
+    ap.add_argument("--edges", action="store_true", help="a polygon mesh: draw its edges")
     a = ap.parse_args()
-    pos, nrm, col, idx = read_glb(a.glb)
+    edges = []
+    if a.glb.lower().endswith((".off", ".obj")):
+        pts, faces = read_polygons(a.glb)
+        pos, nrm, col, idx = flat_mesh(pts, faces)
+        if a.edges:
+            corner = 0
+            for f in faces:
+                edges.extend((corner + k, corner + (k + 1) % len(f)) for k in range(len(f)))
+                corner += len(f)
+    else:
+        pos, nrm, col, idx = read_glb(a.glb)
     nv = len(pos) // 3
     # Camera: rotate the model so that `up` is screen-up, then azimuth about up, elevation about x.
     az, el = math.radians(a.azimuth), math.radians(a.elevation)
@@ -123,6 +177,16 @@ def main():
                 for ch in range(3):
                     v = w0 * c0[ch] + w1 * c1[ch] + w2 * c2[ch]
                     img[3 * k + ch] = max(0, min(255, int(v * 255 + 0.5)))
+    for i0, i1 in edges:  # dark lines over the faces, visible where they are not behind a face
+        (x0, y0, z0), (x1, y1, z1) = S[i0], S[i1]
+        steps = int(max(abs(x1 - x0), abs(y1 - y0))) + 1
+        for t in range(steps + 1):
+            f = t / steps
+            px, py, z = int(x0 + f * (x1 - x0)), int(y0 + f * (y1 - y0)), z0 + f * (z1 - z0)
+            if 0 <= px < W and 0 <= py < H:
+                k = py * W + px
+                if z >= zbuf[k] - 1e-3 * scale ** -1 * W:
+                    img[3 * k:3 * k + 3] = bytes((40, 40, 40))
     write_png(a.png, W, H, img)
 
 

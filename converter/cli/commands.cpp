@@ -70,7 +70,7 @@ std::string histogram_text(const std::map<int, int>& histogram, const char* unit
   return s.empty() ? "-" : s;
 }
 
-void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
+void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s, const pipeline::InputRoute& route) {
   const SubdivOptions& o = loaded.level.options;
   const BoundingBox& b = s.bounds;
   out << loaded.cage.path << "\n"
@@ -97,6 +97,7 @@ void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
       << "  options      boundary " << to_string(o.boundary) << ", creases "
       << to_string(o.crease_method) << ", triangles " << to_string(o.triangles)
       << "\n";
+  out << "  path         " << (route.mesh ? "mesh" : "cage") << ": " << route.reason << "\n";
   const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
   if (q.applied)
     out << "  recovered    " << q.quads << " quads from " << q.source_triangles << " triangles ("
@@ -126,7 +127,7 @@ void write_histogram(JsonWriter& w, const std::map<int, int>& histogram) {
   w.end_object();
 }
 
-void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s) {
+void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s, const pipeline::InputRoute& route) {
   const SubdivOptions& o = loaded.level.options;
   JsonWriter w(JsonWriter::Numbers::Report, JsonWriter::Spacing::Spaced);
   w.begin_object(2);
@@ -149,6 +150,8 @@ void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
   w.end_object().key("options").begin_object();
   w.members("boundary", to_string(o.boundary), "crease_method", to_string(o.crease_method), "triangles",
             to_string(o.triangles));
+  w.end_object().key("path").begin_object();
+  w.members("kind", route.mesh ? "mesh" : "cage", "reason", route.reason);
   w.end_object().key("quad_recovery");
   const LoadedCage::QuadRecovery& q = loaded.cage.recovery;
   if (q.applied) {
@@ -308,10 +311,12 @@ void add_setting_options(CLI::App& app, pipeline::SettingCommand command, Settin
 void run_info(const InfoOptions& options, std::ostream& out) {
   const LoadedInput loaded = load_input(options.mesh);
   const MeshStats stats = compute_stats(loaded.level, loaded.positions());
+  const pipeline::InputRoute route =
+      pipeline::route_input(loaded.cage, options.mesh, pipeline::input_kind(options.input));
   if (options.json)
-    print_json(out, loaded, stats);
+    print_json(out, loaded, stats, route);
   else
-    print_text(out, loaded, stats);
+    print_text(out, loaded, stats, route);
 }
 
 void run_refine(const RefineOptions& options, std::ostream& err) {
@@ -358,6 +363,10 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   CLI::App* info_command =
       add_cage_command(app, "info", "Describe a cage: counts, boundary, creases, warnings", info.mesh);
   info_command->add_flag("--json", info.json, "Print JSON on stdout instead of text");
+  info_command->add_option("--input", info.input,
+                           "auto, mesh or cage: which path `convert` takes (as convert --input; auto: by the rule "
+                           "of docs/meshes.md)")
+      ->check(CLI::IsMember({"auto", "mesh", "cage"}));
 
   RefineOptions refine;
   CLI::App* refine_command =
@@ -388,6 +397,9 @@ int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
   convert_command->add_option("--fit-to", convert.fit_to,
                               "First fit the cage to this target shape (a mesh or point cloud, as `subd2nurbs fit "
                               "--to`, default options), then convert the fitted cage");
+  convert_command->add_option("--keep-cage", convert.keep_cage,
+                              "Also write the cage that was converted as OBJ with its tags (for a mesh input: the "
+                              "quad cage made from it, fitted), for editing");
   add_setting_options(*convert_command, pipeline::kConvertCommand, convert.settings);
   convert_command->add_flag("-q,--quiet", convert.quiet,
                             "No progress, notes or summary on stderr (warnings are still printed)");

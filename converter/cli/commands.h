@@ -95,6 +95,7 @@ std::string option_name(const std::string& setting);
 struct InfoOptions {
   std::string mesh;
   bool json = false;
+  std::string input = "auto";  ///< which path convert would take: auto, mesh, cage
 };
 
 struct RefineOptions {

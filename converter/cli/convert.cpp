@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "io/atomic_file.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
+#include "io/obj_writer.h"
 #include "io/patch_json.h"
 
 namespace subd2nurbs::cli {
@@ -222,9 +224,10 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   const pipeline::Settings all = conversion_settings(options, kind != OutputKind::Json);
   const occt::StepSchema schema = all.write.schema;
   const pipeline::ConversionSettings settings = pipeline::conversion_settings(all);
-  check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview}});
+  check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview},
+                               {"--keep-cage", options.keep_cage}});
   if (!options.fit_to.empty())
-    for (const std::string& out : {options.output, options.report, options.preview})
+    for (const std::string& out : {options.output, options.report, options.preview, options.keep_cage})
       if (!out.empty() && same_file(options.fit_to, out))
         throw UsageError("an output is the target file " + printable(options.fit_to) + "; choose another output name");
 
@@ -235,14 +238,29 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     load_warnings.push_back(w);
   };
 
-  // Load.
+  // Load: a cage, or a mesh made into a fitted cage (the mesh path, pipeline/mesh_path.h).
   auto t = Clock::now();
   progress.stage("reading " + options.mesh);
-  const LoadedInput loaded = load_input(options.mesh);
+  pipeline::LoadedSource source = pipeline::load_source(options.mesh, all.mesh.input);
+  std::optional<pipeline::MeshCage> made;
+  if (source.route.mesh) {
+    for (const std::string& w : source.warnings) warn(w);
+    if (!options.fit_to.empty())
+      throw UsageError("--fit-to fits a cage; " + options.mesh + " is taken as a mesh (" + source.route.reason +
+                       "), which is fitted to itself: drop --fit-to, or give --input cage");
+    progress.stage(options.mesh + ": " + source.route.reason);
+    pipeline::MeshPathProgress mesh_progress;
+    mesh_progress.stage = [&](const std::string& what) { progress.stage(what); };
+    made = pipeline::mesh_to_cage(source.mesh, all.mesh, mesh_progress);
+    made->report.route = source.route;
+    source.cage = std::move(made->cage);
+  }
+  const LoadedInput& loaded = *source.cage;
   const LoadedCage& cage = loaded.cage;
   const SubdivLevel& base = loaded.level;
-  for (const std::string& w : loaded.warnings) warn(w);
-  std::vector<Point3> positions = loaded.positions();
+  if (!made)
+    for (const std::string& w : loaded.warnings) warn(w);
+  std::vector<Point3> positions = made ? made->positions : loaded.positions();
   const double load_ms = ms_since(t);
   if (!options.fit_to.empty()) positions = fit_to_target(options, all, base, positions, progress, err);
   if (cage.recovery.applied && !options.quiet)
@@ -303,6 +321,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   c.output.format = output_kind_name(kind);
   if (kind == OutputKind::Step) c.output.step_schema = occt::to_string(schema);
   c.ms.load = load_ms;
+  if (made) c.mesh = std::move(made->report);
 
   if (!options.report.empty()) {
     if (!options.quiet) print_quality_summary(err, *c.quality, c.build.set.model_size);
@@ -311,8 +330,15 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     staged.back().write([&](std::ostream& out) { out << text; });
   }
   if (!options.preview.empty()) staged.push_back(stage_preview(options, c, err));
+  if (!options.keep_cage.empty()) {
+    staged.emplace_back(options.keep_cage);
+    staged.back().write([&](std::ostream& out) { write_obj(out, c.cage, base); });
+  }
   for (StagedFile& file : staged) file.commit();
-  if (!options.quiet) print_summary(err, c, kind, schema);
+  if (!options.quiet) {
+    if (c.mesh) err << pipeline::mesh_path_summary(*c.mesh);
+    print_summary(err, c, kind, schema);
+  }
 }
 
 }  // namespace subd2nurbs::cli

@@ -17,6 +17,7 @@ struct ConvertOptions {
   std::string report;         ///< JSON report path, empty for none
   std::string preview;        ///< GLB preview path, empty for none
   std::string fit_to;         ///< a target shape: the cage is fitted to it first (subd2nurbs fit), empty for none
+  std::string keep_cage;      ///< mesh input: the cage made from it, written as OBJ (fitted), empty for none
   bool quiet = false;         ///< no progress, notes or summary (warnings are still printed)
   bool progress_tty = false;  ///< stderr is a terminal: show the B-rep percentage in place
   SettingValues settings;     ///< the settings table's options as given (converter/pipeline/settings.h)

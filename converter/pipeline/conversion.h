@@ -15,6 +15,7 @@
 
 #include "converter/occt/brep_builder.h"
 #include "converter/occt/writers.h"
+#include "converter/pipeline/mesh_path.h"
 #include "converter/pipeline/resources.h"
 #include "converter/pipeline/settings_error.h"
 #include "converter/pipeline/text.h"
@@ -235,6 +236,8 @@ struct ConversionResult {
   std::vector<Point3> cage;  ///< the cage converted: the input's positions, or the fitted cage
   std::optional<QualityReport> quality;  ///< ConversionSettings::quality_samples given
   std::optional<PreviewMesh> preview;    ///< ConversionSettings::preview given
+  /// The input was a mesh (mesh_path.h): what made the cage from it; set by the caller.
+  std::optional<MeshPathReport> mesh;
   PreviewSettings preview_settings;      ///< what `preview` was made with
   Timings ms;             ///< load and write are the caller's to fill
 };

@@ -2,11 +2,15 @@
 
 #include "io/cage_reader.h"
 
+#include <utility>
+
 namespace subd2nurbs::pipeline {
 
-LoadedInput load_input(const std::string& path) {
+LoadedInput load_input(const std::string& path) { return load_input(read_cage(path)); }
+
+LoadedInput load_input(LoadedCage cage) {
   LoadedInput result;
-  result.cage = read_cage(path);
+  result.cage = std::move(cage);
   Diagnostics validation;
   result.level = SubdivLevel::from_validated(validate_cage(result.cage, &validation), result.cage.input);
   for (const Diagnostic& d : result.cage.diagnostics) result.warnings.push_back(format_diagnostic(result.cage, d));

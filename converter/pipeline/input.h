@@ -24,5 +24,7 @@ struct LoadedInput {
 
 /// Reads and validates a cage. \throw InputError for an unreadable or invalid cage
 LoadedInput load_input(const std::string& path);
+/// Validates a cage already read (its warnings included). \throw InputError for an invalid cage
+LoadedInput load_input(LoadedCage cage);
 
 }  // namespace subd2nurbs::pipeline

@@ -261,6 +261,7 @@ std::string report_json(const ConversionResult& c) {
   w.members("max_c2_jump", k.max_c2_jump, "max_crease_normal_angle_deg", k.max_crease_normal_angle_deg);
   w.end_object();
   write_deviation(w, c, size);
+  if (c.mesh) write_mesh_path(w.key("mesh"), *c.mesh);
   const Timings& ms = c.ms;
   w.key("timings_ms").begin_object();
   w.members("load", ms.load, "fit", ms.fit, "patches", ms.patches, "continuity", ms.continuity,

@@ -264,6 +264,59 @@ void add_limit_rows(std::vector<SettingRow>& t) {
   }
 }
 
+/// The mesh path (converter/pipeline/mesh_path.h): input, target_faces, edge_length, feature_angle.
+void add_mesh_rows(std::vector<SettingRow>& t) {
+  {
+    SettingRow& r = add_row(t, "input", SettingType::Word, std::string(to_string(InputKind::Auto)));
+    r.help = "What the input is: auto (decided by the rule of docs/meshes.md: a triangle mesh that does not pair "
+             "back into quads is a mesh), mesh (a shape to reproduce: remeshed into a quad cage, which is fitted "
+             "to it) or cage (its own subdivision cage)";
+    r.cli = "--input";
+    r.choices = {"auto", "mesh", "cage"};
+    r.property = {"InputKind", "Mesh",
+                  "Auto: decided by the input (a triangle mesh that does not pair back into quads is remeshed); "
+                  "Mesh: remesh into a quad cage fitted to the mesh; Cage: the input is the subdivision cage",
+                  {{"Auto", "auto"}, {"Mesh", "mesh"}, {"Cage", "cage"}}};
+    r.set = [](Settings& s, const SettingValue& v) { s.mesh.input = input_kind(word(v)); };
+    r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.mesh.input)); };
+  }
+  {
+    SettingRow& r = add_row(t, "target_faces", SettingType::Integer, {});
+    r.default_text = "from the mesh's area: edges of about 1/25 of the diagonal, 100 .. 1500 quads";
+    r.help = "Mesh input: the number of quads of the cage made from the mesh (about)";
+    r.cli = "--target-faces";
+    r.property = {"TargetFaces", "Mesh", "Mesh input: quads of the cage (about; 0: automatic)", {}, true};
+    r.set = [](Settings& s, const SettingValue& v) { s.mesh.target_faces = integer(v); };
+    r.get = [](const Settings& s) -> SettingValue {
+      if (s.mesh.target_faces == 0) return std::monostate{};
+      return static_cast<long long>(s.mesh.target_faces);
+    };
+  }
+  {
+    SettingRow& r = add_row(t, "edge_length", SettingType::Number, {});
+    r.default_text = "from target_faces";
+    r.help = "Mesh input: the cage's edge length in model units, instead of target_faces";
+    r.cli = "--edge-length";
+    r.property = {"EdgeLength", "Mesh", "Mesh input: the cage's edge length in model units (0: from TargetFaces)",
+                  {}, true};
+    r.set = [](Settings& s, const SettingValue& v) { s.mesh.edge_length = number(v); };
+    r.get = [](const Settings& s) -> SettingValue {
+      if (s.mesh.edge_length == 0) return std::monostate{};
+      return s.mesh.edge_length;
+    };
+  }
+  {
+    SettingRow& r = add_row(t, "feature_angle", SettingType::Number, 30.0);
+    r.help = "Mesh input: an edge whose faces' normals differ by more than this many degrees is a sharp feature, "
+             "kept as an infinitely sharp crease of the cage";
+    r.cli = "--feature-angle";
+    r.property = {"FeatureAngle", "Mesh", "Mesh input: degrees between the faces' normals above which an edge is "
+                  "kept sharp"};
+    r.set = [](Settings& s, const SettingValue& v) { s.mesh.feature_angle = number(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.mesh.feature_angle; };
+  }
+}
+
 std::vector<SettingRow> make_table() {
   std::vector<SettingRow> t;
   add_accuracy_rows(t);
@@ -271,6 +324,7 @@ std::vector<SettingRow> make_table() {
   add_fit_rows(t);
   add_output_rows(t);
   add_limit_rows(t);
+  add_mesh_rows(t);
   return t;
 }
 
@@ -301,6 +355,7 @@ const SettingRow* find_setting(const std::string& name) {
 
 void validate(const Settings& settings) {
   validate(settings.conversion);
+  validate(settings.mesh);
   check_samples("preview_samples", settings.preview_samples);
 }
 

@@ -21,6 +21,7 @@
 
 #include "converter/occt/writers.h"
 #include "converter/pipeline/conversion.h"
+#include "converter/pipeline/mesh_path.h"
 
 namespace subd2nurbs::pipeline {
 
@@ -31,6 +32,7 @@ struct Settings {
   ConversionSettings conversion;
   std::optional<PreviewColor> preview;  ///< the preview's colouring; empty: no preview asked for
   int preview_samples = 12;             ///< per patch side, 2 .. 64
+  MeshPathSettings mesh;                ///< the mesh path's (a mesh input remeshed into a cage)
   /// The output's writer options.
   struct Write {
     occt::StepSchema schema = occt::StepSchema::AP214;

@@ -2,6 +2,7 @@
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -223,43 +224,84 @@ int ptex_faces(const SubdivLevel& cage) {
 
 /// The normal equations in the cage's 3n coordinates, accumulated one weighted row at a time:
 /// a row r over the cage (indices, weights) with the symmetric 3 x 3 weight W and g = W c adds
-/// r^T r (x) W to the matrix and r^T g to the right-hand side. The matrix is kept as dense 3 x 3
-/// blocks per vertex pair (72 n^2 bytes: 8 MB for 334 vertices, 46 MB for 800).
+/// r^T r (x) W to the matrix and r^T g to the right-hand side. The matrix is kept as 3 x 3 blocks
+/// of the vertex pairs (a <= b) that share a row, found through an open-addressing hash table:
+/// memory and time grow with the pairs (about 50 per vertex), not with n^2.
 struct NormalEquations {
   int n = 0;
-  std::vector<double> blocks;  ///< block (a, b) at 9 (a n + b), row-major
-  Eigen::VectorXd rhs;         ///< coordinate-major: x of every vertex, then y, then z
+  std::vector<std::uint64_t> keys;   ///< table slots: a n + b + 1, 0 for an empty slot
+  std::vector<int> slot_block;       ///< table slot -> block index
+  std::vector<int> block_a, block_b; ///< per block: its vertex pair
+  std::vector<double> blocks;        ///< 9 per block, row-major
+  Eigen::VectorXd rhs;               ///< coordinate-major: x of every vertex, then y, then z
 
-  explicit NormalEquations(int vertices) : n(vertices), blocks(static_cast<size_t>(9) * n * n, 0.0), rhs(Eigen::VectorXd::Zero(3 * n)) {}
+  explicit NormalEquations(int vertices) : n(vertices), rhs(Eigen::VectorXd::Zero(3 * n)) {
+    std::size_t capacity = 1024;
+    while (capacity < static_cast<std::size_t>(n) * 128) capacity *= 2;
+    keys.assign(capacity, 0);
+    slot_block.assign(capacity, -1);
+  }
+  /// The block of (a, b), a <= b, created zero on first use.
+  double* block(int a, int b) {
+    const std::uint64_t key = static_cast<std::uint64_t>(a) * static_cast<std::uint64_t>(n) + static_cast<std::uint64_t>(b) + 1;
+    std::size_t mask = keys.size() - 1, i = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+    while (keys[i] != 0 && keys[i] != key) i = (i + 1) & mask;
+    if (keys[i] == 0) {
+      if (2 * (block_a.size() + 1) > keys.size()) {  // keep the load at most 1/2
+        grow();
+        return block(a, b);
+      }
+      keys[i] = key;
+      slot_block[i] = static_cast<int>(block_a.size());
+      block_a.push_back(a);
+      block_b.push_back(b);
+      blocks.resize(blocks.size() + 9, 0.0);
+    }
+    return &blocks[static_cast<std::size_t>(9) * static_cast<std::size_t>(slot_block[i])];
+  }
+  void grow() {
+    std::vector<std::uint64_t> old_keys(keys.size() * 2, 0);
+    std::vector<int> old_slots(keys.size() * 2, -1);
+    keys.swap(old_keys);
+    slot_block.swap(old_slots);
+    const std::size_t mask = keys.size() - 1;
+    for (std::size_t k = 0; k < old_keys.size(); ++k) {
+      if (old_keys[k] == 0) continue;
+      std::size_t i = static_cast<std::size_t>((old_keys[k] * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+      while (keys[i] != 0) i = (i + 1) & mask;
+      keys[i] = old_keys[k];
+      slot_block[i] = old_slots[k];
+    }
+  }
   /// Only the blocks (a, b) with a <= b are accumulated (the matrix is symmetric, and so is W).
   void add(const int* idx, const double* w, int count, const Eigen::Matrix3d& W, const Vec3& g) {
     double w9[9];
     for (int k = 0; k < 9; ++k) w9[k] = W(k / 3, k % 3);
     for (int a = 0; a < count; ++a) {
       for (int c = 0; c < 3; ++c) rhs[c * n + idx[a]] += w[a] * g[c];
-      double* row = &blocks[static_cast<size_t>(9) * idx[a] * n];
       for (int b = 0; b < count; ++b) {
         if (idx[b] < idx[a]) continue;
         const double s = w[a] * w[b];
-        double* block = row + static_cast<size_t>(9) * idx[b];
-        for (int k = 0; k < 9; ++k) block[k] += s * w9[k];
+        double* blk = block(idx[a], idx[b]);
+        for (int k = 0; k < 9; ++k) blk[k] += s * w9[k];
       }
     }
   }
   /// The sparse matrix (coordinate-major) with lambda K (x) I3 + mu I added.
   SparseMatrix matrix(const SparseMatrix* K, double lambda, double mu) const {
     std::vector<Eigen::Triplet<double>> trip;
-    for (int a = 0; a < n; ++a)
-      for (int b = a; b < n; ++b) {
-        const double* block = &blocks[static_cast<size_t>(9) * (static_cast<size_t>(a) * n + b)];
-        bool any = false;
-        for (int k = 0; k < 9 && !any; ++k) any = block[k] != 0;
-        if (!any) continue;
-        for (int k = 0; k < 9; ++k) {
-          trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, block[k]);
-          if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, block[k]);
-        }
+    trip.reserve(18 * block_a.size() + 3 * static_cast<std::size_t>(n) * (K ? 26 : 1));
+    for (std::size_t i = 0; i < block_a.size(); ++i) {
+      const int a = block_a[i], b = block_b[i];
+      const double* blk = &blocks[9 * i];
+      bool any = false;  // a block is entered whole (its zeros too) when any entry is not zero
+      for (int k = 0; k < 9 && !any; ++k) any = blk[k] != 0;
+      if (!any) continue;
+      for (int k = 0; k < 9; ++k) {
+        trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, blk[k]);
+        if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, blk[k]);
       }
+    }
     for (int c = 0; c < 3; ++c) {
       if (K)
         for (int col = 0; col < n; ++col)
@@ -273,8 +315,9 @@ struct NormalEquations {
   }
   double trace() const {
     double t = 0;
-    for (int a = 0; a < n; ++a)
-      for (int k : {0, 4, 8}) t += blocks[static_cast<size_t>(9) * (static_cast<size_t>(a) * n + a) + k];
+    for (std::size_t i = 0; i < block_a.size(); ++i)
+      if (block_a[i] == block_b[i])
+        for (int k : {0, 4, 8}) t += blocks[9 * i + k];
     return t;
   }
 };

@@ -116,8 +116,10 @@ def make_fitted_cage(cage, target, smoothing=1e-4, max_iterations=30, doc=None, 
 
 def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **settings):
     """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
-    Mesh::Feature (triangles: quads are recovered from triangle pairs, fans around
-    high-valence vertices are kept; the object's RecoveredQuads says how many).
+    Mesh::Feature. A Mesh takes the road of docs/meshes.md: a triangulated cage gets its quads back
+    (triangle pairs; fans around high-valence vertices are kept; the object's RecoveredQuads says
+    how many), a mesh to reproduce is remeshed into a quad cage fitted to it (target_faces,
+    edge_length, feature_angle; the object's InputRoute, CageFaces, FeatureEdges, MeshDistance).
 
     settings: the NURBS object's conversion settings by the converter's names, with the values of
     their properties (features.SETTING_ROWS, docs/settings.md): level=1 (Level), tolerance=1e-3
@@ -138,15 +140,15 @@ def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **set
     doc = doc or source.Document
     # Convert before touching the document (errors leave it as it was); the first recompute
     # reuses the result.
-    cage = features.cage_of(source)
-    kwargs = features.settings_of(values)
+    cage, kwargs = features.source_and_settings(source, features.settings_of(values))
     result = features.convert_cage(cage, kwargs, progress=progress)
     with _Transaction(doc, "Convert to NURBS"):
         obj = doc.addObject("Part::FeaturePython", name)
         proxy = features.NurbsFeature(obj)
         for property_name, value in values.items():
             setattr(obj, property_name, value)
-        proxy.prepare(features.NurbsFeature.signature(cage, features.object_settings(obj)), result)
+        proxy.prepare(features.NurbsFeature.signature(*features.source_and_settings(source, features.object_settings(obj))),
+                      result)
         obj.Source = source
         obj.OutputType = "Shell" if shell else "Solid"
         obj.ShowProgress = bool(progress)

@@ -308,8 +308,10 @@ def is_cage(obj):
     return isinstance(getattr(obj, "Proxy", None), CageFeature)
 
 
-def cage_of(source):
-    """The subd2nurbs.Cage of a Cage object or a Mesh::Feature (quads recovered)."""
+def cage_of(source, input="auto"):
+    """The subd2nurbs.Cage of a Cage object or a Mesh::Feature. A Mesh goes the road of
+    subd2nurbs.input_route (docs/meshes.md): a mesh to reproduce stays triangles (its `route`
+    says so; convert() remeshes it), a triangulated cage gets its quads back."""
     if is_cage(source):
         return CageFeature.cage(source)
     if hasattr(source, "isDerivedFrom") and source.isDerivedFrom("Mesh::Feature"):
@@ -318,10 +320,40 @@ def cage_of(source):
             raise subd2nurbs.CageError("%s: the mesh has no facets" % source.Label, element="faces")
         # Topology's points already carry the feature's placement.
         v = np.array([[p.x, p.y, p.z] for p in points], dtype=np.float64)
+        triangles = subd2nurbs.Cage(v, [list(f) for f in facets], name=source.Label)
+        route = subd2nurbs.input_route(triangles, input)
+        if route["kind"] == "mesh":
+            triangles.route = route
+            triangles.quad_recovery = None
+            return triangles
         cage = subd2nurbs.from_triangles(v, [list(f) for f in facets])
         cage.name = source.Label
+        cage.route = route
         return cage
     raise TypeError("%s is neither a subdivision Cage nor a Mesh::Feature" % getattr(source, "Label", source))
+
+
+def source_and_settings(source, settings):
+    """(subd2nurbs.Cage, convert()'s keywords) of a NURBS object's Source and settings: a Mesh
+    source takes the road cage_of() decides (settings["input"] is then fixed to it, whatever the
+    Mesh's label looks like)."""
+    settings = dict(settings)
+    cage = cage_of(source, settings.get("input", "auto"))
+    if getattr(cage, "route", None) and cage.route["kind"] == "mesh":
+        settings["input"] = "mesh"
+    return cage, settings
+
+
+def mesh_note(label, report):
+    """A console line about a remeshed Mesh source (report["mesh"]), or ""."""
+    mesh = report.get("mesh")
+    if not mesh:
+        return ""
+    after = mesh["fit"]["after"]
+    return ("Subd2Nurbs: %s: the mesh (%d triangles, %d feature edges) became a cage of %d quads (%d feature edges "
+            "kept); surface to mesh max %.3g, mesh to surface max %.3g of the diagonal\n"
+            % (label, mesh["input_triangles"], mesh["features"]["edges"], mesh["cage"]["faces"],
+               mesh["cage"]["feature_edges"], after["limit_to_target"]["max"], after["target_to_limit"]["max"]))
 
 
 class _Progress:
@@ -336,7 +368,7 @@ class _Progress:
         self.done = 0
 
     def __call__(self, stage, fraction):
-        target = {"patches": 10, "deviation": 20, "continuity": 30}.get(stage.key, None)
+        target = {"mesh": 5, "patches": 10, "deviation": 20, "continuity": 30}.get(stage.key, None)
         if stage.key == "brep":
             target = 30 + int(70 * fraction)
         if target is not None:
@@ -415,6 +447,15 @@ class NurbsFeature(_Feature):
         _add(obj, "App::PropertyFloat", "MaxCageMove", r,
              "Fit = Interpolate: largest move of a cage vertex by the fit (model units)", read_only=True)
         _add(obj, "App::PropertyStringList", "Warnings", r, "Conversion warnings", read_only=True)
+        m = "Mesh"
+        _add(obj, "App::PropertyString", "InputRoute", m, "Which road the Source took: mesh (remeshed into a quad cage "
+             "fitted to it) or cage, and why", read_only=True)
+        _add(obj, "App::PropertyInteger", "CageFaces", m, "A Mesh source remeshed: quads of the cage made from it",
+             read_only=True)
+        _add(obj, "App::PropertyInteger", "FeatureEdges", m, "A Mesh source remeshed: cage edges kept sharp",
+             read_only=True)
+        _add(obj, "App::PropertyFloat", "MeshDistance", m, "A Mesh source remeshed: largest two-sided distance "
+             "between the surface and the mesh (model units)", read_only=True)
 
     @staticmethod
     def signature(cage, settings):
@@ -434,8 +475,7 @@ class NurbsFeature(_Feature):
         failed conversion raises and keeps the last result (which no longer matches)."""
         if obj.Source is None:
             raise ValueError("%s: no Source" % obj.Label)
-        cage = cage_of(obj.Source)
-        settings = object_settings(obj)
+        cage, settings = source_and_settings(obj.Source, object_settings(obj))
         key = self.signature(cage, settings)
         cache = getattr(self, "_cache", None)
         if cache is None or cache[0] != key:
@@ -468,6 +508,19 @@ class NurbsFeature(_Feature):
         obj.MaxResidual = (f.get("residual") or {}).get("max") or 0.0
         obj.MaxCageMove = (f.get("displacement") or {}).get("max") or 0.0
         obj.Warnings = [str(w) for w in result.warnings]
+        route = getattr(cage, "route", None)
+        if hasattr(obj, "InputRoute"):  # objects saved before the mesh path have no such properties
+            obj.InputRoute = "%s: %s" % (route["kind"], route["reason"]) if route else "cage"
+            mesh = r.get("mesh")
+            if mesh:
+                after = mesh["fit"]["after"]
+                obj.CageFaces = mesh["cage"]["faces"]
+                obj.FeatureEdges = mesh["cage"]["feature_edges"]
+                obj.MeshDistance = max(after["limit_to_target"]["max"], after["target_to_limit"]["max"]) * after["diagonal"]
+            else:
+                obj.CageFaces, obj.FeatureEdges, obj.MeshDistance = -1, 0, 0.0
+        if mesh_note(obj.Label, r):
+            App.Console.PrintMessage(mesh_note(obj.Label, r))
         if q:
             App.Console.PrintMessage("Subd2Nurbs: %s: %d quads recovered from %d triangles, %d triangles kept "
                                      "(%d fan vertices)\n" % (obj.Label, q["quads"], q["source_triangles"],

@@ -208,12 +208,20 @@ py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
 
 /// Reads and validates a cage as every front end does (pipeline::load_input): any format
 /// read_cage reads, errors naming the file and line, the warnings as text.
-py::dict read_cage_file(const std::string& path) {
-  const pipeline::LoadedInput loaded = pipeline::load_input(path);
+py::dict read_cage_file(const std::string& path, const std::string& input) {
+  pipeline::LoadedSource source = pipeline::load_source(path, pipeline::input_kind(input));
+  py::dict route;
+  set_items(route, "kind", source.route.mesh ? "mesh" : "cage", "reason", source.route.reason);
+  if (source.route.mesh) {  // the mesh's faces as in the file: convert() remeshes them
+    py::dict d = cage_dict(source.mesh.input);
+    set_items(d, "warnings", source.warnings, "path", path, "quad_recovery", py::none(), "route", route);
+    return d;
+  }
+  const pipeline::LoadedInput& loaded = *source.cage;
   const LoadedCage& cage = loaded.cage;
   py::dict d = cage_dict(cage.input);
   set_items(d, "warnings", loaded.warnings, "path", path, "quad_recovery",
-            cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none()));
+            cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none()), "route", route);
   return d;
 }
 
@@ -441,6 +449,15 @@ py::dict preview_dict(const PreviewMesh& mesh, const std::string& color) {
 struct Conversion {
   std::shared_ptr<const SubdivLevel> base;
   pipeline::ConversionResult result;
+  std::optional<MeshInput> cage_input;  ///< a mesh input: the cage made from it (positions: as remeshed)
+
+  /// A mesh input: the cage made from it, fitted (a cage dict), else None.
+  py::object made_cage() const {
+    if (!cage_input) return py::none();
+    MeshInput fitted = *cage_input;
+    for (std::size_t i = 0; i < fitted.positions.size() && i < result.cage.size(); ++i) fitted.positions[i] = result.cage[i];
+    return cage_dict(fitted);
+  }
   std::optional<std::string> brep_text;  ///< made on first use
 
   py::object text() {
@@ -539,7 +556,13 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
   auto conversion = std::make_shared<Conversion>();
-  const std::vector<Point3> points(in.positions.begin(), in.positions.end());
+  std::vector<Point3> points(in.positions.begin(), in.positions.end());
+  // The mesh path (pipeline/mesh_path.h): the road by the same rule as the command line's, the
+  // cage's name standing for the file (read_cage keeps a mesh file's triangles).
+  LoadedCage probe;
+  probe.input = in;
+  probe.path = input_name;
+  const pipeline::InputRoute route = pipeline::route_input(probe, input_name, settings.settings.mesh.input);
 
   // The conversion runs without_gil; the progress callback takes the lock back for each call.
   pipeline::ConversionProgress callbacks;
@@ -557,11 +580,29 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
     callbacks.brep_fraction = report;
   }
   pipeline::ConversionResult& c = conversion->result;
+  std::optional<pipeline::MeshPathReport> made;
   without_gil([&] {
-    conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
+    if (route.mesh) {
+      pipeline::MeshPathProgress mesh_progress;
+      if (progress)
+        mesh_progress.stage = [&](const std::string& s) {
+          current = s;
+          key = "mesh";
+          report(0.0);
+        };
+      pipeline::MeshCage cage = pipeline::mesh_to_cage(probe, settings.settings.mesh, mesh_progress);
+      cage.report.route = route;
+      conversion->base = std::make_shared<const SubdivLevel>(std::move(cage.cage.level));
+      conversion->cage_input = std::move(cage.cage.cage.input);
+      points = std::move(cage.positions);
+      made = std::move(cage.report);
+    } else {
+      conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
+    }
     c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
                           load_warnings ? *load_warnings : diagnostics_text(diagnostics));
   });
+  c.mesh = std::move(made);
   c.input = input_name;
   if (c.has_brep) c.output.format = "BREP";
   return conversion;
@@ -667,7 +708,18 @@ PYBIND11_MODULE(_subd2nurbs, m) {
   py::register_exception_translator(&translate);
   m.attr("__version__") = SUBD2NURBS_VERSION;
   m.attr("OCC_VERSION") = OCC_VERSION_COMPLETE;
-  m.def("read_cage", &read_cage_file, py::arg("path"));
+  m.def("input_route", [](const DoubleArray& positions, const IntArray& face_sizes, const IntArray& face_indices,
+                          const std::vector<std::tuple<int, int, double>>& creases,
+                          const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
+                          const py::dict& options, const std::string& name, const std::string& input) {
+    LoadedCage probe;
+    probe.input = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
+    const pipeline::InputRoute r = pipeline::route_input(probe, name, pipeline::input_kind(input));
+    py::dict d;
+    set_items(d, "kind", r.mesh ? "mesh" : "cage", "reason", r.reason);
+    return d;
+  });
+  m.def("read_cage", &read_cage_file, py::arg("path"), py::arg("input") = "auto");
   m.def("check_options", [](const py::dict& options) { subdiv_options(options); });
   m.def("setting_names", &pipeline::setting_names);
   m.def("recover_quads", &recover_quads_from);
@@ -700,6 +752,7 @@ PYBIND11_MODULE(_subd2nurbs, m) {
       .def_property_readonly("diagnostics", &Conversion::diagnostics)
       .def_property_readonly("curve_measures", &Conversion::curve_measures)
       .def_property_readonly("cage_vertices", [](const Conversion& c) { return points_array(c.result.cage); })
+      .def_property_readonly("made_cage", &Conversion::made_cage)
       .def_property_readonly("model_size", [](const Conversion& c) { return c.result.build.set.model_size; })
       .def_property_readonly("closed", [](const Conversion& c) { return c.result.build.set.closed; })
       .def_property_readonly("preview", &Conversion::preview)

@@ -42,7 +42,7 @@ __version__ = _subd2nurbs.__version__
 OCC_VERSION = _subd2nurbs.OCC_VERSION
 
 __all__ = [
-    "Cage", "ConversionResult", "read_cage", "read_obj", "from_triangles", "info", "refine", "convert", "fair", "fit",
+    "Cage", "ConversionResult", "read_cage", "read_mesh", "input_route", "read_obj", "from_triangles", "info", "refine", "convert", "fair", "fit",
     "brep_summary", "file_summary",
     "occt_compatible", "CAGE_OPTIONS", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
     "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS", "SETTINGS",
@@ -251,14 +251,34 @@ class Cage:
         return "<subd2nurbs.Cage %r: %d vertices, %d faces>" % (self.name, self.num_vertices, self.num_faces)
 
 
-def read_cage(path):
+def read_cage(path, input="auto"):
     """Reads and validates a cage: OBJ with OpenSubdiv 't' tags (crease, corner, hole,
-    interpolateboundary, ...; see docs/formats.md), errors naming the file and line; or glTF /
-    GLB triangles, whose quads are recovered (the cage's ``quad_recovery`` says how many)."""
-    d = _subd2nurbs.read_cage(str(path))
+    interpolateboundary, ...; see docs/formats.md), errors naming the file and line; glTF /
+    GLB, STL, PLY, OFF triangles, whose quads are recovered (the cage's ``quad_recovery`` says
+    how many).
+
+    A mesh to reproduce (docs/meshes.md: by the rule, or input="mesh") keeps its faces as in
+    the file; convert() remeshes it into a quad cage fitted to it. The result's ``route`` dict
+    says which: kind ("mesh" or "cage") and reason."""
+    d = _subd2nurbs.read_cage(str(path), _checked("input", input, lambda x: isinstance(x, str), "a string", str))
     cage = Cage._from_dict(d, str(path))
     cage.quad_recovery = d["quad_recovery"]
+    cage.route = d["route"]
     return cage
+
+
+def input_route(cage, input="auto"):
+    """Which road convert() takes with `cage` (docs/meshes.md "Which path"): a dict with kind
+    ("mesh": remeshed into a quad cage fitted to it, or "cage") and reason (one sentence)."""
+    cage = _cage(cage)
+    return _subd2nurbs.input_route(*cage._args(), cage.name,
+                                   _checked("input", input, lambda x: isinstance(x, str), "a string", str))
+
+
+def read_mesh(path):
+    """Reads a mesh to reproduce (STL, PLY, OFF, OBJ, glTF): its faces as in the file, welded and
+    repaired, not paired into quads; convert() remeshes it (read_cage(path, input="mesh"))."""
+    return read_cage(path, input="mesh")
 
 
 read_obj = read_cage
@@ -366,6 +386,10 @@ class ConversionResult:
         #: The cage that was converted (numpy (n, 3)): the input's vertices, or with
         #: fit="interpolate" the cage whose limit passes through them.
         self.cage_vertices = conversion.cage_vertices
+        made = conversion.made_cage
+        #: A mesh input (docs/meshes.md): the quad cage made from it, fitted (a Cage), else None;
+        #: report["mesh"] says how it was made.
+        self.made_cage = None if made is None else Cage._from_dict(made, "cage of the mesh")
 
     @property
     def brep_text(self):
@@ -469,6 +493,9 @@ def convert(cage, progress=None, allow_invalid=False, fit_to=None, **settings):
         if settings.get("fit", "approximate") != "approximate":
             raise SettingsError("fit_to excludes fit=%r: the fit to a target already decides the cage"
                                 % settings["fit"], setting="fit_to", rule="excludes the interpolating fit")
+        if settings.get("input") == "mesh":
+            raise SettingsError("fit_to fits a cage; input='mesh' is fitted to itself", setting="fit_to",
+                                rule="excludes input='mesh'")
         cage, _ = fit(cage, fit_to)
     given = {}
     for name, value in settings.items():
@@ -508,6 +535,10 @@ progress: a callable(stage: str, fraction: float) called as the stages run; `sta
 allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
 fit_to: a target shape (anything fit() takes): the cage is fitted to it first with fit()'s
     defaults, then converted (as the command line's convert --fit-to); excludes fit="interpolate".
+Mesh input (docs/meshes.md): a Cage of triangles that do not pair back into quads (read_mesh(),
+    read_cage() of an STL, or input="mesh") is a shape to reproduce: its sharp features are
+    detected (feature_angle), an all-quad cage of about target_faces quads is made and fitted to
+    it, and that cage is converted; result.made_cage is the cage, report["mesh"] the numbers.
 """ % _settings_doc()
 
 

@@ -321,7 +321,8 @@ class Workbench(unittest.TestCase):
                 self.assertEqual(nurbs.getDocumentationOfProperty(p["name"]), p["tooltip"])
                 self.assertEqual(features.PROPERTY_OF_SETTING[row["name"]], p["name"])
         # Defaults: nothing given, so the converter's defaults apply.
-        self.assertEqual(features.object_settings(nurbs), {"polar": "on", "fit": "approximate", "faces": "packed"})
+        self.assertEqual(features.object_settings(nurbs), {"polar": "on", "fit": "approximate", "faces": "packed",
+                                                           "input": "auto", "feature_angle": 30.0})
         dummy = {"name": "dummy_setting", "type": "number", "default": None, "default_text": "", "help": "a test row",
                  "choices": [], "cli": None, "python": True,
                  "property": {"name": "DummySetting", "group": "Conversion", "tooltip": "only this test has it",
@@ -427,6 +428,23 @@ class Workbench(unittest.TestCase):
                     self.assertTrue(nurbs.Shape.isValid())
                     self.assertEqual(len(nurbs.Shape.Solids), 0)
                     self.assertEqual(len(nurbs.Shape.Faces), expected_faces(path))
+
+    def test_mesh_feature_of_a_part_becomes_a_light_solid(self):
+        # The mesh path (docs/meshes.md): a triangle STL of a part is remeshed, not taken as its own
+        # cage. Oracle: the mesh's own volume (FreeCAD's Mesh.Volume) and its triangle count.
+        path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "mesh", "plate_holes.STL")
+        mesh = self.doc.addObject("Mesh::Feature", "plate")
+        mesh.Mesh = Mesh.read(path)
+        self.doc.recompute()
+        nurbs = s2n.make_nurbs(mesh, progress=False, target_faces=300)
+        self.assertTrue(nurbs.InputRoute.startswith("mesh: "), nurbs.InputRoute)
+        self.assertGreater(nurbs.CageFaces, 0)
+        # Lighter than FreeCAD's own Part from Mesh (one planar face per triangle).
+        self.assertLess(len(nurbs.Shape.Faces), mesh.Mesh.CountFacets)
+        self.assertTrue(nurbs.Shape.isValid())
+        self.assertEqual(len(nurbs.Shape.Solids), 1)
+        self.assertAlmostEqual(nurbs.Shape.Volume / mesh.Mesh.Volume, 1.0, delta=0.02)
+        self.assertEqual(nurbs.TargetFaces, 300)
 
     def test_fit_interpolate_passes_through_the_cage_vertices(self):
         """The NURBS object's Fit property: Interpolate makes the shape pass through the cage's

@@ -929,5 +929,55 @@ class ShapeFitTest(unittest.TestCase):
             s2n.fit("not a cage", points)
 
 
+MESH_DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "mesh")
+
+
+def euler_characteristic(face_lists, num_vertices):
+    edges = {tuple(sorted((f[i], f[(i + 1) % len(f)]))) for f in face_lists for i in range(len(f))}
+    return num_vertices - len(edges) + len(face_lists)
+
+
+class MeshPath(unittest.TestCase):
+    """The mesh path (issue #28, docs/meshes.md) from Python: the road rule, read_mesh, convert's
+    remeshed cage. Oracles: the mesh's own topology (Euler characteristic counted here), the rule
+    on shapes whose answer is known (a triangulated quad cube, a tetrahedron, a dense mesh)."""
+
+    def test_road_rule(self):
+        v, faces = cube_cage()
+        tris = [[f[0], f[1], f[2]] for f in faces] + [[f[0], f[2], f[3]] for f in faces]
+        self.assertEqual(s2n.input_route(s2n.Cage(v, faces))["kind"], "cage")  # quads
+        self.assertEqual(s2n.input_route(s2n.Cage(v, tris))["kind"], "cage")   # they pair back
+        self.assertEqual(s2n.input_route(s2n.Cage(v, tris), input="mesh")["kind"], "mesh")
+        tet = s2n.Cage(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
+                       [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+        self.assertEqual(s2n.input_route(tet)["kind"], "cage")  # 4 triangles: a triangle cage
+        mesh = s2n.read_cage(os.path.join(MESH_DATA, "plate_holes.STL"))
+        self.assertEqual(mesh.route["kind"], "mesh", mesh.route)
+        self.assertTrue(all(n == 3 for n in mesh.face_sizes))
+        self.assertIsNone(mesh.quad_recovery)
+        with self.assertRaises(s2n.SettingsError):
+            s2n.input_route(tet, input="sometimes")
+
+    def test_convert_a_mesh(self):
+        mesh = s2n.read_mesh(os.path.join(MESH_DATA, "plate_holes.STL"))
+        result = s2n.convert(mesh, target_faces=300)
+        cage = result.made_cage
+        self.assertIsNotNone(cage)
+        self.assertTrue(all(n == 4 for n in cage.face_sizes))
+        self.assertEqual(euler_characteristic(cage.faces, cage.num_vertices),
+                         euler_characteristic(mesh.faces, mesh.num_vertices))
+        m = result.report["mesh"]
+        self.assertEqual(m["cage"]["faces"], cage.num_faces)
+        self.assertEqual(m["input_triangles"], mesh.num_faces)
+        self.assertTrue(result.brep["valid"])
+        self.assertTrue(result.brep["is_solid"])
+        self.assertEqual(len(cage.creases), m["cage"]["feature_edges"])
+        # The cage converted is the made cage: its vertices are the result's cage vertices.
+        np.testing.assert_array_equal(cage.vertices, result.cage_vertices)
+        # A quad cage given with input="mesh" is remeshed too; with input="cage" it is not.
+        v, faces = cube_cage()
+        self.assertIsNone(s2n.convert(s2n.Cage(v, faces), input="cage").made_cage)
+
+
 if __name__ == "__main__":
     unittest.main()

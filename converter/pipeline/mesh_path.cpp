@@ -1,0 +1,371 @@
+#include "converter/pipeline/mesh_path.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include "converter/pipeline/settings_error.h"
+#include "converter/pipeline/text.h"
+#include "core/limit/limit_evaluator.h"
+#include "core/mesh/quad_recovery.h"
+#include "core/util/error.h"
+#include "io/cage_reader.h"
+#include "io/input_file.h"
+#include "io/target_reader.h"
+
+namespace subd2nurbs::pipeline {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Point3 cross(const Point3& a, const Point3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
+
+/// Angle between two vectors, degrees (0 for a zero vector).
+double angle_deg(const Point3& a, const Point3& b) {
+  const double na = norm(a), nb = norm(b);
+  if (!(na > 0 && nb > 0)) return 0;
+  return std::acos(std::clamp(dot(a, b) / (na * nb), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+bool all_triangles(const MeshInput& m) {
+  return std::all_of(m.face_sizes.begin(), m.face_sizes.end(), [](int n) { return n == 3; });
+}
+
+bool mesh_format(const std::string& ext) { return ext == ".stl" || ext == ".ply" || ext == ".off"; }
+
+/// The file's faces as triangles (polygons fan-triangulated), without tags.
+void triangulate(MeshInput& m) {
+  if (all_triangles(m)) return;
+  std::vector<int> sizes, indices;
+  for (const auto& t : fan_triangles(m.face_sizes, m.face_indices)) {
+    sizes.push_back(3);
+    indices.insert(indices.end(), t.begin(), t.end());
+  }
+  m.face_sizes = std::move(sizes);
+  m.face_indices = std::move(indices);
+}
+
+/// The triangles' two-sided features: per input feature edge (not on the boundary) its end
+/// points and its dihedral angle (between the two triangles' normals), degrees.
+struct MeshFeatureEdge {
+  Point3 a, b;
+  double angle = 0;
+};
+
+std::vector<MeshFeatureEdge> mesh_feature_edges(const MeshInput& mesh, const PolyMesh& poly, const FeatureSet& features) {
+  std::vector<MeshFeatureEdge> out;
+  auto face_normal = [&](int f) {
+    const int* v = poly.face_vertices(f);
+    const auto& p = mesh.positions;
+    return cross(sub(p[v[1]], p[v[0]]), sub(p[v[2]], p[v[0]]));
+  };
+  for (const auto& e : features.edges) {
+    const int id = poly.find_edge(e[0], e[1]);
+    if (id < 0 || poly.is_boundary_edge(id)) continue;
+    const int h = poly.edge_corner(id);
+    out.push_back({mesh.positions[e[0]], mesh.positions[e[1]],
+                   angle_deg(face_normal(poly.corner_face(h)), face_normal(poly.corner_face(poly.twin(h))))});
+  }
+  return out;
+}
+
+double segment_distance2(const Point3& p, const Point3& a, const Point3& b) {
+  const Point3 ab = sub(b, a);
+  const double len2 = dot(ab, ab);
+  const double t = len2 > 0 ? std::clamp(dot(sub(p, a), ab) / len2, 0.0, 1.0) : 0.0;
+  const Point3 q{a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
+  const Point3 d = sub(p, q);
+  return dot(d, d);
+}
+
+/// (u, v) of the point at fraction t along edge `corner` (0..3) of a quad's ptex face.
+std::pair<double, double> quad_edge_uv(int corner, double t) {
+  switch (corner) {
+    case 0: return {t, 0};
+    case 1: return {1, t};
+    case 2: return {1 - t, 1};
+    default: return {0, 1 - t};
+  }
+}
+
+/// The normal angle across each infinitely sharp interior edge of the fitted cage (evaluated on
+/// both sides at 1/4, 1/2, 3/4 of the edge), against the mesh's dihedral at the closest feature
+/// edge of the mesh.
+FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vector<Point3>& positions,
+                                         const std::vector<MeshFeatureEdge>& mesh_edges) {
+  FeatureAngleStats s;
+  if (mesh_edges.empty()) return s;
+  const PolyMesh& m = cage.mesh;
+  const LimitEvaluator limit(cage, positions);
+  double sum = 0;
+  for (int e = 0; e < m.num_edges(); ++e) {
+    if (m.is_boundary_edge(e) || cage.edge_sharpness[e] < kInfiniteSharpness) continue;
+    const int h = m.edge_corner(e), g = m.twin(h);
+    const int fh = m.corner_face(h), fg = m.corner_face(g);
+    if (m.face_size(fh) != 4 || m.face_size(fg) != 4) continue;
+    for (const double t : {0.25, 0.5, 0.75}) {
+      const auto [uh, vh] = quad_edge_uv(h - m.face_begin(fh), t);
+      const auto [ug, vg] = quad_edge_uv(g - m.face_begin(fg), 1 - t);
+      LimitSample a, b;
+      try {
+        a = limit.evaluate_ptex(limit.first_ptex(fh), uh, vh);
+        b = limit.evaluate_ptex(limit.first_ptex(fg), ug, vg);
+      } catch (const std::exception&) {
+        continue;  // no limit there (a hole's side)
+      }
+      const double surface = angle_deg(a.normal, b.normal);
+      // The closest mesh feature edge running along the curve (within 30 degrees of its
+      // direction: near a corner the closest edge may belong to another curve).
+      const Point3 along = cross(a.normal, b.normal);
+      double best = INFINITY, mesh_angle = 0;
+      for (const MeshFeatureEdge& me : mesh_edges) {
+        const Point3 dir = sub(me.b, me.a);
+        if (norm(along) > 0.1 && norm(dir) > 0 && std::abs(dot(along, dir)) < 0.866 * norm(along) * norm(dir)) continue;
+        const double d = segment_distance2(a.p, me.a, me.b);
+        if (d < best) best = d, mesh_angle = me.angle;
+      }
+      if (!std::isfinite(best)) continue;
+      const double diff = std::abs(surface - mesh_angle);
+      sum += diff;
+      ++s.samples;
+      if (diff > s.max_difference) s.max_difference = diff, s.where_edge = e;
+    }
+  }
+  if (s.samples > 0) s.mean_difference = sum / s.samples;
+  return s;
+}
+
+void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
+  w.begin_object();
+  w.members("faces", r.faces, "vertices", r.vertices, "extraordinary_vertices", r.extraordinary_vertices,
+            "feature_edges", r.feature_edges, "feature_chains_kept", r.feature_chains_kept, "corners", r.corners);
+  w.members("euler_characteristic", r.euler_cage, "boundaries", r.boundaries_cage, "components", r.components_cage);
+  w.end_object();
+}
+
+}  // namespace
+
+const char* to_string(InputKind kind) {
+  switch (kind) {
+    case InputKind::Auto: return "auto";
+    case InputKind::Mesh: return "mesh";
+    case InputKind::Cage: return "cage";
+  }
+  return "?";
+}
+
+InputKind input_kind(const std::string& name) {
+  for (InputKind k : {InputKind::Auto, InputKind::Mesh, InputKind::Cage})
+    if (name == to_string(k)) return k;
+  throw SettingsError("input", "must be auto, mesh or cage, not '" + printable(name) + "'");
+}
+
+void validate(const MeshPathSettings& s) {
+  if (s.target_faces < 0) throw SettingsError("target_faces", "must be >= 0 (0: automatic)");
+  if (!(s.edge_length >= 0 && std::isfinite(s.edge_length)))
+    throw SettingsError("edge_length", "must be a number >= 0 (0: automatic)");
+  if (!(s.feature_angle > 0 && s.feature_angle < 180))
+    throw SettingsError("feature_angle", "must be between 0 and 180 degrees");
+}
+
+int automatic_target_faces(const MeshInput& mesh) {
+  // Quads for the mesh's area at an edge length of 1/25 of the bounding-box diagonal, within
+  // 100 .. 1500: a closed box of side a (diagonal a sqrt 3) gets 6 a^2 / (a sqrt 3 / 25)^2 = 1250.
+  Point3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  std::vector<char> used(mesh.positions.size(), 0);
+  for (int v : mesh.face_indices) used[static_cast<std::size_t>(v)] = 1;
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    if (used[i])
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], mesh.positions[i][k]), hi[k] = std::max(hi[k], mesh.positions[i][k]);
+  const double diag = norm(sub(hi, lo));
+  double area = 0;
+  int off = 0;
+  for (int n : mesh.face_sizes) {
+    const Point3& a = mesh.positions[mesh.face_indices[off]];
+    for (int i = 1; i + 1 < n; ++i)
+      area += 0.5 * norm(cross(sub(mesh.positions[mesh.face_indices[off + i]], a),
+                               sub(mesh.positions[mesh.face_indices[off + i + 1]], a)));
+    off += n;
+  }
+  if (!(diag > 0)) return 100;
+  const double h = diag / 25;
+  return static_cast<int>(std::clamp(area / (h * h), 100.0, 1500.0));
+}
+
+InputRoute route_input(const LoadedCage& read, const std::string& path, InputKind requested) {
+  if (requested == InputKind::Mesh) return {true, "the input was declared a mesh"};
+  if (requested == InputKind::Cage) return {false, "the input was declared a cage"};
+  const MeshInput& in = read.input;
+  const bool file_triangles = read.recovery.applied || all_triangles(in);
+  if (!file_triangles) {
+    const long others = std::count_if(in.face_sizes.begin(), in.face_sizes.end(), [](int n) { return n != 3; });
+    return {false, "it has " + std::to_string(others) + " faces that are not triangles: a cage"};
+  }
+  if (!in.creases.empty() || !in.corners.empty() || !in.holes.empty())
+    return {false, "it has crease, corner or hole tags: a cage"};
+  const std::string ext = lowercase_extension(path);
+  int triangles = 0, unpaired = 0;
+  if (read.recovery.applied) {
+    triangles = read.recovery.source_triangles;
+    unpaired = read.recovery.triangles_kept - read.recovery.fan_triangles;
+  } else {
+    const QuadRecoveryResult r = recover_quads(in);
+    triangles = r.input_triangles;
+    unpaired = r.triangles_kept - r.fan_triangles;
+  }
+  if (unpaired == 0)
+    return {false, "its " + std::to_string(triangles) + " triangles pair back into quads: a triangulated cage"};
+  const std::string why = "its " + std::to_string(triangles) + " triangles do not pair back into quads (" +
+                          std::to_string(unpaired) + " stay triangles)";
+  const bool mesh_file = mesh_format(ext) || ext == ".gltf" || ext == ".glb";
+  if (!mesh_file && triangles < kMinMeshTriangles)
+    return {false, why + ", but fewer than " + std::to_string(kMinMeshTriangles) +
+                       " triangles outside an STL, PLY, OFF or glTF file are taken as a triangle cage"};
+  return {true, why + ": a mesh to reproduce"};
+}
+
+LoadedSource load_source(const std::string& path, InputKind requested) {
+  LoadedSource s;
+  LoadedCage read = read_cage(path);
+  s.route = route_input(read, path, requested);
+  if (!s.route.mesh) {
+    s.cage = load_input(std::move(read));
+    return s;
+  }
+  if (mesh_format(lowercase_extension(path))) {
+    MeshReadOptions raw;
+    raw.recover_quads = false;
+    s.mesh = read_cage(path, raw);
+  } else {
+    s.mesh = std::move(read);  // OBJ as read; glTF: its recovered quads triangulated again
+  }
+  for (const Diagnostic& d : s.mesh.diagnostics) s.warnings.push_back(format_diagnostic(s.mesh, d));
+  return s;
+}
+
+MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, const MeshPathProgress& progress) {
+  validate(settings);
+  MeshCage out;
+  MeshPathReport& rep = out.report;
+  MeshInput tri = mesh.input;  // the shape: triangles; infinitely sharp creases are the user's features
+  triangulate(tri);
+  tri.creases.erase(std::remove_if(tri.creases.begin(), tri.creases.end(),
+                                   [](const CreaseTag& c) { return c.sharpness < kInfiniteSharpness; }),
+                    tri.creases.end());
+  tri.corners.clear();
+  tri.holes.clear();
+  rep.input_vertices = tri.num_vertices();
+  rep.input_triangles = tri.num_faces();
+  rep.feature_angle = settings.feature_angle;
+
+  QuadRemeshOptions ro;
+  if (settings.target_faces > 0) ro.target_faces = settings.target_faces;
+  else if (settings.edge_length > 0) ro.edge_length = settings.edge_length;
+  else ro.target_faces = automatic_target_faces(tri);
+  rep.target_faces = ro.target_faces;
+  rep.edge_length = ro.edge_length;
+  ro.features.angle_degrees = settings.feature_angle;
+
+  auto t = Clock::now();
+  if (progress.stage) progress.stage("remeshing " + std::to_string(tri.num_faces()) + " triangles into a quad cage");
+  QuadRemeshResult rr = quad_remesh(tri, ro, progress.fraction);
+  if (rr.cancelled) throw Error(ErrorKind::Usage, "cancelled");
+  rep.remesh_ms = ms_since(t);
+  rep.remesh = rr.stats;
+  rep.feature_edges_in = static_cast<int>(rr.features.edges.size());
+  rep.corners_in = static_cast<int>(rr.features.corners.size());
+  rep.feature_chains_in = rr.features.chains;
+
+  // The cage, validated as a file's cage would be (a remesher fault is an error, not a crash).
+  LoadedCage cage;
+  cage.path = mesh.path;
+  cage.input = std::move(rr.cage);
+  out.cage.cage = std::move(cage);
+  Diagnostics validation;
+  out.cage.level = SubdivLevel::from_validated(validate_cage(out.cage.cage, &validation), out.cage.cage.input);
+  const std::vector<Point3> start = out.cage.positions();
+
+  // The fit of the cage's limit surface to the mesh.
+  t = Clock::now();
+  if (progress.stage)
+    progress.stage("fitting the cage's " + std::to_string(out.cage.cage.input.num_faces()) + " quads to the mesh");
+  TargetShape shape;
+  shape.points = tri.positions;
+  shape.triangles = fan_triangles(tri.face_sizes, tri.face_indices);
+  const ShapeTarget target = make_target(std::move(shape), mesh.path);
+  // Samples of level 2 (16 per quad): the cage's quads are a few mesh triangles wide, so 16
+  // samples per quad still outnumber the mesh's vertices; 4 x cheaper than level 3.
+  rep.fit_options.levels = 2;
+  rep.fit_options.max_iterations = 10;
+  ShapeFitProgress fit_progress;
+  if (progress.fraction)
+    fit_progress = [&](int iteration, double) {
+      return progress.fraction(std::min(1.0, (iteration + 1.0) / rep.fit_options.max_iterations));
+    };
+  rep.fit = run_shape_fit(out.cage.level, start, target, rep.fit_options, fit_progress);
+  if (rep.fit.fit.stop == ShapeFitStop::Cancelled) throw Error(ErrorKind::Usage, "cancelled");
+  out.positions = rep.fit.fit.positions;
+  rep.fit_ms = rep.fit.fit_ms;
+  rep.measure_ms = rep.fit.measure_ms;
+
+  // The kept features' normal angles against the mesh's dihedrals.
+  Diagnostics ignore;
+  const PolyMesh poly = PolyMesh::build(tri.num_vertices(), tri.face_sizes, tri.face_indices, &ignore);
+  rep.feature_angles = measure_feature_angles(out.cage.level, out.positions, mesh_feature_edges(tri, poly, rr.features));
+  return out;
+}
+
+void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
+  w.begin_object();
+  w.members("reason", r.route.reason, "input_vertices", r.input_vertices, "input_triangles", r.input_triangles);
+  w.key("features").begin_object();
+  w.members("angle_deg", r.feature_angle, "edges", r.feature_edges_in, "corners", r.corners_in, "chains",
+            r.feature_chains_in);
+  w.end_object();
+  w.key("cage");
+  write_stats(w, r.remesh);
+  w.members("target_faces", r.target_faces, "edge_length", r.edge_length);
+  w.key("fit").begin_object();
+  w.members("iterations", r.fit.fit.iterations, "stop", std::string(to_string(r.fit.fit.stop)));
+  w.key("before");
+  write_target_distance(w, r.fit.before);
+  w.key("after");
+  write_target_distance(w, r.fit.after);
+  w.end_object();
+  w.key("feature_angles").begin_object();
+  w.members("samples", r.feature_angles.samples, "max_difference_deg", r.feature_angles.max_difference,
+            "mean_difference_deg", r.feature_angles.mean_difference, "where_edge", r.feature_angles.where_edge);
+  w.end_object();
+  w.key("ms").begin_object();
+  w.members("remesh", r.remesh_ms, "fit", r.fit_ms, "measure", r.measure_ms);
+  w.end_object();
+  w.end_object();
+}
+
+std::string mesh_path_summary(const MeshPathReport& r) {
+  std::ostringstream o;
+  const QuadRemeshStats& c = r.remesh;
+  o << "  mesh       " << r.input_triangles << " triangles, " << r.feature_edges_in << " feature edges in "
+    << r.feature_chains_in << " curves, " << r.corners_in << " corners (feature angle " << short_number(r.feature_angle)
+    << " deg)\n";
+  o << "  cage       " << c.faces << " quads, " << c.extraordinary_vertices << " extraordinary vertices, "
+    << c.feature_edges << " feature edges kept, remeshed in " << short_number(r.remesh_ms / 1000) << " s\n";
+  o << "  fit        " << r.fit.fit.iterations << " iterations (" << to_string(r.fit.fit.stop) << "), to the mesh: "
+    << distance_text(r.fit.after.limit_to_target) << "; from the mesh: " << distance_text(r.fit.after.target_to_limit)
+    << " (of the diagonal)\n";
+  if (r.feature_angles.samples > 0)
+    o << "  features   normal angle across kept feature curves within " << short_number(r.feature_angles.max_difference)
+      << " deg of the mesh's dihedral (mean " << short_number(r.feature_angles.mean_difference) << ")\n";
+  return o.str();
+}
+
+}  // namespace subd2nurbs::pipeline

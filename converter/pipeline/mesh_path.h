@@ -1,0 +1,131 @@
+// The mesh path (issue #28): a dense triangle mesh is a shape to reproduce, not a cage. Every
+// front end (`subd2nurbs convert` and `info`, the Python module, the FreeCAD workbench) loads a
+// file through load_source, which decides the road by the rule below; a mesh then becomes a cage
+// by mesh_to_cage: sharp features (core/features), a field-aligned all-quad cage with the
+// features as infinitely sharp creases (core/remesh), the cage's limit surface fitted to the mesh
+// (core/fit/shape_fit.h). From there the conversion is the cage path's.
+//
+// The rule (docs/meshes.md "Which path"), in order:
+//  1. `input` mesh or cage (the setting) decides;
+//  2. a file with faces that are not triangles (quads, n-gons) is a cage;
+//  3. a file with crease, corner or hole tags is a cage;
+//  4. a file of triangles only whose triangles all pair back into quads (quad recovery,
+//     core/mesh/quad_recovery.h; triangles around a polar fan vertex may stay) is a
+//     triangulated cage;
+//  5. otherwise an STL, PLY, OFF or glTF file is a mesh, and so are at least kMinMeshTriangles
+//     triangles from anywhere else (OBJ, the Python module's arrays, a FreeCAD Mesh); fewer are
+//     a triangle cage.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "converter/pipeline/input.h"
+#include "converter/pipeline/shape_fit_report.h"
+#include "core/remesh/quad_remesh.h"
+
+namespace subd2nurbs::pipeline {
+
+/// Which road a file takes: decided by the rule (Auto), or as the user says.
+enum class InputKind { Auto, Mesh, Cage };
+const char* to_string(InputKind kind);  ///< "auto", "mesh", "cage"
+/// \throw SettingsError ("input")
+InputKind input_kind(const std::string& name);
+
+/// Triangles from other than an STL, PLY, OFF or glTF file take the mesh path from this many (rule 5).
+constexpr int kMinMeshTriangles = 200;
+
+/// The mesh path's settings (the settings table's rows "input", "target_faces", "edge_length",
+/// "feature_angle").
+struct MeshPathSettings {
+  InputKind input = InputKind::Auto;
+  int target_faces = 0;        ///< quads of the cage wanted; 0 with edge_length 0: automatic
+  double edge_length = 0;      ///< the cage's edge length in model units (used when target_faces is 0)
+  double feature_angle = 30;   ///< degrees: an edge between faces whose normals differ more is sharp
+};
+
+/// The automatic size: this many quads per unit of the mesh's area / diagonal^2, within limits.
+int automatic_target_faces(const MeshInput& mesh);
+
+/// Which road, and why in one sentence ("its 12946 triangles do not pair back into quads (330
+/// stay triangles): a mesh to reproduce").
+struct InputRoute {
+  bool mesh = false;
+  std::string reason;
+};
+
+/// What load_source read: on the cage road the cage as load_input gives it; on the mesh road the
+/// mesh's triangles (as in the file, not paired into quads) and the file's warnings.
+struct LoadedSource {
+  InputRoute route;
+  std::optional<LoadedInput> cage;  ///< the cage road
+  LoadedCage mesh;                  ///< the mesh road: the file's faces (not paired into quads)
+  std::vector<std::string> warnings;  ///< the mesh road's reading warnings ("FILE:LINE: warning: ...")
+};
+
+/// Reads `path` and decides its road by the rule (file comment).
+/// \throw InputError (unreadable or invalid file), SettingsError
+LoadedSource load_source(const std::string& path, InputKind requested);
+
+/// Decides the road of a cage already read (rule 2 .. 5). `path` gives the format (by extension).
+InputRoute route_input(const LoadedCage& read, const std::string& path, InputKind requested);
+
+/// The normal angle across a kept feature curve of the fitted surface against the mesh's
+/// dihedral angle there (both in degrees, as the angle between the two sides' normals).
+struct FeatureAngleStats {
+  int samples = 0;            ///< points measured (3 per feature edge of the cage, where a mesh feature edge runs along)
+  double max_difference = 0;  ///< max |surface angle - mesh angle|, degrees
+  double mean_difference = 0;
+  int where_edge = -1;        ///< the worst cage feature edge (index into cage.creases)
+};
+
+/// What the mesh path did, for the report and the summaries.
+struct MeshPathReport {
+  InputRoute route;
+  int input_vertices = 0, input_triangles = 0;
+  QuadRemeshStats remesh;
+  int feature_edges_in = 0, corners_in = 0, feature_chains_in = 0;
+  int target_faces = 0;         ///< asked for (after the automatic choice), 0 if edge_length
+  double edge_length = 0;       ///< asked for, model units (0 if target_faces)
+  double feature_angle = 30;
+  ShapeFitOptions fit_options;
+  ShapeFitRun fit;              ///< the fit, with the two-sided distance before and after
+  FeatureAngleStats feature_angles;
+  double remesh_ms = 0, fit_ms = 0, measure_ms = 0;
+};
+
+/// The cage made from a mesh, fitted, ready for convert().
+struct MeshCage {
+  LoadedInput cage;                ///< the cage (tags: feature creases and corners), validated
+  std::vector<Point3> positions;   ///< the fitted positions
+  MeshPathReport report;
+};
+
+/// Progress of the mesh path: a stage line ("detecting features", "remeshing", "fitting"),
+/// and a fraction of the remesh; returning false from either cancels (Error, kind Usage,
+/// "cancelled").
+struct MeshPathProgress {
+  std::function<void(const std::string& text)> stage;
+  std::function<bool(double fraction)> fraction;
+};
+
+/// The mesh's features, an all-quad cage of it, and the cage fitted to it (see the file comment).
+/// Polygons are fan-triangulated first; infinitely sharp crease tags (an OBJ's `t crease` with
+/// sharpness >= 10 given with --input mesh) are features the user tagged, kept whatever their
+/// angle; other tags are ignored.
+/// \throw SettingsError (settings), Error (remesh or fit impossible, cancelled)
+MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, const MeshPathProgress& progress = {});
+
+/// The rules of the mesh settings: target_faces >= 0, edge_length >= 0, feature angle in (0, 180).
+/// \throw SettingsError
+void validate(const MeshPathSettings& settings);
+
+/// The mesh path's member of the conversion report ("mesh": docs/formats.md).
+void write_mesh_path(JsonWriter& w, const MeshPathReport& report);
+
+/// A few lines for stderr: the cage, the features, the fit's distances.
+std::string mesh_path_summary(const MeshPathReport& report);
+
+}  // namespace subd2nurbs::pipeline

@@ -1,0 +1,1120 @@
+#include "core/remesh/quad_remesh.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "core/mesh/poly_mesh.h"
+#include "core/util/error.h"
+
+namespace subd2nurbs {
+namespace {
+
+using V3 = Eigen::Vector3d;
+using Clock = std::chrono::steady_clock;
+using Tri = std::array<int, 3>;
+
+struct CancelSignal {};
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
+std::uint64_t half_key(int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); }
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// --- topology of a polygon mesh: per component (Euler characteristic, boundary loops) ---------
+struct Topology {
+  int euler = 0, boundaries = 0, components = 0;
+  std::vector<std::pair<int, int>> per_component;  // sorted
+};
+
+int find_root(std::vector<int>& parent, int x) {
+  while (parent[x] != x) x = parent[x] = parent[parent[x]];
+  return x;
+}
+
+Topology topology(int num_vertices, const std::vector<int>& sizes, const std::vector<int>& indices) {
+  std::vector<int> parent(num_vertices);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<char> used(num_vertices, 0);
+  std::vector<std::uint64_t> edges;
+  std::vector<int> face_first;
+  int begin = 0;
+  for (int size : sizes) {
+    face_first.push_back(indices[begin]);
+    for (int k = 0; k < size; ++k) {
+      int a = indices[begin + k], b = indices[begin + (k + 1) % size];
+      used[a] = 1;
+      edges.push_back(edge_key(a, b));
+      parent[find_root(parent, a)] = find_root(parent, b);
+    }
+    begin += size;
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<int> boundary_parent(num_vertices);
+  std::iota(boundary_parent.begin(), boundary_parent.end(), 0);
+  std::vector<char> on_boundary(num_vertices, 0);
+  std::unordered_map<int, std::array<int, 3>> comp;  // root -> V - E + F, boundary loops
+  std::vector<int> roots;
+  for (int v = 0; v < num_vertices; ++v)
+    if (used[v]) comp[find_root(parent, v)][0] += 1;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    int a = int(edges[i] >> 32), b = int(edges[i] & 0xffffffffu);
+    comp[find_root(parent, a)][0] -= 1;
+    if (j - i == 1) {
+      on_boundary[a] = on_boundary[b] = 1;
+      boundary_parent[find_root(boundary_parent, a)] = find_root(boundary_parent, b);
+    }
+    i = j;
+  }
+  for (int f : face_first) comp[find_root(parent, f)][0] += 1;
+  for (int v = 0; v < num_vertices; ++v)
+    if (on_boundary[v] && find_root(boundary_parent, v) == v) comp[find_root(parent, v)][1] += 1;
+  Topology t;
+  for (const auto& [root, c] : comp) {
+    t.per_component.push_back({c[0], c[1]});
+    t.euler += c[0];
+    t.boundaries += c[1];
+  }
+  t.components = static_cast<int>(comp.size());
+  std::sort(t.per_component.begin(), t.per_component.end());
+  return t;
+}
+
+// --- dense mesh: the input's triangles with long edges split --------------------------------
+struct Dense {
+  std::vector<V3> p;
+  std::vector<Tri> t;
+  std::unordered_set<std::uint64_t> feature;  // feature edge keys
+  std::vector<char> corner;
+};
+
+void split_long_edges(Dense& d, double lmax) {
+  for (int pass = 0; pass < 400; ++pass) {
+    std::unordered_map<std::uint64_t, int> half;
+    half.reserve(d.t.size() * 3);
+    for (size_t f = 0; f < d.t.size(); ++f)
+      for (int k = 0; k < 3; ++k) half[half_key(d.t[f][k], d.t[f][(k + 1) % 3])] = int(f);
+    struct Cand {
+      double length;
+      std::uint64_t key;
+      int face, k;
+    };
+    std::vector<Cand> cands;
+    for (size_t f = 0; f < d.t.size(); ++f) {
+      int best = -1;
+      double bl = lmax;
+      for (int k = 0; k < 3; ++k) {
+        double l = (d.p[d.t[f][k]] - d.p[d.t[f][(k + 1) % 3]]).norm();
+        if (l > bl) bl = l, best = k;
+      }
+      if (best >= 0) cands.push_back({bl, edge_key(d.t[f][best], d.t[f][(best + 1) % 3]), int(f), best});
+    }
+    if (cands.empty()) return;
+    std::sort(cands.begin(), cands.end(), [](const Cand& a, const Cand& b) {
+      return a.length != b.length ? a.length > b.length : a.key != b.key ? a.key < b.key : a.face < b.face;
+    });
+    std::vector<char> touched(d.t.size(), 0);
+    for (const Cand& c : cands) {
+      int f = c.face;
+      if (touched[f]) continue;
+      int a = d.t[f][c.k], b = d.t[f][(c.k + 1) % 3], cc = d.t[f][(c.k + 2) % 3];
+      auto it = half.find(half_key(b, a));
+      int g = it == half.end() ? -1 : it->second;
+      if (g >= 0 && touched[g]) continue;
+      int m = static_cast<int>(d.p.size());
+      d.p.push_back(0.5 * (d.p[a] + d.p[b]));
+      d.corner.push_back(0);
+      d.t[f] = {a, m, cc};
+      d.t.push_back({m, b, cc});
+      touched[f] = 1;
+      touched.push_back(1);
+      if (g >= 0) {
+        int j = 0;
+        while (!(d.t[g][j] == b && d.t[g][(j + 1) % 3] == a)) ++j;
+        int w = d.t[g][(j + 2) % 3];
+        d.t[g] = {b, m, w};
+        d.t.push_back({m, a, w});
+        touched[g] = 1;
+        touched.push_back(1);
+      }
+      if (d.feature.erase(edge_key(a, b))) {
+        d.feature.insert(edge_key(a, m));
+        d.feature.insert(edge_key(m, b));
+      }
+    }
+  }
+}
+
+// --- fields ---------------------------------------------------------------------------------
+V3 any_perpendicular(const V3& n) {
+  V3 a = std::abs(n.x()) < 0.6 ? V3(1, 0, 0) : V3(0, 1, 0);
+  return (a - n * n.dot(a)).normalized();
+}
+
+// The members of {q0, n0 x q0} and {±q1, ±n1 x q1} that agree best (4-fold symmetry).
+std::pair<V3, V3> match_cross(const V3& q0, const V3& n0, const V3& q1, const V3& n1) {
+  V3 a[2] = {q0, n0.cross(q0)};
+  V3 b[2] = {q1, n1.cross(q1)};
+  double best = -1;
+  int bi = 0, bj = 0;
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) {
+      double s = std::abs(a[i].dot(b[j]));
+      if (s > best) best = s, bi = i, bj = j;
+    }
+  double sign = a[bi].dot(b[bj]) < 0 ? -1.0 : 1.0;
+  return {a[bi], sign * b[bj]};
+}
+
+// The point nearest the midpoint of p0, p1 on both tangent planes.
+V3 middle_point(const V3& p0, const V3& n0, const V3& p1, const V3& n1) {
+  V3 c = 0.5 * (p0 + p1);
+  double r0 = n0.dot(p0 - c), r1 = n1.dot(p1 - c), k = n0.dot(n1);
+  double det = 1 - k * k + 1e-4;
+  return c + ((r0 - k * r1) / det) * n0 + ((r1 - k * r0) / det) * n1;
+}
+
+V3 round_lattice(const V3& x, const V3& origin, const V3& q, const V3& t, double s) {
+  V3 d = x - origin;
+  return origin + q * (s * std::round(d.dot(q) / s)) + t * (s * std::round(d.dot(t) / s));
+}
+
+struct Fields {
+  int n = 0;
+  std::vector<int> offsets, adj;  // CSR neighbours (sorted)
+  std::vector<V3> normal, q, o;
+  std::vector<V3> p;              // positions
+  std::vector<V3> anchor;         // corners: where o stays; feature vertices: a point of o's line
+  std::vector<double> weight;     // dense vertices represented (coarse levels)
+  std::vector<int> kind;          // 0 free, 1 on a feature chain, 2 corner
+  std::vector<V3> tangent;        // feature tangent (kind 1), zero if none
+  std::vector<V3> principal;      // principal curvature direction
+  std::vector<double> principal_weight;
+  double s = 1;
+};
+
+void build_adjacency(const Dense& d, Fields& fl) {
+  int n = static_cast<int>(d.p.size());
+  fl.n = n;
+  fl.p = d.p;
+  fl.anchor = d.p;
+  fl.weight.assign(n, 1.0);
+  std::vector<std::uint64_t> pairs;
+  pairs.reserve(d.t.size() * 6);
+  fl.normal.assign(n, V3::Zero());
+  for (const Tri& t : d.t) {
+    V3 fn = (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]);
+    for (int k = 0; k < 3; ++k) {
+      fl.normal[t[k]] += fn;
+      pairs.push_back(half_key(t[k], t[(k + 1) % 3]));
+      pairs.push_back(half_key(t[(k + 1) % 3], t[k]));
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  fl.offsets.assign(n + 1, 0);
+  for (auto k : pairs) fl.offsets[(k >> 32) + 1]++;
+  for (int v = 0; v < n; ++v) fl.offsets[v + 1] += fl.offsets[v];
+  fl.adj.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) fl.adj[i] = int(pairs[i] & 0xffffffffu);
+  for (auto& nv : fl.normal) {
+    double l = nv.norm();
+    nv = l > 0 ? V3(nv / l) : V3(0, 0, 1);
+  }
+}
+
+void classify(const Dense& d, Fields& fl) {
+  fl.kind.assign(fl.n, 0);
+  fl.tangent.assign(fl.n, V3::Zero());
+  for (int v = 0; v < fl.n; ++v) {
+    std::vector<int> fn;
+    for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+      if (d.feature.count(edge_key(v, fl.adj[i]))) fn.push_back(fl.adj[i]);
+    if (d.corner[v]) {
+      fl.kind[v] = 2;
+    } else if (!fn.empty()) {
+      fl.kind[v] = 1;
+      V3 t = fn.size() == 2 ? V3(d.p[fn[1]] - d.p[fn[0]]) : V3(d.p[v] - d.p[fn[0]]);
+      t -= fl.normal[v] * fl.normal[v].dot(t);
+      if (fn.size() <= 2 && t.norm() > 0) fl.tangent[v] = t.normalized();
+      if (fn.size() > 2) fl.kind[v] = 2;  // a junction the feature set missed: keep it in place
+    }
+  }
+}
+
+// Principal curvature directions from a least-squares shape operator (normal differences along
+// the edges), weighted by anisotropy and by how much the curvature matters at the lattice scale.
+void curvature(const Dense& d, Fields& fl, double alignment) {
+  fl.principal.assign(fl.n, V3::Zero());
+  fl.principal_weight.assign(fl.n, 0.0);
+  if (alignment <= 0) return;
+  for (int v = 0; v < fl.n; ++v) {
+    if (fl.kind[v] != 0) continue;
+    bool near_feature = false;
+    for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) near_feature |= fl.kind[fl.adj[i]] != 0;
+    if (near_feature || fl.offsets[v + 1] - fl.offsets[v] < 3) continue;
+    const V3& n = fl.normal[v];
+    V3 e1 = any_perpendicular(n), e2 = n.cross(e1);
+    Eigen::Matrix2d a = Eigen::Matrix2d::Zero(), b = Eigen::Matrix2d::Zero();
+    for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+      int w = fl.adj[i];
+      V3 e = d.p[w] - d.p[v], dn = fl.normal[w] - n;
+      Eigen::Vector2d e2d(e.dot(e1), e.dot(e2)), dn2d(dn.dot(e1), dn.dot(e2));
+      a += e2d * e2d.transpose();
+      b += dn2d * e2d.transpose();
+    }
+    if (std::abs(a.determinant()) < 1e-12 * a.squaredNorm()) continue;
+    Eigen::Matrix2d shape = b * a.inverse();
+    shape = 0.5 * (shape + shape.transpose()).eval();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(shape);
+    double k1 = es.eigenvalues()(0), k2 = es.eigenvalues()(1);
+    double spread = std::abs(k1 - k2), total = std::abs(k1) + std::abs(k2);
+    if (total <= 0) continue;
+    Eigen::Vector2d dir = es.eigenvectors().col(std::abs(k1) > std::abs(k2) ? 0 : 1);
+    fl.principal[v] = (e1 * dir(0) + e2 * dir(1)).normalized();
+    fl.principal_weight[v] = alignment * (spread / total) * std::min(1.0, spread * fl.s);
+  }
+}
+
+template <class Check>
+void init_cross_field(Fields& fl, Check&& check) {
+  fl.q.assign(fl.n, V3::Zero());
+  std::vector<char> set(fl.n, 0);
+  std::deque<int> queue;
+  for (int v = 0; v < fl.n; ++v) {
+    if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
+      fl.q[v] = fl.tangent[v];
+    } else if (fl.principal_weight[v] > 0.5) {
+      fl.q[v] = fl.principal[v];
+    } else {
+      continue;
+    }
+    set[v] = 1;
+    queue.push_back(v);
+  }
+  for (int seed = 0;; ++seed) {
+    while (!queue.empty()) {
+      int v = queue.front();
+      queue.pop_front();
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        int w = fl.adj[i];
+        if (set[w]) continue;
+        V3 t = fl.q[v] - fl.normal[w] * fl.normal[w].dot(fl.q[v]);
+        fl.q[w] = t.norm() > 1e-9 ? V3(t.normalized()) : any_perpendicular(fl.normal[w]);
+        set[w] = 1;
+        queue.push_back(w);
+      }
+    }
+    while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
+    if (seed >= fl.n) break;
+    fl.q[seed] = any_perpendicular(fl.normal[seed]);
+    set[seed] = 1;
+    queue.push_back(seed);
+    check();
+  }
+  for (int v = 0; v < fl.n; ++v)
+    if (!set[v]) fl.q[v] = any_perpendicular(fl.normal[v]);
+}
+
+void smooth_cross_vertex(Fields& fl, int v) {
+  if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) return;  // constrained to the feature
+  const V3& n = fl.normal[v];
+  V3 sum = fl.q[v];
+  double weight = 0;
+  for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+    int w = fl.adj[i];
+    auto [a, b] = match_cross(sum, n, fl.q[w], fl.normal[w]);
+    sum = a * weight + b;
+    sum -= n * n.dot(sum);
+    weight += 1;
+    double l = sum.norm();
+    if (l > 0) sum /= l;
+  }
+  if (fl.principal_weight[v] > 0) {
+    auto [a, b] = match_cross(sum, n, fl.principal[v], n);
+    sum = a + b * fl.principal_weight[v];
+    sum -= n * n.dot(sum);
+  }
+  double l = sum.norm();
+  if (l > 1e-12) fl.q[v] = sum / l;
+}
+
+void constrain_position(Fields& fl, int v) {
+  if (fl.kind[v] == 2) {
+    fl.o[v] = fl.anchor[v];
+  } else if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
+    V3 r = fl.o[v] - fl.anchor[v];
+    fl.o[v] = fl.anchor[v] + fl.q[v] * fl.q[v].dot(r);
+  }
+  V3 t = fl.normal[v].cross(fl.q[v]);
+  fl.o[v] = round_lattice(fl.p[v], fl.o[v], fl.q[v], t, fl.s);
+}
+
+template <class Check>
+void init_position_field(Fields& fl, Check&& check) {
+  fl.o.assign(fl.n, V3::Zero());
+  std::vector<char> set(fl.n, 0);
+  std::deque<int> queue;
+  for (int v = 0; v < fl.n; ++v)
+    if (fl.kind[v] == 2) {
+      fl.o[v] = fl.anchor[v];
+      constrain_position(fl, v);
+      set[v] = 1;
+      queue.push_back(v);
+    }
+  for (int seed = 0;; ++seed) {
+    while (!queue.empty()) {
+      int v = queue.front();
+      queue.pop_front();
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        int w = fl.adj[i];
+        if (set[w]) continue;
+        const V3& n = fl.normal[w];
+        fl.o[w] = fl.o[v] - n * n.dot(fl.o[v] - fl.p[w]);
+        constrain_position(fl, w);
+        set[w] = 1;
+        queue.push_back(w);
+      }
+    }
+    while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
+    if (seed >= fl.n) break;
+    fl.o[seed] = fl.p[seed];
+    set[seed] = 1;
+    queue.push_back(seed);
+    check();
+  }
+}
+
+void smooth_position_vertex(Fields& fl, int v) {
+  if (fl.kind[v] == 2) return;
+  const V3& n = fl.normal[v];
+  const V3& p = fl.p[v];
+  V3 t = n.cross(fl.q[v]);
+  V3 sum = fl.o[v];
+  double weight = 0;
+  for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+    int w = fl.adj[i];
+    V3 m = middle_point(p, n, fl.p[w], fl.normal[w]);
+    V3 a = round_lattice(m, sum, fl.q[v], t, fl.s);
+    V3 b = round_lattice(a, fl.o[w], fl.q[w], fl.normal[w].cross(fl.q[w]), fl.s);  // the same lattice point
+    sum = (a * weight + b) / (weight + 1);
+    sum -= n * n.dot(sum - p);
+    weight += 1;
+  }
+  fl.o[v] = sum;
+  constrain_position(fl, v);
+}
+
+// --- multiresolution (as Instant Meshes): vertices paired along edges level by level --------
+// One coarser level: edges sorted by how well their normals agree, greedily matched; a pair
+// becomes one vertex (weighted mean position, summed normal, the stronger constraint).
+Fields coarsen(const Fields& f, std::vector<int>& parent) {
+  struct Candidate {
+    double score;
+    int u, v;
+  };
+  std::vector<Candidate> edges;
+  for (int u = 0; u < f.n; ++u)
+    for (int i = f.offsets[u]; i < f.offsets[u + 1]; ++i) {
+      int v = f.adj[i];
+      if (v > u && !(f.kind[u] == 2 && f.kind[v] == 2)) edges.push_back({f.normal[u].dot(f.normal[v]), u, v});
+    }
+  std::sort(edges.begin(), edges.end(), [](const Candidate& a, const Candidate& b) {
+    return a.score != b.score ? a.score > b.score : a.u != b.u ? a.u < b.u : a.v < b.v;
+  });
+  parent.assign(f.n, -1);
+  int n = 0;
+  for (const Candidate& e : edges)
+    if (parent[e.u] < 0 && parent[e.v] < 0) parent[e.u] = parent[e.v] = n++;
+  for (int u = 0; u < f.n; ++u)
+    if (parent[u] < 0) parent[u] = n++;
+  Fields c;
+  c.n = n;
+  c.s = f.s;
+  c.p.assign(n, V3::Zero());
+  c.normal.assign(n, V3::Zero());
+  c.weight.assign(n, 0.0);
+  c.kind.assign(n, -1);
+  c.anchor.assign(n, V3::Zero());
+  c.tangent.assign(n, V3::Zero());
+  c.principal.assign(n, V3::Zero());
+  c.principal_weight.assign(n, 0.0);
+  for (int u = 0; u < f.n; ++u) {
+    int a = parent[u];
+    c.p[a] += f.weight[u] * f.p[u];
+    c.normal[a] += f.weight[u] * f.normal[u];
+    c.weight[a] += f.weight[u];
+    if (f.kind[u] > c.kind[a]) {
+      c.kind[a] = f.kind[u];
+      c.anchor[a] = f.anchor[u];
+      c.tangent[a] = f.tangent[u];
+    }
+    if (f.principal_weight[u] > c.principal_weight[a]) {
+      c.principal_weight[a] = f.principal_weight[u];
+      c.principal[a] = f.principal[u];
+    }
+  }
+  for (int a = 0; a < n; ++a) {
+    c.p[a] /= c.weight[a];
+    double l = c.normal[a].norm();
+    c.normal[a] = l > 0 ? V3(c.normal[a] / l) : V3(0, 0, 1);
+    for (V3* t : {&c.tangent[a], &c.principal[a]}) {
+      *t -= c.normal[a] * c.normal[a].dot(*t);
+      double lt = t->norm();
+      *t = lt > 1e-9 ? V3(*t / lt) : V3::Zero();
+    }
+    if (c.kind[a] == 1 && c.tangent[a].norm() == 0) c.kind[a] = 0;
+    if (c.principal[a].norm() == 0) c.principal_weight[a] = 0;
+  }
+  std::vector<std::uint64_t> pairs;
+  for (int u = 0; u < f.n; ++u)
+    for (int i = f.offsets[u]; i < f.offsets[u + 1]; ++i) {
+      int a = parent[u], b = parent[f.adj[i]];
+      if (a != b) pairs.push_back(half_key(a, b));
+    }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  c.offsets.assign(n + 1, 0);
+  for (auto k : pairs) c.offsets[(k >> 32) + 1]++;
+  for (int a = 0; a < n; ++a) c.offsets[a + 1] += c.offsets[a];
+  c.adj.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) c.adj[i] = int(pairs[i] & 0xffffffffu);
+  return c;
+}
+
+struct Hierarchy {
+  std::vector<Fields> levels;             // levels[0] is the dense mesh's
+  std::vector<std::vector<int>> parents;  // parents[l][v]: v's vertex on level l + 1
+};
+
+void build_hierarchy(Hierarchy& h) {
+  while (h.levels.size() < 40 && h.levels.back().n > 64) {
+    std::vector<int> parent;
+    Fields c = coarsen(h.levels.back(), parent);
+    if (c.n > 0.9 * h.levels.back().n) break;
+    h.parents.push_back(std::move(parent));
+    h.levels.push_back(std::move(c));
+  }
+}
+
+template <class Sweep, class Check>
+void sweeps(Fields& fl, int iterations, Sweep&& sweep, Check&& check) {
+  for (int it = 0; it < iterations; ++it) {
+    if (it % 2 == 0)
+      for (int v = 0; v < fl.n; ++v) sweep(fl, v);
+    else
+      for (int v = fl.n - 1; v >= 0; --v) sweep(fl, v);
+    check();
+  }
+}
+
+// Both fields solved coarse to fine: initialised on the coarsest level, smoothed there, carried
+// to each finer level (projected onto its tangent planes, constraints applied) and smoothed again.
+template <class Check>
+void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
+  int top = static_cast<int>(h.levels.size()) - 1;
+  if (cross)
+    init_cross_field(h.levels[top], check);
+  else
+    init_position_field(h.levels[top], check);
+  for (int l = top; l >= 0; --l) {
+    Fields& fl = h.levels[l];
+    if (l < top) {
+      const Fields& up = h.levels[l + 1];
+      const std::vector<int>& parent = h.parents[l];
+      if (cross) {
+        fl.q.resize(fl.n);
+        for (int v = 0; v < fl.n; ++v) {
+          if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
+            fl.q[v] = fl.tangent[v];
+            continue;
+          }
+          V3 q = up.q[parent[v]] - fl.normal[v] * fl.normal[v].dot(up.q[parent[v]]);
+          fl.q[v] = q.norm() > 1e-9 ? V3(q.normalized()) : any_perpendicular(fl.normal[v]);
+        }
+      } else {
+        fl.o.resize(fl.n);
+        for (int v = 0; v < fl.n; ++v) {
+          const V3& o = up.o[parent[v]];
+          fl.o[v] = o - fl.normal[v] * fl.normal[v].dot(o - fl.p[v]);
+          constrain_position(fl, v);
+        }
+      }
+    }
+    if (cross)
+      sweeps(fl, iterations, smooth_cross_vertex, check);
+    else
+      sweeps(fl, iterations, smooth_position_vertex, check);
+  }
+}
+
+// --- extraction by edge collapses -------------------------------------------------------------
+struct Collapser {
+  const std::vector<V3>& p;
+  const Fields& fl;
+  std::vector<Tri> f;
+  std::vector<char> face_alive, alive;
+  std::vector<std::vector<int>> vf;
+  std::unordered_set<std::uint64_t> feature;
+  std::vector<double> dist;
+  std::vector<int> scratch_u, scratch_v;
+
+  Collapser(const Dense& d, const Fields& fields) : p(d.p), fl(fields), f(d.t), feature(d.feature) {
+    int n = static_cast<int>(p.size());
+    face_alive.assign(f.size(), 1);
+    alive.assign(n, 1);
+    vf.assign(n, {});
+    for (size_t i = 0; i < f.size(); ++i)
+      for (int v : f[i]) vf[v].push_back(int(i));
+    dist.resize(n);
+    for (int v = 0; v < n; ++v) dist[v] = (p[v] - fl.o[v]).norm();
+  }
+
+  bool higher(int a, int b) const {  // priority of a above b
+    if (fl.kind[a] != fl.kind[b]) return fl.kind[a] > fl.kind[b];
+    if (dist[a] != dist[b]) return dist[a] < dist[b];
+    return a < b;
+  }
+  void neighbours(int u, std::vector<int>& out) const {
+    out.clear();
+    for (int fi : vf[u])
+      for (int w : f[fi])
+        if (w != u) out.push_back(w);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+  static bool contains(const Tri& t, int v) { return t[0] == v || t[1] == v || t[2] == v; }
+  int faces_with(int a, int b, int* out) const {
+    int count = 0;
+    for (int fi : vf[a])
+      if (contains(f[fi], b)) {
+        if (count < 2) out[count] = fi;
+        ++count;
+      }
+    return count;
+  }
+  bool is_feature(int a, int b) const { return feature.count(edge_key(a, b)) != 0; }
+  bool boundary_vertex(int u, const std::vector<int>& nu) const {
+    int tmp[2];
+    for (int w : nu)
+      if (faces_with(u, w, tmp) == 1) return true;
+    return false;
+  }
+  V3 face_normal(const Tri& t, int from, int to) const {
+    auto at = [&](int k) -> const V3& { return p[t[k] == from ? to : t[k]]; };
+    return (at(1) - at(0)).cross(at(2) - at(0));
+  }
+
+  bool can_collapse(int u, int v) {
+    if (fl.kind[u] == 2) return false;
+    int shared[2];
+    int count = faces_with(u, v, shared);
+    if (count == 0 || count > 2) return false;
+    std::vector<int>& nu = scratch_u;
+    std::vector<int>& nv = scratch_v;
+    neighbours(u, nu);
+    if (fl.kind[u] == 1) {
+      if (!is_feature(u, v)) return false;
+      for (int w : nu)
+        if (w != v && is_feature(u, w) && is_feature(v, w)) return false;
+    }
+    neighbours(v, nv);
+    std::vector<int> common, opposite;
+    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+    for (int k = 0; k < count; ++k)
+      for (int w : f[shared[k]])
+        if (w != u && w != v) opposite.push_back(w);
+    std::sort(opposite.begin(), opposite.end());
+    if (common != opposite) return false;
+    if (count == 2 && boundary_vertex(u, nu) && boundary_vertex(v, nv)) return false;
+    for (int fi : vf[u]) {
+      if (fi == shared[0] || (count == 2 && fi == shared[1])) continue;
+      V3 before = face_normal(f[fi], -1, -1), after = face_normal(f[fi], u, v);
+      double lb = before.norm(), la = after.norm();
+      if (la <= 1e-12 * lb || before.dot(after) <= 0.2 * la * lb) return false;
+      int a = -1, b = -1;
+      for (int w : f[fi])
+        if (w != u) (a < 0 ? a : b) = w;
+      for (int gi : vf[v])
+        if (contains(f[gi], a) && contains(f[gi], b)) return false;
+    }
+    return true;
+  }
+
+  void collapse(int u, int v) {
+    std::vector<int> nu;
+    neighbours(u, nu);
+    std::vector<int> faces = vf[u];
+    for (int fi : faces) {
+      if (contains(f[fi], v)) {
+        face_alive[fi] = 0;
+        for (int w : f[fi])
+          if (w != u) vf[w].erase(std::find(vf[w].begin(), vf[w].end(), fi));
+      } else {
+        for (int& w : f[fi])
+          if (w == u) w = v;
+        vf[v].push_back(fi);
+      }
+    }
+    vf[u].clear();
+    for (int w : nu)
+      if (feature.erase(edge_key(u, w)) && w != v) feature.insert(edge_key(v, w));
+    alive[u] = 0;
+  }
+};
+
+double quad_quality(const V3 c[4]) {
+  V3 normal = (c[2] - c[0]).cross(c[3] - c[1]);
+  if (normal.norm() <= 0) return -1;
+  normal.normalize();
+  double worst = 1;
+  for (int k = 0; k < 4; ++k) {
+    V3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
+    double la = a.norm(), lb = b.norm();
+    if (la <= 0 || lb <= 0) return -1;
+    worst = std::min(worst, a.cross(b).dot(normal) / (la * lb));
+  }
+  return worst;
+}
+
+// Closest point on triangle abc to x.
+V3 closest_on_triangle(const V3& x, const V3& a, const V3& b, const V3& c) {
+  V3 ab = b - a, ac = c - a, ax = x - a;
+  double d1 = ab.dot(ax), d2 = ac.dot(ax);
+  if (d1 <= 0 && d2 <= 0) return a;
+  V3 bx = x - b;
+  double d3 = ab.dot(bx), d4 = ac.dot(bx);
+  if (d3 >= 0 && d4 <= d3) return b;
+  double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  V3 cx = x - c;
+  double d5 = ab.dot(cx), d6 = ac.dot(cx);
+  if (d6 >= 0 && d5 <= d6) return c;
+  double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  double denom = 1 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
+  V3 ab = b - a;
+  double l = ab.squaredNorm();
+  double t = l > 0 ? std::clamp((x - a).dot(ab) / l, 0.0, 1.0) : 0.0;
+  return a + ab * t;
+}
+
+struct Projector {
+  const Dense& d;
+  const Fields& fl;
+  std::vector<int> vf_offsets, vf;
+
+  Projector(const Dense& dense, const Fields& fields) : d(dense), fl(fields) {
+    int n = static_cast<int>(d.p.size());
+    vf_offsets.assign(n + 1, 0);
+    for (const Tri& t : d.t)
+      for (int v : t) vf_offsets[v + 1]++;
+    for (int v = 0; v < n; ++v) vf_offsets[v + 1] += vf_offsets[v];
+    vf.resize(vf_offsets[n]);
+    std::vector<int> fill(vf_offsets.begin(), vf_offsets.end() - 1);
+    for (size_t i = 0; i < d.t.size(); ++i)
+      for (int v : d.t[i]) vf[fill[v]++] = int(i);
+  }
+  // Walks from dense vertex `start` towards x (over feature edges only when `on_feature`), then
+  // projects onto the faces (or feature edges) around the vertex reached.
+  V3 project(const V3& x, int start, bool on_feature) const {
+    int v = start;
+    for (int step = 0; step < 100000; ++step) {
+      int best = v;
+      double bd = (d.p[v] - x).squaredNorm();
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        int w = fl.adj[i];
+        if (on_feature && !d.feature.count(edge_key(v, w))) continue;
+        double dw = (d.p[w] - x).squaredNorm();
+        if (dw < bd) bd = dw, best = w;
+      }
+      if (best == v) break;
+      v = best;
+    }
+    V3 result = d.p[v];
+    double bd = (result - x).squaredNorm();
+    if (on_feature) {
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        int w = fl.adj[i];
+        if (!d.feature.count(edge_key(v, w))) continue;
+        V3 c = closest_on_segment(x, d.p[v], d.p[w]);
+        if ((c - x).squaredNorm() < bd) bd = (c - x).squaredNorm(), result = c;
+      }
+      return result;
+    }
+    for (int i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
+      const Tri& t = d.t[vf[i]];
+      V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
+      if ((c - x).squaredNorm() < bd) bd = (c - x).squaredNorm(), result = c;
+    }
+    return result;
+  }
+};
+
+}  // namespace
+
+QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
+                             const std::function<bool(double)>& progress) {
+  if ((options.target_faces > 0) == (options.edge_length > 0) || !std::isfinite(options.edge_length) ||
+      options.target_faces < 0 || options.edge_length < 0)
+    throw Error(ErrorKind::Settings,
+                "quad remesh: exactly one of target faces (> 0) and edge length (> 0) must be given");
+  if (!(options.curvature_alignment >= 0) || options.smoothing_iterations < 0)
+    throw Error(ErrorKind::Settings, "quad remesh: curvature alignment and smoothing iterations must be >= 0");
+  if (mesh.num_faces() == 0) throw Error(ErrorKind::Input, "quad remesh: the mesh has no faces");
+  PolyMesh::build(mesh.num_vertices(), mesh.face_sizes, mesh.face_indices);  // manifold, oriented
+
+  QuadRemeshResult result;
+  auto check = [&](double fraction) {
+    if (progress && !progress(std::clamp(fraction, 0.0, 1.0))) throw CancelSignal{};
+  };
+  try {
+    auto t0 = Clock::now();
+    check(0);
+    result.features = detect_features(mesh, options.features);
+    QuadRemeshStats& st = result.stats;
+    st.input_vertices = mesh.num_vertices();
+    st.input_faces = mesh.num_faces();
+
+    // Dense triangle mesh (fan triangulation), its features.
+    Dense d;
+    for (const auto& x : mesh.positions) d.p.push_back(V3(x[0], x[1], x[2]));
+    d.corner.assign(mesh.num_vertices(), 0);
+    for (int c : result.features.corners) d.corner[c] = 1;
+    for (const auto& e : result.features.edges) d.feature.insert(edge_key(e[0], e[1]));
+    int begin = 0;
+    double area = 0;
+    for (int size : mesh.face_sizes) {
+      for (int k = 1; k + 1 < size; ++k) {
+        Tri t{mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]};
+        d.t.push_back(t);
+        area += 0.5 * (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]).norm();
+      }
+      begin += size;
+    }
+    if (!(area > 0)) throw Error(ErrorKind::Input, "quad remesh: the mesh has zero area");
+    double h = options.target_faces > 0 ? std::sqrt(area / options.target_faces) : options.edge_length;
+    double s = 2 * h;  // extraction lattice; the final split halves it
+    double lmax = s / 4;
+    if (area / (lmax * lmax) > 8e6)
+      throw Error(ErrorKind::Settings, "quad remesh: the edge length is too small for the mesh's area (over " +
+                                           std::to_string(long(area / (h * h))) + " quads)");
+    split_long_edges(d, lmax);
+    st.dense_vertices = static_cast<int>(d.p.size());
+    check(0.05);
+
+    Hierarchy hier;
+    {
+      Fields dense;
+      dense.s = s;
+      build_adjacency(d, dense);
+      classify(d, dense);
+      curvature(d, dense, options.curvature_alignment);
+      hier.levels.push_back(std::move(dense));
+    }
+    build_hierarchy(hier);
+    Fields& fl = hier.levels[0];
+    int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
+    solve_fields(hier, iterations, true, [&]() { check(0.25); });
+    // Position field and extraction; when the lattice's irregularities gave clearly more faces
+    // than asked for, once more with the spacing scaled by the square root of the excess.
+    for (int attempt = 0;; ++attempt) {
+      result.cage = MeshInput{};
+      auto t_position = Clock::now();
+      for (Fields& level : hier.levels) level.s = s;
+      solve_fields(hier, iterations, false, [&]() { check(0.5); });
+      st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
+      auto t1 = Clock::now();
+
+      // Collapse every edge whose ends share a lattice point (link condition, features kept).
+      Collapser col(d, fl);
+      // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
+      // along their chains); each grows from its centre, the vertex of highest priority, by
+      // collapsing its neighbours into it ring by ring.
+      auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
+      std::vector<int> cluster(fl.n);
+      std::iota(cluster.begin(), cluster.end(), 0);
+      for (int u = 0; u < fl.n; ++u)
+        for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
+          int v = fl.adj[i];
+          if (v < u || !same_point(u, v)) continue;
+          bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
+          if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
+          cluster[find_root(cluster, u)] = find_root(cluster, v);
+        }
+      std::vector<int> centre_of(fl.n, -1);
+      for (int u = 0; u < fl.n; ++u) {
+        int r = find_root(cluster, u);
+        if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
+      }
+      for (int pass = 0; pass < 200; ++pass) {
+        int changed = 0;
+        for (int u = 0; u < fl.n; ++u) {
+          int c = centre_of[find_root(cluster, u)];
+          int tmp[2];
+          if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
+            continue;
+          if (col.can_collapse(u, c)) {
+            col.collapse(u, c);
+            ++changed;
+          }
+        }
+        check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
+        if (changed == 0) break;
+      }
+      std::vector<int> nu, cands;
+      for (int pass = 0; pass < 200; ++pass) {
+        int changed = 0;
+        for (int u = 0; u < fl.n; ++u) {
+          if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
+          col.neighbours(u, nu);
+          cands.clear();
+          for (int v : nu)
+            if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
+          std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
+          for (int v : cands)
+            if (col.can_collapse(u, v)) {
+              col.collapse(u, v);
+              ++changed;
+              break;
+            }
+        }
+        check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
+        if (changed == 0) break;
+      }
+
+      // The coarse triangle mesh.
+      std::vector<int> coarse_of(fl.n, -1), dense_of;
+      for (int v = 0; v < fl.n; ++v)
+        if (col.alive[v] && !col.vf[v].empty()) {
+          coarse_of[v] = static_cast<int>(dense_of.size());
+          dense_of.push_back(v);
+        }
+      std::vector<Tri> tris;
+      for (size_t i = 0; i < col.f.size(); ++i)
+        if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
+      int nc = static_cast<int>(dense_of.size());
+      auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
+
+      // Pair triangles into quads across "diagonal" edges (lattice displacement (±1, ±1)).
+      std::unordered_map<std::uint64_t, int> half;
+      for (size_t i = 0; i < tris.size(); ++i)
+        for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+      struct Pair {
+        double score;
+        int f, g, k;
+      };
+      std::vector<Pair> pairs;
+      auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
+        int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
+        int w = -1;
+        for (int j = 0; j < 3; ++j)
+          if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
+        quad = {x, w, y, z};
+      };
+      for (size_t i = 0; i < tris.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+          int x = tris[i][k], y = tris[i][(k + 1) % 3];
+          auto it = half.find(half_key(y, x));
+          if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
+          std::array<int, 4> quad;
+          quad_of(int(i), k, it->second, quad);
+          if (quad[1] == quad[3]) continue;  // two triangles sharing two edges
+          V3 c[4];
+          for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
+          double quality = quad_quality(c);
+          if (quality < 0.2) continue;
+          int dx = dense_of[x], dy = dense_of[y];
+          V3 disp = fl.o[dy] - fl.o[dx];
+          V3 tx = fl.normal[dx].cross(fl.q[dx]);
+          double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
+          bool diagonal = a == 1 && b == 1;
+          pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
+        }
+      std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+        return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
+      });
+      // Greedy matching, best pairs first; then augmenting paths (alternating between unused and
+      // used pairs, breadth first, bounded) from each unpaired triangle to another.
+      int nt = static_cast<int>(tris.size());
+      std::vector<int> mate(nt, -1), mate_k(nt, -1);
+      std::vector<std::array<int, 3>> cand(nt, {-1, -1, -1});  // neighbour across edge k if pairable
+      for (const Pair& pr : pairs) {
+        cand[pr.f][pr.k] = pr.g;
+        for (int j = 0; j < 3; ++j)
+          if (tris[pr.g][j] == tris[pr.f][(pr.k + 1) % 3]) cand[pr.g][j] = pr.f;
+      }
+      for (const Pair& pr : pairs) {
+        if (mate[pr.f] >= 0 || mate[pr.g] >= 0) continue;
+        mate[pr.f] = pr.g;
+        mate[pr.g] = pr.f;
+      }
+      std::vector<int> from(nt, -1), seen(nt, -1);
+      for (int t = 0; t < nt; ++t) {
+        if (mate[t] >= 0) continue;
+        std::vector<int> queue{t};
+        seen[t] = t;
+        int end_a = -1, end_b = -1;
+        for (size_t head = 0; head < queue.size() && head < 400 && end_b < 0; ++head) {
+          int a = queue[head];
+          for (int k = 0; k < 3 && end_b < 0; ++k) {
+            int b = cand[a][k];
+            if (b < 0 || b == mate[a] || seen[b] == t) continue;
+            if (mate[b] < 0) {
+              end_a = a;
+              end_b = b;
+            } else if (seen[mate[b]] != t) {
+              seen[b] = t;
+              seen[mate[b]] = t;
+              from[mate[b]] = a;
+              queue.push_back(mate[b]);
+            }
+          }
+        }
+        if (end_b < 0) continue;
+        // flip the path: end_b - end_a, then each a's old mate pairs with a's predecessor
+        int a = end_a, b = end_b;
+        while (true) {
+          int old = mate[a];
+          mate[a] = b;
+          mate[b] = a;
+          if (a == t) break;
+          b = old;
+          a = from[a];
+        }
+      }
+      std::vector<std::vector<int>> polygons;
+      for (int f = 0; f < nt; ++f) {
+        int g = mate[f];
+        if (g < f) continue;
+        int k = 0;
+        while (cand[f][k] != g) ++k;
+        std::array<int, 4> quad;
+        quad_of(f, k, g, quad);
+        polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
+      }
+      st.coarse_quads = static_cast<int>(polygons.size());
+      for (int f = 0; f < nt; ++f)
+        if (mate[f] < 0) polygons.push_back({tris[f][0], tris[f][1], tris[f][2]});
+      st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
+      check(0.92);
+
+      // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface.
+      Projector proj(d, fl);
+      MeshInput& cage = result.cage;
+      cage.options = mesh.options;
+      for (int v = 0; v < nc; ++v) {
+        const V3& x = d.p[dense_of[v]];
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+      }
+      std::unordered_map<std::uint64_t, int> midpoint;
+      std::vector<std::uint64_t> feature_keys;
+      auto mid = [&](int a, int b) {
+        auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
+        if (!inserted) return it->second;
+        bool feat = coarse_feature(a, b);
+        int da = std::min(dense_of[a], dense_of[b]);
+        V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
+        it->second = static_cast<int>(cage.positions.size());
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+        if (feat) {
+          feature_keys.push_back(edge_key(a, it->second));
+          feature_keys.push_back(edge_key(it->second, b));
+        }
+        return it->second;
+      };
+      for (const auto& poly : polygons) {
+        int m = static_cast<int>(poly.size());
+        V3 centre = V3::Zero();
+        int start = dense_of[poly[0]];
+        for (int v : poly) {
+          centre += d.p[dense_of[v]];
+          start = std::min(start, dense_of[v]);
+        }
+        V3 x = proj.project(centre / m, start, false);
+        int c = static_cast<int>(cage.positions.size());
+        cage.positions.push_back({x.x(), x.y(), x.z()});
+        std::vector<int> mids(m);
+        for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
+        for (int k = 0; k < m; ++k) {
+          cage.face_sizes.push_back(4);
+          cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
+        }
+      }
+      std::sort(feature_keys.begin(), feature_keys.end());
+      for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
+      for (int v = 0; v < nc; ++v)
+        if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
+      st.extract_seconds += seconds_since(t1);
+      double ratio = result.cage.num_faces() * h * h / area;
+      st.attempts = attempt + 1;
+      if (attempt == 0 && ratio > 1.3) {
+        s *= std::sqrt(ratio);
+        continue;
+      }
+      break;
+    }
+
+    // Checks and statistics: the cage must be a manifold with the input's topology.
+    PolyMesh pm;
+    try {
+      pm = PolyMesh::build(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
+    } catch (const Error& e) {
+      throw Error(ErrorKind::Fit, std::string("quad remesh: the extracted cage is not a valid mesh: ") + e.what());
+    }
+    Topology ti = topology(mesh.num_vertices(), mesh.face_sizes, mesh.face_indices);
+    Topology tc = topology(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
+    st.euler_input = ti.euler;
+    st.euler_cage = tc.euler;
+    st.boundaries_input = ti.boundaries;
+    st.boundaries_cage = tc.boundaries;
+    st.components_input = ti.components;
+    st.components_cage = tc.components;
+    if (ti.per_component != tc.per_component)
+      throw Error(ErrorKind::Fit, "quad remesh: the cage's topology (Euler characteristic " + std::to_string(tc.euler) +
+                                      ", " + std::to_string(tc.boundaries) + " boundaries, " +
+                                      std::to_string(tc.components) + " components) differs from the mesh's (" +
+                                      std::to_string(ti.euler) + ", " + std::to_string(ti.boundaries) + ", " +
+                                      std::to_string(ti.components) + ")");
+    st.faces = result.cage.num_faces();
+    st.vertices = result.cage.num_vertices();
+    st.feature_edges = static_cast<int>(result.cage.creases.size());
+    st.corners = static_cast<int>(result.cage.corners.size());
+    std::vector<char> is_corner(result.cage.num_vertices(), 0);
+    for (const auto& c : result.cage.corners) is_corner[c.vertex] = 1;
+    for (int v = 0; v < pm.num_vertices(); ++v) {
+      if (pm.is_unused_vertex(v) || is_corner[v]) continue;
+      int regular = pm.is_boundary_vertex(v) ? 3 : 4;
+      if (pm.valence(v) != regular) ++st.extraordinary_vertices;
+    }
+    st.feature_chains_in = result.features.chains + result.features.dropped_short_chains;
+    st.feature_chains_kept = result.features.chains;
+    check(1);
+  } catch (const CancelSignal&) {
+    QuadRemeshResult cancelled;
+    cancelled.cancelled = true;
+    return cancelled;
+  }
+  return result;
+}
+
+}  // namespace subd2nurbs

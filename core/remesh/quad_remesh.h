@@ -1,0 +1,55 @@
+// Field-aligned all-quad remeshing of a triangle mesh (issue #28): a 4-RoSy cross field
+// smoothed over the mesh and constrained to the feature curves (and pulled towards principal
+// curvature directions), a position field (lattice offsets), then an extraction by edge
+// collapses that keeps the topology by construction (link condition), pairing into quads and one
+// Catmull-Clark-style split into an all-quad cage. docs/remesh.md describes the method.
+#pragma once
+
+#include <functional>
+
+#include "core/features/features.h"
+#include "core/mesh/mesh_input.h"
+
+namespace subd2nurbs {
+
+struct QuadRemeshOptions {
+  int target_faces = 0;     ///< wanted quad count (approximate); used when > 0
+  double edge_length = 0;   ///< wanted edge length in model units; used when > 0 and target_faces == 0
+                            ///< (exactly one of them must be > 0, else Error(ErrorKind::Settings))
+  FeatureOptions features;
+  double curvature_alignment = 1.0;  ///< weight of principal-curvature alignment of the cross field (0 = off)
+  int smoothing_iterations = 0;      ///< 0 = automatic
+};
+
+struct QuadRemeshStats {
+  int input_vertices = 0, input_faces = 0;
+  int faces = 0, vertices = 0, extraordinary_vertices = 0;  ///< of the cage (interior valence != 4, boundary valence != 3, excluding feature corners which count separately)
+  int feature_edges = 0;  ///< cage edges tagged infinitely sharp
+  int feature_chains_in = 0, feature_chains_kept = 0, corners = 0;
+  int euler_input = 0, euler_cage = 0, boundaries_input = 0, boundaries_cage = 0, components_input = 0,
+      components_cage = 0;
+  double field_seconds = 0, extract_seconds = 0;  ///< wall time per stage
+  int dense_vertices = 0;      ///< vertices of the input after long edges were split (the fields' domain)
+  int coarse_triangles = 0;    ///< triangles left unpaired after the extraction (each becomes 3 quads)
+  int coarse_quads = 0;        ///< quads paired by the extraction (each becomes 4 quads)
+  int attempts = 0;            ///< position field + extraction runs (2: the first gave > 1.3x the faces asked for)
+};
+
+struct QuadRemeshResult {
+  MeshInput cage;       ///< all quads, manifold, consistently oriented like the input; feature edges as CreaseTag
+                        ///< {v0,v1,kInfiniteSharpness}; feature corners as CornerTag {v, kInfiniteSharpness};
+                        ///< positions on (near) the input surface
+  FeatureSet features;  ///< the input's features
+  QuadRemeshStats stats;
+  bool cancelled = false;  ///< the progress callback returned false: the cage is empty (as ShapeFitStop::Cancelled)
+};
+
+/// progress(fraction in [0,1]) -> false cancels: the result then has cancelled = true and an
+/// empty cage (the project's convention, as fit_to_shape's ShapeFitStop::Cancelled).
+/// \throw Error(ErrorKind::Settings) for sizes that are not exactly one positive value,
+/// Error(ErrorKind::Input) for a mesh that is not manifold / oriented or has no faces,
+/// Error(ErrorKind::Fit) if the cage could not be made with the input's topology.
+QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
+                             const std::function<bool(double)>& progress = {});
+
+}  // namespace subd2nurbs

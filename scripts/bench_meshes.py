@@ -1,0 +1,256 @@
+#!/usr/bin/env python3
+"""Mesh path benchmark (issue #28): `subd2nurbs convert MESH` (features, our quad remesher, the
+fit, the conversion) against Blender's QuadriFlow (`apt-get install blender`, run headless) on
+the same meshes in the same run; prints a Markdown section for docs/benchmarks.md.
+
+Usage: bench_meshes.py BUILD_DIR [REPS]   (default 3 repetitions)
+       BENCH_MESHES_RAW=FILE bench_meshes.py ...   also dumps the measurements as JSON
+
+Per mesh and repetition, each in a fresh process:
+  * ours: `subd2nurbs convert MESH -o X.step --report R.json --keep-cage C.obj -q`: wall time and
+    peak memory (GNU time), the report's remesh time, cage quads and extraordinary vertices,
+    B-rep faces, two-sided distance to the mesh after the fit, the feature angle difference;
+  * QuadriFlow: `blender -b --python` with bpy.ops.object.quadriflow_remesh(target_faces = our
+    cage's quads, use_preserve_sharp, use_preserve_boundary, seed 0): its own remesh time, quads,
+    extraordinary vertices, boundary loops (spurious holes: more loops than the mesh has); then
+    our fit of its quads to the mesh (`subd2nurbs fit`) and their conversion, for the deviation
+    and the B-rep faces it would give.
+Wall times are medians over the repetitions; peak memory is the median of ru_maxrss.
+"""
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REAL = os.path.join(HERE, "..", "..", "shared", "corpus", "real")
+
+QF_SCRIPT = r'''
+import bpy, sys, time, json
+argv = sys.argv[sys.argv.index("--") + 1:]
+src, out, target = argv[0], argv[1], int(argv[2])
+bpy.ops.wm.read_factory_settings(use_empty=True)
+if src.lower().endswith(".stl"):
+    bpy.ops.import_mesh.stl(filepath=src)
+elif src.lower().endswith(".ply"):
+    bpy.ops.import_mesh.ply(filepath=src)
+else:
+    bpy.ops.import_scene.obj(filepath=src, axis_forward="Y", axis_up="Z")
+obj = bpy.context.selected_objects[0]
+bpy.context.view_layer.objects.active = obj
+t = time.perf_counter()
+r = bpy.ops.object.quadriflow_remesh(target_faces=target, use_preserve_sharp=True, use_preserve_boundary=True,
+                                     seed=0, mode="FACES")
+dt = time.perf_counter() - t
+print("QF " + json.dumps({"result": list(r), "seconds": dt, "faces": len(obj.data.polygons)}))
+bpy.ops.export_scene.obj(filepath=out, use_selection=True, use_materials=False, use_normals=False, use_uvs=False,
+                         axis_forward="Y", axis_up="Z")
+'''
+
+
+def run(cmd, tmp, check=True):
+    """(wall seconds, peak RSS kB, stdout, stderr, exit code) of one process (GNU time)."""
+    mem = os.path.join(tmp, "maxrss")
+    t = time.monotonic()
+    p = subprocess.run(["/usr/bin/time", "-f", "%M", "-o", mem] + cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    wall = time.monotonic() - t
+    if check and p.returncode != 0:
+        raise SystemExit("failed (%d): %s\n%s" % (p.returncode, " ".join(cmd), p.stderr.decode()[-2000:]))
+    return wall, int(open(mem).read().split()[-1]), p.stdout.decode(), p.stderr.decode(), p.returncode
+
+
+def off_to_ply(src, dst):
+    """Blender 3.4 reads no OFF: the same vertices and faces as ASCII PLY."""
+    lines = [l for l in open(src) if l.strip() and not l.lstrip().startswith("#")]
+    counts = lines[1].split() if lines[0].strip() == "OFF" else lines[0].split()[1:]
+    start = 2 if lines[0].strip() == "OFF" else 1
+    nv, nf = int(counts[0]), int(counts[1])
+    with open(dst, "w") as o:
+        o.write("ply\nformat ascii 1.0\nelement vertex %d\nproperty double x\nproperty double y\nproperty double z\n"
+                "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % (nv, nf))
+        for l in lines[start:start + nv]:
+            o.write(" ".join(l.split()[:3]) + "\n")
+        for l in lines[start + nv:start + nv + nf]:
+            w = l.split()
+            o.write(" ".join(w[:int(w[0]) + 1]) + "\n")
+
+
+def obj_stats(path):
+    """(quads, other faces, extraordinary vertices, boundary loops) of an OBJ's faces."""
+    faces = []
+    nv = 0
+    for line in open(path):
+        w = line.split()
+        if not w:
+            continue
+        if w[0] == "v":
+            nv += 1
+        elif w[0] == "f":
+            faces.append([int(x.split("/")[0]) - 1 for x in w[1:]])
+    edges = {}
+    for f in faces:
+        for a, b in zip(f, f[1:] + f[:1]):
+            edges[(min(a, b), max(a, b))] = edges.get((min(a, b), max(a, b)), 0) + 1
+    valence = [0] * nv
+    boundary_next = {}
+    for (a, b), n in edges.items():
+        valence[a] += 1
+        valence[b] += 1
+    bverts = set()
+    for (a, b), n in edges.items():
+        if n == 1:
+            bverts.update((a, b))
+            boundary_next.setdefault(a, []).append(b)
+            boundary_next.setdefault(b, []).append(a)
+    ev = sum(1 for v in range(nv) if valence[v] and valence[v] != (3 if v in bverts else 4))
+    loops, seen = 0, set()
+    for v in boundary_next:
+        if v in seen:
+            continue
+        loops += 1
+        stack = [v]
+        while stack:
+            x = stack.pop()
+            if x in seen:
+                continue
+            seen.add(x)
+            stack.extend(boundary_next[x])
+    quads = sum(1 for f in faces if len(f) == 4)
+    return quads, len(faces) - quads, ev, loops
+
+
+def limit_scan(exe, cage, n, out, tmp):
+    """A dense triangulation of `cage`'s exact limit surface: an n x n grid per quad, evaluated
+    by `subd2nurbs limit`, written as STL (the shared edges' points weld)."""
+    faces = [l for l in open(cage) if l.startswith("f ")]
+    queries = os.path.join(tmp, "queries.txt")
+    with open(queries, "w") as q:
+        for f in range(len(faces)):
+            for i in range(n + 1):
+                for j in range(n + 1):
+                    q.write("%d %.17g %.17g\n" % (f, i / n, j / n))
+    _, _, text, _, _ = run([exe, "limit", cage, queries], tmp)
+    pts = [tuple(map(float, l.split()[:3])) for l in text.splitlines() if l.strip()]
+    k = n + 1
+    with open(out, "w") as s:
+        s.write("solid scan\n")
+        for f in range(len(faces)):
+            base = f * k * k
+            for i in range(n):
+                for j in range(n):
+                    a, b, c, d = base + i * k + j, base + (i + 1) * k + j, base + (i + 1) * k + j + 1, base + i * k + j + 1
+                    for tri in ((a, b, c), (a, c, d)) if (i + j) % 2 == 0 else ((a, b, d), (b, c, d)):
+                        s.write(" facet normal 0 0 0\n  outer loop\n")
+                        for v in tri:
+                            s.write("   vertex %.17g %.17g %.17g\n" % pts[v])
+                        s.write("  endloop\n endfacet\n")
+        s.write("endsolid scan\n")
+    return len(faces)
+
+
+def two_sided(d):
+    return max(d["limit_to_target"]["max"], d["target_to_limit"]["max"])
+
+
+def main():
+    build = sys.argv[1]
+    reps = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+    exe = os.path.join(build, "subd2nurbs")
+    tmp = tempfile.mkdtemp()
+    qf_script = os.path.join(tmp, "qf.py")
+    open(qf_script, "w").write(QF_SCRIPT)
+    meshes = []  # (name, our input, blender input, extra options, original cage faces or None)
+    fandisk_ply = os.path.join(tmp, "fandisk.ply")
+    off_to_ply(os.path.join(REAL, "fandisk.off"), fandisk_ply)
+    meshes.append(("fandisk", os.path.join(REAL, "fandisk.off"), fandisk_ply, [], None))
+    for name in ("plate_holes.STL", "featuretype.STL"):
+        meshes.append((name, os.path.join(REAL, name), os.path.join(REAL, name), [], None))
+    scan = os.path.join(tmp, "blub_limit.stl")
+    # 112 quads x 18 x 18 x 2 = 72 576 triangles (a scan of the size of the Stanford bunny), cage
+    # of at most 2 x the original's faces asked for
+    cage_faces = limit_scan(exe, os.path.join(REAL, "blub_control_mesh.obj"), 18, scan, tmp)
+    meshes.append(("blub limit scan", scan, scan, ["--input", "mesh", "--target-faces", str(2 * cage_faces)],
+                   cage_faces))
+    results = []
+    for name, src, blend_src, extra, original in meshes:
+        rows = []
+        for rep in range(reps):
+            step, report, cage = (os.path.join(tmp, x) for x in ("o.step", "r.json", "c.obj"))
+            wall, rss, _, _, _ = run([exe, "convert", src, "-o", step, "--report", report, "--keep-cage", cage, "-q"]
+                                     + extra, tmp)
+            r = json.load(open(report))
+            m = r["mesh"]
+            row = {"wall": wall, "rss": rss, "remesh_s": m["ms"]["remesh"] / 1000, "fit_s": m["ms"]["fit"] / 1000,
+                   "quads": m["cage"]["faces"], "ev": m["cage"]["extraordinary_vertices"],
+                   "vertices": m["cage"]["vertices"], "brep_faces": r["brep"]["faces"],
+                   "distance": two_sided(m["fit"]["after"]), "feature_diff": m["feature_angles"]["max_difference_deg"],
+                   "triangles": m["input_triangles"], "boundaries_in": None}
+            qf_obj = os.path.join(tmp, "qf.obj")
+            qf_wall, qf_rss, out, _, code = run(["blender", "-b", "--python", qf_script, "--", blend_src, qf_obj,
+                                      str(row["quads"])], tmp, check=False)
+            qf = [json.loads(l[3:]) for l in out.splitlines() if l.startswith("QF ")]
+            if code == 0 and qf:
+                quads, others, ev, loops = obj_stats(qf_obj)
+                row.update(qf_wall=qf_wall, qf_rss=qf_rss, qf_s=qf[0]["seconds"], qf_quads=quads, qf_other=others, qf_ev=ev, qf_loops=loops,
+                           qf_vertices=None)
+                fitted, fit_report = os.path.join(tmp, "qf_fit.obj"), os.path.join(tmp, "qf_fit.json")
+                _, _, _, err, code = run([exe, "fit", qf_obj, "--to", src, "-o", fitted, "--report", fit_report,
+                                          "--max-iterations", "15", "-q"], tmp, check=False)
+                if code == 0:
+                    row["qf_distance"] = two_sided(json.load(open(fit_report))["after"])
+                    _, _, _, _, code = run([exe, "convert", fitted, "-o", step, "--report", report, "-q"], tmp,
+                                           check=False)
+                    if code == 0:
+                        row["qf_brep_faces"] = json.load(open(report))["brep"]["faces"]
+                else:
+                    row["qf_error"] = err.strip().splitlines()[-1] if err.strip() else "exit %d" % code
+            rows.append(row)
+            print("%s rep %d: %s" % (name, rep, json.dumps(row)), file=sys.stderr)
+        results.append({"mesh": name, "original_cage_faces": original, "runs": rows})
+    if os.environ.get("BENCH_MESHES_RAW"):
+        json.dump(results, open(os.environ["BENCH_MESHES_RAW"], "w"), indent=1)
+    print_table(results, reps)
+
+
+def med(rows, key):
+    values = [r[key] for r in rows if r.get(key) is not None]
+    return statistics.median(values) if values else None
+
+
+def fmt(x, spec):
+    return "-" if x is None else format(x, spec)
+
+
+def print_table(results, reps):
+    print("## 12. Mesh path: ours against QuadriFlow (scripts/bench_meshes.py)\n")
+    print("`subd2nurbs convert MESH -o X.step` (release build, 2 cores; medians of %d runs). QuadriFlow is "
+          "Blender 3.4's, asked for as many quads as our cage has, sharp features and boundaries preserved; its "
+          "quads are then fitted to the mesh by `subd2nurbs fit` (15 iterations) and converted, so that both "
+          "cages meet the same fit. Distances are two-sided maxima relative to the mesh's diagonal. EV: "
+          "extraordinary vertices / all vertices.\n" % reps)
+    print("| mesh | triangles | ours: wall | peak RSS | remesh | quads | EV | B-rep faces | distance | feature angle "
+          "error | QuadriFlow: remesh (Blender process wall, peak RSS) | quads (+ other) | EV | boundary loops | distance after our fit | B-rep faces | "
+          "remesh time ratio ours/theirs |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for res in results:
+        rows = res["runs"]
+        ev = med(rows, "ev") / max(1, med(rows, "vertices"))
+        qf_ev = med(rows, "qf_ev")
+        qf_fraction = None if qf_ev is None else qf_ev / max(1, med(rows, "qf_quads"))  # V ~ F for closed quads
+        ratio = None if med(rows, "qf_s") is None else med(rows, "remesh_s") / med(rows, "qf_s")
+        print("| %s | %d | %s s | %s MB | %s s | %d | %s | %d | %s | %s deg | %s s (%s s, %s MB) | %s (+%s) | %s | %s | %s | %s | %s |" % (
+            res["mesh"], med(rows, "triangles"), fmt(med(rows, "wall"), ".2f"), fmt(med(rows, "rss") / 1024, ".0f"),
+            fmt(med(rows, "remesh_s"), ".2f"), med(rows, "quads"), fmt(ev, ".3f"), med(rows, "brep_faces"),
+            fmt(med(rows, "distance"), ".2e"), fmt(med(rows, "feature_diff"), ".1f"), fmt(med(rows, "qf_s"), ".2f"), fmt(med(rows, "qf_wall"), ".1f"),
+            fmt(None if med(rows, "qf_rss") is None else med(rows, "qf_rss") / 1024, ".0f"),
+            fmt(med(rows, "qf_quads"), "d"), fmt(med(rows, "qf_other"), "d"), fmt(qf_fraction, ".3f"),
+            fmt(med(rows, "qf_loops"), "d"), fmt(med(rows, "qf_distance"), ".2e"), fmt(med(rows, "qf_brep_faces"), "d"),
+            fmt(ratio, ".2f")))
+    print()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,395 @@
+// The mesh path end to end (issue #28): `subd2nurbs convert MESH.stl` on CAD-like parts built
+// here with OCCT (a box with a drilled hole, a closed cylinder, a box with a filleted slot),
+// tessellated finely (BRepMesh) and written as STL by the test. Oracles: the exact OCCT solid the
+// mesh was made from (distances both ways, sampled; its volume; its planes and its cylinder), the
+// mesh's topology (Euler characteristic counted here from the triangles), and for the road rule a
+// triangulated quad cage (its conversion must equal the OBJ cage's).
+#include <gtest/gtest.h>
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepBndLib.hxx>
+#include <Bnd_Box.hxx>
+#include <ShapeAnalysis_Surface.hxx>
+#include <BRepAlgoAPI_Cut.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRepCheck_Analyzer.hxx>
+#include <BRepExtrema_DistShapeShape.hxx>
+#include <BRepFilletAPI_MakeFillet.hxx>
+#include <BRepGProp.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
+#include <Poly_Triangulation.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopLoc_Location.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <gp_Ax2.hxx>
+#include <gp_Pnt.hxx>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <algorithm>
+
+#include "common/run_command.h"
+#include "common/shapes.h"
+#include "io/obj_reader.h"
+#include "io/temp_dir.h"
+
+using namespace subd2nurbs;
+using namespace subd2nurbs::testing;
+
+namespace {
+
+const std::string kExe = SUBD2NURBS_EXE;
+
+/// The number after `"key": ` following the keys of `path` in order, in JSON text (NaN if absent).
+double json_number(const std::string& text, const std::vector<std::string>& path) {
+  size_t at = 0;
+  for (const std::string& key : path) {
+    at = text.find("\"" + key + "\": ", at);
+    if (at == std::string::npos) return std::nan("");
+    at += key.size() + 4;
+  }
+  return std::strtod(text.c_str() + at, nullptr);
+}
+
+struct Triangles {
+  std::vector<gp_Pnt> points;
+  std::vector<std::array<int, 3>> triangles;
+};
+
+/// The shape's triangulation (BRepMesh, `deflection` in model units), oriented outward, with
+/// the faces' shared edge nodes merged by exact position.
+Triangles tessellate(const TopoDS_Shape& shape, double deflection) {
+  BRepMesh_IncrementalMesh mesher(shape, deflection, false, 0.2, false);
+  Triangles t;
+  std::map<std::array<double, 3>, int> index;
+  for (TopExp_Explorer ex(shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    const TopoDS_Face face = TopoDS::Face(ex.Current());
+    TopLoc_Location loc;
+    const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, loc);
+    if (tri.IsNull()) continue;
+    std::vector<int> ids(static_cast<std::size_t>(tri->NbNodes()) + 1);
+    for (int i = 1; i <= tri->NbNodes(); ++i) {
+      const gp_Pnt p = tri->Node(i).Transformed(loc.Transformation());
+      const std::array<double, 3> key{p.X(), p.Y(), p.Z()};
+      auto [it, added] = index.emplace(key, static_cast<int>(t.points.size()));
+      if (added) t.points.push_back(p);
+      ids[static_cast<std::size_t>(i)] = it->second;
+    }
+    const bool reversed = face.Orientation() == TopAbs_REVERSED;
+    for (int i = 1; i <= tri->NbTriangles(); ++i) {
+      int a, b, c;
+      tri->Triangle(i).Get(a, b, c);
+      if (reversed) std::swap(b, c);
+      t.triangles.push_back({ids[a], ids[b], ids[c]});
+    }
+  }
+  return t;
+}
+
+void write_stl(const Triangles& t, const std::string& path) {
+  std::ofstream out(path);
+  out.precision(17);
+  out << "solid part\n";
+  for (const auto& tri : t.triangles) {
+    out << " facet normal 0 0 0\n  outer loop\n";
+    for (int v : tri) out << "   vertex " << t.points[v].X() << " " << t.points[v].Y() << " " << t.points[v].Z() << "\n";
+    out << "  endloop\n endfacet\n";
+  }
+  out << "endsolid part\n";
+}
+
+/// V - E + F of the triangles.
+int euler_characteristic(const Triangles& t) {
+  std::set<std::pair<int, int>> edges;
+  for (const auto& tri : t.triangles)
+    for (int k = 0; k < 3; ++k) edges.insert(std::minmax(tri[k], tri[(k + 1) % 3]));
+  return static_cast<int>(t.points.size()) - static_cast<int>(edges.size()) + static_cast<int>(t.triangles.size());
+}
+
+double diagonal(const Triangles& t) {
+  gp_Pnt lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
+  for (const gp_Pnt& p : t.points) {
+    lo.SetCoord(std::min(lo.X(), p.X()), std::min(lo.Y(), p.Y()), std::min(lo.Z(), p.Z()));
+    hi.SetCoord(std::max(hi.X(), p.X()), std::max(hi.Y(), p.Y()), std::max(hi.Z(), p.Z()));
+  }
+  return lo.Distance(hi);
+}
+
+/// Points on every face of `shape`, an n x n grid over each face's parameter range (inside its
+/// trimming: B-spline faces of ours are untrimmed; the exact solids' faces are sampled by their
+/// triangulation nodes instead, see nodes()).
+std::vector<gp_Pnt> grid_points(const TopoDS_Shape& shape, int n) {
+  std::vector<gp_Pnt> out;
+  for (TopExp_Explorer ex(shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    const BRepAdaptor_Surface s(TopoDS::Face(ex.Current()));
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const double u = s.FirstUParameter() + (s.LastUParameter() - s.FirstUParameter()) * (i + 0.5) / n;
+        const double v = s.FirstVParameter() + (s.LastVParameter() - s.FirstVParameter()) * (j + 0.5) / n;
+        out.push_back(s.Value(u, v));
+      }
+  }
+  return out;
+}
+
+struct Distances {
+  double max = 0, mean = 0;
+};
+
+/// Largest and mean distance from `points` (every `stride`-th) to `shape`.
+Distances distances(const std::vector<gp_Pnt>& points, const TopoDS_Shape& shape, std::size_t stride = 1) {
+  Distances r;
+  int n = 0;
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    BRepExtrema_DistShapeShape d(BRepBuilderAPI_MakeVertex(points[i]).Vertex(), shape);
+    if (!d.IsDone()) continue;
+    r.max = std::max(r.max, d.Value());
+    r.mean += d.Value();
+    ++n;
+  }
+  if (n > 0) r.mean /= n;
+  return r;
+}
+
+/// Largest distance from `points` (every `stride`-th) to the faces of `shape`, each point
+/// projected onto the faces whose bounding boxes (enlarged by `reach`) hold it
+/// (ShapeAnalysis_Surface keeps a grid per surface, so repeated projections stay cheap). A point
+/// near no face counts as `reach`.
+double max_distance_to_faces(const std::vector<gp_Pnt>& points, const TopoDS_Shape& shape, double reach,
+                             std::size_t stride = 1) {
+  struct FaceData {
+    Handle(ShapeAnalysis_Surface) surface;
+    Bnd_Box box;
+  };
+  std::vector<FaceData> faces;
+  for (TopExp_Explorer ex(shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    FaceData f;
+    f.surface = new ShapeAnalysis_Surface(BRep_Tool::Surface(TopoDS::Face(ex.Current())));
+    BRepBndLib::Add(ex.Current(), f.box);
+    f.box.Enlarge(reach);
+    faces.push_back(f);
+  }
+  double worst = 0;
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    double best = reach;
+    for (FaceData& f : faces) {
+      if (f.box.IsOut(points[i])) continue;
+      f.surface->ValueOfUV(points[i], 1e-9);
+      best = std::min(best, f.surface->Gap());
+    }
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+double volume(const TopoDS_Shape& s) {
+  GProp_GProps g;
+  BRepGProp::VolumeProperties(s, g);
+  return g.Mass();
+}
+
+struct Converted {
+  CommandResult run;
+  std::string report;
+  TopoDS_Shape shape;
+  LoadedCage cage;  ///< --keep-cage
+};
+
+Converted convert(const std::string& input, TempDir& dir, const std::string& extra = "") {
+  Converted c;
+  const std::string brep = dir.file("out.brep"), report = dir.file("report.json"), cage = dir.file("cage.obj");
+  c.run = run_command(kExe + " convert " + quote(input) + " -o " + quote(brep) + " --report " + quote(report) +
+                      " --keep-cage " + quote(cage) + " " + extra);
+  if (c.run.exit_code != 0) return c;
+  c.report = read_text(report);
+  BRep_Builder builder;
+  BRepTools::Read(c.shape, brep.c_str(), builder);
+  c.cage = read_obj(cage);
+  return c;
+}
+
+/// The checks every mesh conversion must pass, against the exact solid it was tessellated from.
+/// Distances: the largest both ways below `max_rel` x the diagonal, our surface's mean distance to
+/// the exact solid below `mean_rel` x the diagonal. (The issue's goal, a largest distance of
+/// 1e-3 x the diagonal, is met on smooth parts such as the cylinder, not yet at the sharp rims of
+/// coarse CAD tessellations: docs/meshes.md "Limits".)
+void check_against(const TopoDS_Shape& exact, const Triangles& mesh, const Converted& c, double max_rel,
+                   double mean_rel = 1e-3) {
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  const double diag = diagonal(mesh);
+  EXPECT_NE(c.report.find("\"mesh\": {"), std::string::npos) << "the mesh path was not taken:\n" << c.run.err;
+  // A valid closed solid of about the exact volume.
+  EXPECT_TRUE(BRepCheck_Analyzer(c.shape).IsValid());
+  TopTools_IndexedMapOfShape solids;
+  TopExp::MapShapes(c.shape, TopAbs_SOLID, solids);
+  EXPECT_EQ(solids.Extent(), 1);
+  const double v_exact = volume(exact), v_ours = volume(c.shape);
+  EXPECT_NEAR(v_ours, v_exact, 0.01 * v_exact);
+  // The cage: all quads, the mesh's Euler characteristic, closed.
+  const MeshInput& cage = c.cage.input;
+  for (int n : cage.face_sizes) ASSERT_EQ(n, 4);
+  std::set<std::pair<int, int>> edges;
+  int off = 0;
+  for (int n : cage.face_sizes) {
+    for (int k = 0; k < n; ++k) edges.insert(std::minmax(cage.face_indices[off + k], cage.face_indices[off + (k + 1) % n]));
+    off += n;
+  }
+  EXPECT_EQ(cage.num_vertices() - static_cast<int>(edges.size()) + cage.num_faces(), euler_characteristic(mesh));
+  // Both ways within the tolerance of the exact solid: our faces' points to it, its mesh's
+  // nodes to ours.
+  const Distances to_exact = distances(grid_points(c.shape, 5), exact);
+  std::vector<gp_Pnt> nodes = mesh.points;
+  const double from_exact =
+      max_distance_to_faces(nodes, c.shape, 10 * max_rel * diag, std::max<std::size_t>(1, nodes.size() / 400));
+  EXPECT_LT(to_exact.max, max_rel * diag) << "relative " << to_exact.max / diag;
+  EXPECT_LT(to_exact.mean, mean_rel * diag) << "relative " << to_exact.mean / diag;
+  EXPECT_LT(from_exact, max_rel * diag) << "relative " << from_exact / diag;
+  std::printf("  %zu triangles -> %d quads, %g B-rep faces; surface->exact max %.3g mean %.3g, exact->surface max %.3g "
+              "of the diagonal; volume %.4g vs %.4g; feature angles max %.3g mean %.3g deg off\n",
+              mesh.triangles.size(), cage.num_faces(), json_number(c.report, {"brep", "faces"}), to_exact.max / diag,
+              to_exact.mean / diag, from_exact / diag, v_ours, v_exact,
+              json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"}),
+              json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}));
+}
+
+TopoDS_Shape box_with_hole() {
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-20, -15, 0), 40, 30, 10).Shape();
+  const TopoDS_Shape drill = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp::DZ()), 6, 12).Shape();
+  return BRepAlgoAPI_Cut(box, drill).Shape();
+}
+
+TEST(MeshPath, BoxWithDrilledHole) {
+  TempDir dir;
+  const TopoDS_Shape exact = box_with_hole();
+  const Triangles mesh = tessellate(exact, 0.01);
+  ASSERT_EQ(euler_characteristic(mesh), 0);  // genus 1
+  const std::string stl = dir.file("part.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir, "--target-faces 300");
+  check_against(exact, mesh, c, 2e-2);
+  // The sharp edges kept: the normal jump across the cage's feature curves is the mesh's
+  // dihedral there (90 degrees at the box's and the hole's rims), on average within 3 degrees.
+  // (The issue's goal, every point within 3 degrees, is not met yet: the largest is printed.)
+  EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 0);
+  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}), 3.0);
+}
+
+TEST(MeshPath, CylinderSideStaysOnTheCylinder) {
+  TempDir dir;
+  const double r = 5, h = 20;
+  const TopoDS_Shape exact = BRepPrimAPI_MakeCylinder(r, h).Shape();
+  const Triangles mesh = tessellate(exact, 0.005);
+  const std::string stl = dir.file("cylinder.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir, "--target-faces 250");
+  check_against(exact, mesh, c, 2e-3, 2e-4);
+  // Points of our surface away from the caps: on the cylinder within the tolerance.
+  const double diag = diagonal(mesh);
+  double worst = 0;
+  for (const gp_Pnt& p : grid_points(c.shape, 7))
+    if (p.Z() > 0.1 * h && p.Z() < 0.9 * h) worst = std::max(worst, std::abs(std::hypot(p.X(), p.Y()) - r));
+  EXPECT_LT(worst, 2e-3 * diag) << "relative " << worst / diag;
+}
+
+TEST(MeshPath, BoxWithFilletedSlot) {
+  TempDir dir;
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-20, -10, 0), 40, 20, 12).Shape();
+  const TopoDS_Shape slot = BRepPrimAPI_MakeBox(gp_Pnt(-25, -4, 6), 50, 8, 10).Shape();
+  const TopoDS_Shape cut = BRepAlgoAPI_Cut(box, slot).Shape();
+  // Fillet the slot's two bottom edges (the edges along x at z = 6, y = +-4).
+  BRepFilletAPI_MakeFillet fillet(cut);
+  for (TopExp_Explorer ex(cut, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge e = TopoDS::Edge(ex.Current());
+    TopoDS_Vertex a, b;
+    TopExp::Vertices(e, a, b);
+    const gp_Pnt pa = BRep_Tool::Pnt(a), pb = BRep_Tool::Pnt(b);
+    if (std::abs(pa.Z() - 6) < 1e-9 && std::abs(pb.Z() - 6) < 1e-9 && std::abs(std::abs(pa.Y()) - 4) < 1e-9 &&
+        std::abs(pa.Y() - pb.Y()) < 1e-9)
+      fillet.Add(2.0, e);
+  }
+  ASSERT_EQ(fillet.NbContours(), 2);
+  const TopoDS_Shape exact = fillet.Shape();
+  const Triangles mesh = tessellate(exact, 0.01);
+  const std::string stl = dir.file("slot.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir, "--target-faces 400");
+  check_against(exact, mesh, c, 2e-2);
+}
+
+/// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says
+/// so, and its conversion equals the OBJ cage's.
+TEST(MeshPath, TriangulatedQuadCageStaysACage) {
+  TempDir dir;
+  const MeshInput ring = torus(12, 8);
+  Triangles t;
+  for (const auto& p : ring.positions) t.points.emplace_back(p[0], p[1], p[2]);
+  const std::string obj = dir.file("ring.obj");
+  {
+    std::ofstream out(obj);
+    out.precision(17);
+    for (const auto& p : ring.positions) out << "v " << p[0] << " " << p[1] << " " << p[2] << "\n";
+    for (int f = 0; f < ring.num_faces(); ++f) {
+      const int* q = ring.face_indices.data() + 4 * f;
+      out << "f " << q[0] + 1 << " " << q[1] + 1 << " " << q[2] + 1 << " " << q[3] + 1 << "\n";
+      t.triangles.push_back({q[0], q[1], q[2]});
+      t.triangles.push_back({q[0], q[2], q[3]});
+    }
+  }
+  const std::string stl = dir.file("ring.stl");
+  write_stl(t, stl);
+  const CommandResult info = run_command(kExe + " info " + quote(stl));
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("path         cage: its 192 triangles pair back into quads"), std::string::npos) << info.out;
+  const CommandResult a = run_command(kExe + " convert " + quote(stl) + " -o " + quote(dir.file("a.json")) + " -q");
+  const CommandResult b = run_command(kExe + " convert " + quote(obj) + " -o " + quote(dir.file("b.json")) + " -q");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  // The same patches up to the last digits of the STL's text coordinates: the same counts.
+  const std::string ja = read_text(dir.file("a.json")), jb = read_text(dir.file("b.json"));
+  EXPECT_EQ(std::count(ja.begin(), ja.end(), '{'), std::count(jb.begin(), jb.end(), '{'));
+  // Declared a mesh, the same file is remeshed.
+  const CommandResult as_mesh = run_command(kExe + " info " + quote(stl) + " --input mesh");
+  EXPECT_NE(as_mesh.out.find("path         mesh: the input was declared a mesh"), std::string::npos) << as_mesh.out;
+}
+
+/// A dense triangle mesh that does not pair back takes the mesh road; `--input cage` overrides.
+TEST(MeshPath, DenseTriangleMeshIsAMesh) {
+  TempDir dir;
+  const Triangles mesh = tessellate(box_with_hole(), 0.05);
+  const std::string stl = dir.file("c.stl");
+  write_stl(mesh, stl);
+  const CommandResult info = run_command(kExe + " info " + quote(stl));
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("path         mesh: its " + std::to_string(mesh.triangles.size()) + " triangles do not pair back"),
+            std::string::npos)
+      << info.out;
+  const CommandResult as_cage = run_command(kExe + " info " + quote(stl) + " --input cage");
+  EXPECT_NE(as_cage.out.find("path         cage: the input was declared a cage"), std::string::npos) << as_cage.out;
+  // The mesh settings' rules, before any work, naming the flag; nothing written.
+  const std::string out = dir.file("never.step");
+  for (const auto& [args, words] : {std::pair<std::string, std::string>{"--target-faces -3", "--target-faces must be >= 0"},
+                                    {"--edge-length -1", "--edge-length must be a number >= 0"},
+                                    {"--feature-angle 200", "--feature-angle must be between 0 and 180"},
+                                    {"--fit-to " + quote(stl), "--fit-to fits a cage"}}) {
+    const CommandResult bad = run_command(kExe + " convert " + quote(stl) + " -o " + quote(out) + " " + args);
+    EXPECT_EQ(bad.exit_code, 1) << args << "\n" << bad.err;
+    EXPECT_NE(bad.err.find(words), std::string::npos) << args << "\n" << bad.err;
+  }
+  EXPECT_FALSE(std::ifstream(out).good());
+}
+
+}  // namespace

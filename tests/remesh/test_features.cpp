@@ -1,0 +1,147 @@
+// detect_features on analytic meshes: a box's 12 edges and 8 corners, none on a sphere, the
+// boundary loops of an open cylinder, a short ridge dropped as noise, user-tagged creases kept.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/features/features.h"
+#include "core/util/error.h"
+#include "remesh/test_meshes.h"
+
+namespace subd2nurbs {
+namespace {
+
+using test::P3;
+
+bool on_box_edge(const P3& p) {
+  int fixed = 0;
+  for (double c : p) fixed += std::abs(std::abs(c) - 1) < 1e-12;
+  return fixed >= 2;
+}
+
+TEST(Features, BoxHasItsTwelveEdgesAndEightCorners) {
+  const int n = 8;
+  MeshInput mesh = test::box(n);
+  FeatureSet fs = detect_features(mesh);
+  // the analytic sharp edges: mesh edges with both ends on the same box edge
+  int expected = 0;
+  std::vector<std::array<int, 2>> edges;
+  int begin = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f, begin += 3)
+    for (int k = 0; k < 3; ++k) {
+      int a = mesh.face_indices[begin + k], b = mesh.face_indices[begin + (k + 1) % 3];
+      if (a > b) continue;  // each edge of the closed mesh once
+      const P3 &pa = mesh.positions[a], &pb = mesh.positions[b];
+      int same = 0;
+      for (int c = 0; c < 3; ++c) same += std::abs(std::abs(pa[c]) - 1) < 1e-12 && pa[c] == pb[c];
+      if (same >= 2) ++expected;
+    }
+  EXPECT_EQ(expected, 12 * n);
+  EXPECT_EQ(static_cast<int>(fs.edges.size()), expected);
+  for (const auto& e : fs.edges) {
+    EXPECT_LT(e[0], e[1]);
+    EXPECT_TRUE(on_box_edge(mesh.positions[e[0]]) && on_box_edge(mesh.positions[e[1]]));
+  }
+  EXPECT_TRUE(std::is_sorted(fs.edges.begin(), fs.edges.end()));
+  ASSERT_EQ(fs.corners.size(), 8u);
+  for (int c : fs.corners) {
+    for (double x : mesh.positions[c]) EXPECT_EQ(std::abs(x), 1.0);
+  }
+  EXPECT_EQ(fs.chains, 12);
+  EXPECT_EQ(fs.dropped_short_chains, 0);
+}
+
+TEST(Features, SphereHasNone) {
+  FeatureSet fs = detect_features(test::icosphere(3));
+  EXPECT_TRUE(fs.edges.empty());
+  EXPECT_TRUE(fs.corners.empty());
+  EXPECT_EQ(fs.chains, 0);
+}
+
+TEST(Features, OpenCylinderHasItsTwoBoundaryLoops) {
+  const int nu = 32;
+  FeatureSet fs = detect_features(test::open_cylinder(1, 2, nu, 6));
+  EXPECT_EQ(static_cast<int>(fs.edges.size()), 2 * nu);
+  EXPECT_TRUE(fs.corners.empty());  // the loops turn by 360/32 degrees per vertex
+  EXPECT_EQ(fs.chains, 2);
+}
+
+// A square grid with a tent-shaped ridge along x = 0 whose height fades away from y = 0: the ridge
+// edges bend by 2 atan(0.364 (1 - |y| / 3)) (40 degrees at y = 0, below 30 beyond |y| ~ 0.79),
+// every other edge by less than 17 degrees. Boundary: 4 chains between 4 corners.
+MeshInput ridge_grid() {
+  test::MeshBuilder b;
+  b.patch([](double u, double v) {
+    double x = 2 * u - 1, y = 2 * v - 1;
+    return P3{x, y, 0.4367 * (1 - std::abs(x) / 1.2) * (1 - std::abs(y) / 3)};
+  }, 10, 10);
+  return b.mesh();
+}
+
+TEST(Features, ShortIsolatedChainIsDroppedUnlessLongEnoughOrTagged) {
+  MeshInput mesh = ridge_grid();
+  auto is_ridge = [&](const std::array<int, 2>& e) {
+    const P3 &a = mesh.positions[e[0]], &b = mesh.positions[e[1]];
+    return a[0] == 0 && b[0] == 0 && std::abs(a[1]) < 0.99 && std::abs(b[1]) < 0.99;
+  };
+  auto ridge_edges = [&](const FeatureSet& fs) {
+    return static_cast<int>(std::count_if(fs.edges.begin(), fs.edges.end(), is_ridge));
+  };
+  FeatureOptions all;
+  all.min_chain_edges = 1;
+  FeatureSet kept = detect_features(mesh, all);
+  int ridge = ridge_edges(kept);
+  EXPECT_EQ(ridge, 8);  // |y| <= 0.8: the edges whose bend exceeds 30 degrees
+  EXPECT_EQ(static_cast<int>(kept.edges.size()), 40 + ridge);  // nothing else but the boundary
+  EXPECT_EQ(kept.corners.size(), 6u);  // the boundary's 4 and the ridge's two ends
+  EXPECT_EQ(kept.chains, 5);
+  EXPECT_EQ(kept.dropped_short_chains, 0);
+
+  FeatureOptions longer;
+  longer.min_chain_edges = ridge + 1;
+  FeatureSet dropped = detect_features(mesh, longer);
+  EXPECT_EQ(ridge_edges(dropped), 0);
+  EXPECT_EQ(dropped.dropped_short_chains, 1);
+  EXPECT_EQ(dropped.edges.size(), 40u);  // the boundary (longer than the minimum too, but kept)
+  EXPECT_EQ(dropped.corners.size(), 4u);
+  EXPECT_EQ(dropped.chains, 4);
+
+  // the same edges tagged by the user are kept whatever their length
+  MeshInput tagged = mesh;
+  for (const auto& e : kept.edges)
+    if (is_ridge(e)) tagged.creases.push_back({e[0], e[1], kInfiniteSharpness});
+  FeatureSet user = detect_features(tagged, longer);
+  EXPECT_EQ(ridge_edges(user), ridge);
+  EXPECT_EQ(user.dropped_short_chains, 0);
+}
+
+TEST(Features, TaggedCreaseOnSmoothSurfaceIsKept) {
+  MeshInput sphere = test::icosphere(2);
+  // a chain of three edges of the first faces
+  int a = sphere.face_indices[0], b = sphere.face_indices[1], c = sphere.face_indices[2];
+  sphere.creases.push_back({a, b, kInfiniteSharpness});
+  sphere.creases.push_back({b, c, kInfiniteSharpness});
+  sphere.creases.push_back({c, a, 1.0});  // semi-sharp: not a feature
+  FeatureSet fs = detect_features(sphere);
+  ASSERT_EQ(fs.edges.size(), 2u);
+  // the chain turns by 120 degrees at b (two sides of a triangle): a corner at the default 60
+  EXPECT_EQ(fs.chains, 2);
+  EXPECT_EQ(fs.corners.size(), 3u);
+  FeatureOptions blunt;
+  blunt.corner_angle_degrees = 150;
+  FeatureSet one = detect_features(sphere, blunt);
+  EXPECT_EQ(one.chains, 1);
+  EXPECT_EQ(one.corners, (std::vector<int>{std::min(a, c), std::max(a, c)}));
+}
+
+TEST(Features, NonManifoldEdgeIsRefused) {
+  MeshInput m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  m.face_sizes = {3, 3, 3};
+  m.face_indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  EXPECT_THROW(detect_features(m), Error);
+}
+
+}  // namespace
+}  // namespace subd2nurbs
