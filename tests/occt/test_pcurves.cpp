@@ -33,6 +33,26 @@ namespace {
 using testing::bspline_torus;
 using testing::unit_cube;
 
+/// The PatchSet as the packing writes it: each patch's knots map one unit per knot span (one
+/// unit per coarse quad: a packed face of 8 x 6 quads has the domain [0, 8] x [0, 6]), and
+/// every curve's knots lie on [0, 1] (CurveUse::side_parameter: s in [0, 1]) whatever the
+/// parameter length of the sides it runs along. (bspline_torus itself gives the patches and the
+/// curves the same knots on [0, 1], which would hide what build_brep does with the edges.)
+PatchSet as_packed(PatchSet ps) {
+  auto unit_spans = [](KnotVector& kv) {
+    for (size_t i = 0; i < kv.knots.size(); ++i) kv.knots[i] = static_cast<double>(i);
+  };
+  for (NurbsPatch& p : ps.patches) {
+    unit_spans(p.knots_u);
+    unit_spans(p.knots_v);
+  }
+  for (BoundaryCurve& c : ps.curves) {
+    const double k0 = c.knots.knots.front(), k1 = c.knots.knots.back();
+    for (double& k : c.knots.knots) k = (k - k0) / (k1 - k0);
+  }
+  return ps;
+}
+
 /// Checks every (edge, face) pair of `shape`: the pcurve is a Geom2d_Line over exactly the
 /// edge's range, and the edge's 3D curve and the surface at the pcurve agree pointwise with
 /// the same parameter (sampled), to rounding. Returns the number of pcurves checked.
@@ -73,13 +93,13 @@ int check_pcurves(const TopoDS_Shape& shape, double size) {
 TEST(Pcurves, AreUnitSpeedLinesInTheFacesOwnParameters) {
   for (const auto& split : std::vector<std::pair<int, int>>{{8, 6}, {2, 2}, {1, 1}, {4, 1}}) {
     SCOPED_TRACE(std::to_string(split.first) + " x " + std::to_string(split.second));
-    const PatchSet ps = bspline_torus(split.first, split.second);
+    const PatchSet ps = as_packed(bspline_torus(split.first, split.second));
     const BrepResult r = build_brep(ps);
     ASSERT_TRUE(r.valid) << r.check_message;
     // Each face has four sides, each side one pcurve (a seam counts in both of its sides).
     EXPECT_EQ(check_pcurves(r.shape, ps.model_size), 4 * r.num_faces);
   }
-  const PatchSet cube = unit_cube();
+  const PatchSet cube = as_packed(unit_cube());
   EXPECT_EQ(check_pcurves(build_brep(cube).shape, cube.model_size), 24);
 }
 
@@ -93,7 +113,7 @@ TEST(Pcurves, AreUnitSpeedLinesInTheFacesOwnParameters) {
 TEST(Pcurves, ClosedTorusFaceCutFlatThenShelled) {
   for (const auto& split : std::vector<std::pair<int, int>>{{1, 1}, {2, 2}}) {
     SCOPED_TRACE(std::to_string(split.first) + " x " + std::to_string(split.second));
-    const BrepResult r = build_brep(bspline_torus(split.first, split.second));
+    const BrepResult r = build_brep(as_packed(bspline_torus(split.first, split.second)));
     ASSERT_TRUE(r.valid) << r.check_message;
     // The torus (R = 3, r = 1, axis z): everything above z = 0.3 cut off.
     BRepAlgoAPI_Cut cut(r.shape, BRepPrimAPI_MakeBox(gp_Pnt(-5, -5, 0.3), gp_Pnt(5, 5, 2)).Shape());
