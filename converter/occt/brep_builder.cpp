@@ -298,8 +298,9 @@ struct SharedTopology {
 /// (OCCT's offset, shell and boolean algorithms recognise iso-lines by it). Taken from a use
 /// where the curve runs the way the parameter increases (the coordinates of its ends), else
 /// [0, length] from the first use. The other use's side has the same length wherever the two
-/// faces give a coarse quad the same parameter length (every face the builder makes: one unit
-/// per quad); where not, that pcurve is a straight degree-1 B-spline (see segment).
+/// faces give a coarse quad the same parameter length (per-quad and packed faces: one unit per
+/// quad); where not (a polar cap's [0, 1] side against its ring of quads), that pcurve is a
+/// straight degree-1 B-spline (see segment).
 std::pair<double, double> edge_parameter_range(const PatchSet& ps, int k) {
   const BoundaryCurve& curve = ps.curves[k];
   std::pair<double, double> fallback{0, 0};

@@ -38,8 +38,9 @@ struct BrepResult {
 /// made as OCCT makes its own (BRepBuilderAPI_MakeFace, BRepPrimAPI_MakeTorus): the edge's
 /// range is the face parameter's range along the iso-line it runs on, so its pcurve is a
 /// unit-speed Geom2d_Line in the surface's own parameters (a degree-1 B-spline only where the
-/// two faces of an edge give it different parameter lengths, which the patch builder never
-/// does); OCCT's offset, shell and boolean algorithms rely on it (docs/downstream.md).
+/// two faces of an edge give it different parameter lengths: a polar cap, whose side of
+/// parameter length 1 meets a ring of quads of length 1 each); OCCT's offset, shell and
+/// boolean algorithms rely on it (docs/downstream.md).
 /// A curve used twice by one patch is a seam; a side whose curve index is -1 and whose two
 /// corners are the same corner is a degenerate (collapsed) side, e.g. at a polar point.
 ///
