@@ -50,7 +50,10 @@ CurvatureRadii smallest_curvature_radii(const PatchSet& ps, int samples_per_span
   double sign = 1;
   if (ps.closed && signed_volume(ps, n) < 0) sign = -1;
   r.outward = ps.closed;
-  double max_convex = 0, max_concave = 0;  // largest curvature each way
+  // Largest curvature each way; below 1e-9 / model size a surface counts as flat (the
+  // rounding of a plane's second derivatives would otherwise give radii of 1e15).
+  const double flat = 1e-9 / (ps.model_size > 0 ? ps.model_size : 1.0);
+  double max_convex = flat, max_concave = flat;
   for (size_t p = 0; p < ps.patches.size(); ++p) {
     const NurbsPatch& patch = ps.patches[p];
     const PatchEvaluator eval(patch);

@@ -27,6 +27,7 @@ struct CurvatureRadii {
   bool outward = false;
   /// The smallest radius where the surface curves away from the normal (convex: a sphere
   /// everywhere): the largest inward offset / shell thickness before the offset folds.
+  /// Curvatures below 1e-9 / model size count as flat (radius infinity, patch -1).
   CurvatureRadiusAt inward;
   /// The smallest radius where it curves towards the normal (concave): the largest outward
   /// offset before it folds.

@@ -52,6 +52,22 @@ TEST(CurvatureRadius, ParaboloidApexIsExact) {
   EXPECT_TRUE(std::isinf(down.outward_offset.radius));
 }
 
+TEST(CurvatureRadius, FlatPatchHasNoLimit) {
+  // The plane z = 0 turned by arbitrary angles: its poles carry rounding, so its second
+  // derivatives are ~1e-16 rather than 0; no radius either way, not 1e15.
+  PatchSet ps = paraboloid(0, false);
+  const double a = 0.7, b = 1.3;
+  for (Point3& q : ps.patches[0].poles) {
+    const Point3 r1{q[0], std::cos(a) * q[1] - std::sin(a) * q[2], std::sin(a) * q[1] + std::cos(a) * q[2]};
+    q = {std::cos(b) * r1[0] + std::sin(b) * r1[2], r1[1], -std::sin(b) * r1[0] + std::cos(b) * r1[2]};
+  }
+  const CurvatureRadii r = smallest_curvature_radii(ps);
+  EXPECT_EQ(r.samples, 81);
+  EXPECT_EQ(r.inward.patch, -1);
+  EXPECT_EQ(r.outward_offset.patch, -1);
+  EXPECT_TRUE(std::isinf(r.inward.radius) && std::isinf(r.outward_offset.radius));
+}
+
 /// Principal curvatures by central differences of positions only (h in parameter units):
 /// the fundamental forms from finite-difference derivatives.
 void finite_difference_k(const NurbsPatch& patch, double u, double v, double sign, double& k_min, double& k_max) {
