@@ -103,7 +103,10 @@ Handle(Geom_BSplineSurface) make_surface(const NurbsPatch& patch, int index) {
   });
 }
 
-Handle(Geom_BSplineCurve) make_curve(const BoundaryCurve& curve, int index, int patch) {
+/// The 3D curve of an edge: the curve's poles with its knots mapped affinely onto `range`
+/// (the edge's parameter range, see edge_parameter_range), so the same curve, reparametrized linearly.
+Handle(Geom_BSplineCurve) make_curve(const BoundaryCurve& curve, int index, int patch,
+                                     std::pair<double, double> range) {
   const int n = static_cast<int>(curve.poles.size());
   if (n < 2) throw ExportError("edge", patch, "curve " + std::to_string(index) + " has < 2 poles");
   check_knots(curve.knots, curve.degree, n, ("curve " + std::to_string(index)).c_str(), patch);
@@ -113,6 +116,18 @@ Handle(Geom_BSplineCurve) make_curve(const BoundaryCurve& curve, int index, int 
     TColStd_Array1OfReal knots;
     TColStd_Array1OfInteger mults;
     to_occt(curve.knots, knots, mults);
+    const double k0 = curve.knots.knots.front(), k1 = curve.knots.knots.back();
+    const int nk = knots.Upper();
+    if (range.first != k0 || range.second != k1) {
+      const double scale = (range.second - range.first) / (k1 - k0);
+      for (int i = 1; i <= nk; ++i) knots(i) = range.first + (knots(i) - k0) * scale;
+      knots(1) = range.first;  // the ends exactly, whatever the rounding
+      knots(nk) = range.second;
+      for (int i = 2; i <= nk; ++i)
+        if (!(knots(i) > knots(i - 1)))
+          throw ExportError("edge", patch, "curve " + std::to_string(index) +
+                                               ": knots collapse when mapped onto the face's parameters");
+    }
     return new Geom_BSplineCurve(poles, knots, mults, curve.degree);
   });
 }
@@ -277,6 +292,36 @@ struct SharedTopology {
   std::vector<std::pair<double, double>> edge_range;
 };
 
+/// The parameter range of curve k's edge, as OCCT gives the edges it builds on a face (e.g.
+/// BRepBuilderAPI_MakeFace, BRepPrimAPI_MakeTorus): the range of the face's own parameter
+/// along the iso-line the edge runs on, so that the edge's pcurve is a unit-speed Geom2d_Line
+/// (OCCT's offset, shell and boolean algorithms recognise iso-lines by it). Taken from a use
+/// where the curve runs the way the parameter increases (the coordinates of its ends), else
+/// [0, length] from the first use. The other use's side has the same length wherever the two
+/// faces give a coarse quad the same parameter length (per-quad and packed faces: one unit per
+/// quad); where not (a polar cap's [0, 1] side against its ring of quads), that pcurve is a
+/// straight degree-1 B-spline (see segment).
+std::pair<double, double> edge_parameter_range(const PatchSet& ps, int k) {
+  const BoundaryCurve& curve = ps.curves[k];
+  std::pair<double, double> fallback{0, 0};
+  for (size_t i = 0; i < curve.uses.size(); ++i) {
+    const CurveUse& use = curve.uses[i];
+    const NurbsPatch& patch = ps.patches[use.patch];
+    const Domain d{patch.knots_u.knots.front(), patch.knots_u.knots.back(),
+                   patch.knots_v.knots.front(), patch.knots_v.knots.back()};
+    const auto [a, b] = side_ends(d, use.side);
+    auto at = [&](double t) { return gp_Pnt2d(a.XY() + t * (b.XY() - a.XY())); };
+    const gp_Pnt2d start = at(use.reversed ? use.t1 : use.t0), end = at(use.reversed ? use.t0 : use.t1);
+    const bool along_u = use.side % 2 == 0;  // sides 0 and 2 run along u, 1 and 3 along v
+    const double c0 = along_u ? start.X() : start.Y(), c1 = along_u ? end.X() : end.Y();
+    if (c1 > c0) return {c0, c1};
+    if (i == 0) fallback = {0, c0 - c1};
+  }
+  if (!(fallback.second > 0)) throw ExportError("edge", curve.uses[0].patch,
+                                                "curve " + std::to_string(k) + " has zero length in its face");
+  return fallback;
+}
+
 SharedTopology make_vertices_and_edges(const PatchSet& ps, BRep_Builder& builder, double tol) {
   const int num_curves = static_cast<int>(ps.curves.size());
   const int num_corners = static_cast<int>(ps.corners.size());
@@ -295,7 +340,7 @@ SharedTopology make_vertices_and_edges(const PatchSet& ps, BRep_Builder& builder
     const BoundaryCurve& curve = ps.curves[k];
     if (curve.uses.empty()) continue;
     const int patch = curve.uses[0].patch;
-    Handle(Geom_BSplineCurve) c3d = make_curve(curve, k, patch);
+    Handle(Geom_BSplineCurve) c3d = make_curve(curve, k, patch, edge_parameter_range(ps, k));
     guarded("edge", patch, [&] {
       builder.MakeEdge(edges[k], c3d, tol);
       // The start vertex is FORWARD and the end vertex REVERSED in its edge; for a closed

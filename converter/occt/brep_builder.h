@@ -33,8 +33,14 @@ struct BrepResult {
 /// ps.closed. Checks the result with BRepCheck_Analyzer (see BrepResult::valid).
 ///
 /// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given), each
-/// BoundaryCurve a Geom_BSplineCurve parametrized by s from corner0 to corner1, and each use of
-/// a curve a straight pcurve on the patch's parameter-domain side whose parameter is s.
+/// BoundaryCurve a Geom_BSplineCurve (its poles; its knots mapped linearly onto the edge's
+/// range), and each use of a curve a pcurve on the patch's parameter-domain side. Edges are
+/// made as OCCT makes its own (BRepBuilderAPI_MakeFace, BRepPrimAPI_MakeTorus): the edge's
+/// range is the face parameter's range along the iso-line it runs on, so its pcurve is a
+/// unit-speed Geom2d_Line in the surface's own parameters (a degree-1 B-spline only where the
+/// two faces of an edge give it different parameter lengths: a polar cap, whose side of
+/// parameter length 1 meets a ring of quads of length 1 each); OCCT's offset, shell and
+/// boolean algorithms rely on it (docs/downstream.md).
 /// A curve used twice by one patch is a seam; a side whose curve index is -1 and whose two
 /// corners are the same corner is a degenerate (collapsed) side, e.g. at a polar point.
 ///

@@ -1,8 +1,10 @@
 #include "converter/pipeline/report.h"
 
 #include <stdexcept>
+#include <utility>
 
 #include "converter/pipeline/shape_fit_report.h"
+#include "core/eval/curvature_radius.h"
 #include "io/json_writer.h"
 
 namespace subd2nurbs::pipeline {
@@ -204,6 +206,34 @@ void write_field_stats(JsonWriter& w, const FieldStats& stats) {
   else w.null();
 }
 
+namespace {
+
+/// "curvature_radius" (docs/formats.md): the smallest radius of curvature of the exported
+/// faces each way (core/eval/curvature_radius.h), where it is (face, u, v, point): how thick a
+/// shell / inward offset (`inward`) or an outward offset (`outward`) the body can take.
+void write_curvature_radius(JsonWriter& w, const PatchSet& faces) {
+  const CurvatureRadii r = smallest_curvature_radii(faces, 8);
+  w.key("curvature_radius").begin_object();
+  w.members("samples_per_span", 8, "samples", r.samples, "normals", r.outward ? "outward" : "patch");
+  for (const auto& [key, at] : {std::pair<const char*, const CurvatureRadiusAt*>{"inward", &r.inward},
+                                {"outward", &r.outward_offset}}) {
+    w.key(key);
+    if (at->patch < 0) {  // flat or curving only the other way: no limit
+      w.null();
+      continue;
+    }
+    w.begin_object();
+    w.members("radius", at->radius, "face", at->patch, "u", at->u, "v", at->v);
+    w.key("point").begin_array();
+    for (double x : at->point) w.number(x);
+    w.end_array();
+    w.end_object();
+  }
+  w.end_object();
+}
+
+}  // namespace
+
 std::string report_json(const ConversionResult& c) {
   const PatchBuildInfo& info = c.build.info;
   const PatchSet& ps = c.build.set;
@@ -261,6 +291,7 @@ std::string report_json(const ConversionResult& c) {
   w.members("max_c2_jump", k.max_c2_jump, "max_crease_normal_angle_deg", k.max_crease_normal_angle_deg);
   w.end_object();
   write_deviation(w, c, size);
+  write_curvature_radius(w, c.exported.set);
   if (c.mesh) write_mesh_path(w.key("mesh"), *c.mesh);
   const Timings& ms = c.ms;
   w.key("timings_ms").begin_object();

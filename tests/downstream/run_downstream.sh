@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# ctest driver of the downstream suite: converts small cages with the CLI (packed and per-quad
+# faces, polar caps on and off) to BREP, then runs downstream_ops.py in FreeCAD (headless):
+# booleans, offsets, hollow, cut-then-shell, fillet, sections, mesh, STEP round trip, on our
+# bodies and on OCCT's own.
+# Usage: run_downstream.sh SUBD2NURBS FREECADCMD CORPUS_DIR SAMPLES_DIR
+set -euo pipefail
+exe=$(realpath "$1"); freecadcmd=$2; corpus=$(realpath "$3"); samples=$(realpath "$4")
+here=$(cd "$(dirname "$0")" && pwd)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+convert() {  # NAME CAGE [OPTIONS...]
+  local name=$1 cage=$2; shift 2
+  "$exe" convert "$cage" -o "$work/$name.brep" --quiet "$@"
+  bodies="$bodies $name=$work/$name.brep"
+}
+bodies=""
+convert torus_packed "$corpus/catmark_torus.obj"
+convert torus_per_quad "$corpus/catmark_torus.obj" --faces per-quad
+convert cube_packed "$corpus/catmark_cube.obj"
+convert capped_cylinder_polar "$samples/capped_cylinder.obj"
+convert capped_cylinder_nopolar "$samples/capped_cylinder.obj" --polar off
+convert cube_creases "$corpus/catmark_cube_creases2.obj"
+export S2N_BODIES="$bodies" S2N_OUT="$work"
+export HOME="$work"  # FreeCAD writes its user config under $HOME
+cd "$work"
+"$freecadcmd" -c "exec(open('$here/downstream_ops.py').read())"
