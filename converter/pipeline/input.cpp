@@ -4,9 +4,9 @@
 
 namespace subd2nurbs::pipeline {
 
-LoadedInput load_input(const std::string& path) {
+LoadedInput load_input(const std::string& path, const UsdReadOptions& usd) {
   LoadedInput result;
-  result.cage = read_cage(path);
+  result.cage = read_cage(path, {}, usd);
   Diagnostics validation;
   result.level = SubdivLevel::from_validated(validate_cage(result.cage, &validation), result.cage.input);
   for (const Diagnostic& d : result.cage.diagnostics) result.warnings.push_back(format_diagnostic(result.cage, d));

@@ -9,6 +9,7 @@
 
 #include "core/refine/refiner.h"
 #include "io/obj_reader.h"
+#include "io/usd_reader.h"
 
 namespace subd2nurbs::pipeline {
 
@@ -22,7 +23,8 @@ struct LoadedInput {
   }
 };
 
-/// Reads and validates a cage. \throw InputError for an unreadable or invalid cage
-LoadedInput load_input(const std::string& path);
+/// Reads and validates a cage; `usd` applies to USD files (the variants to select).
+/// \throw InputError for an unreadable or invalid cage
+LoadedInput load_input(const std::string& path, const UsdReadOptions& usd = {});
 
 }  // namespace subd2nurbs::pipeline
