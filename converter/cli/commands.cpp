@@ -271,7 +271,8 @@ CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::st
       },
       "USD input: select variant NAME of variant set SET (SET=NAME; may be repeated); default: the file's "
       "selection, else the first variant")
-      ->type_name("SET=NAME");
+      ->type_name("SET=NAME")
+      ->allow_extra_args(false);  // one SET=NAME per --variant: MESH is never taken for one
   return command;
 }
 
