@@ -8,6 +8,7 @@
 #include <string>
 
 #include "io/input_error.h"
+#include "io/obj_reader.h"
 #include "io/usd_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
