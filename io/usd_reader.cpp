@@ -170,7 +170,7 @@ class Reader {
     }
     for (const auto& [set, variant] : options_.variants)
       if (!used_overrides_.count(set))
-        throw InputError(name_, 0, "--variant " + printable(set, 60) + "=" + printable(variant, 60) +
+        throw InputError(name_, 0, "variant selection " + printable(set, 60) + "=" + printable(variant, 60) +
                                        ": the file has no variant set '" + printable(set, 60) + "' on the prims read" +
                                        variant_sets_text());
   }
