@@ -773,6 +773,9 @@ class Crate {
           } else if (n == "instanceable") {
             const Value v = value(f->rep, "instanceable");
             prim.instanceable = !v.numbers.empty() && v.numbers[0] != 0;
+          } else if (n == "active") {
+            const Value v = value(f->rep, "active");
+            if (!v.numbers.empty()) prim.active = v.numbers[0] != 0 ? 1 : 0;
           } else if (s.type == kPseudoRootSpec) {
             if (n == "metersPerUnit") {
               const Value v = value(f->rep, "metersPerUnit");

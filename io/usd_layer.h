@@ -60,6 +60,7 @@ struct PrimSpec {
   std::vector<std::string> internal_references;  ///< prim paths in this layer ("/A/B")
   std::vector<std::string> external_references;  ///< asset paths (references and payloads)
   bool instanceable = false;
+  int active = -1;  ///< `active` metadata: -1 not authored, 0 false (the prim and its subtree are not read), 1 true
 
   PrimSpec* child(const std::string& child_name) const {
     for (const auto& c : children)

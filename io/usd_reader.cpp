@@ -142,17 +142,27 @@ class Reader {
         throw InputError(name_, 0, "more than " + std::to_string(options_.limits.max_expanded_prims) +
                                        " prims once references and variants are expanded");
       bool defined = false, class_only = true;
+      int active = -1;
       std::string type;
       for (const PrimSpec* s : prim.specs) {
         defined |= s->specifier == usd::Specifier::Def;
         class_only &= s->specifier == usd::Specifier::Class;
         if (type.empty()) type = s->type_name;
+        if (active < 0) active = s->active;
         if (s->instanceable) note(s->line, "prim " + prim.path + " is instanceable: read as an ordinary prim");
         for (const std::string& r : s->external_references)
           note(s->line, "prim " + prim.path + ": " + printable(r, 80) + " is in another file, not read");
       }
       if (class_only) continue;
       (void)defined;
+      if (active == 0) {
+        note(prim.specs.front()->line, "prim " + prim.path + " is inactive (active = false): it and its children are not read");
+        continue;
+      }
+      if (token(prim, "visibility", "inherited") == "invisible") {
+        note(prim.specs.front()->line, "prim " + prim.path + " is invisible: it and its children are not read");
+        continue;
+      }
       const Matrix world = transform(prim, parent);
       if (type == "Mesh") read_mesh(prim, world);
       // Children, in order of first appearance; each child's specs in the parent's order.

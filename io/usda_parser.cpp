@@ -382,6 +382,8 @@ class Parser {
         parse_value(v, depth + 1);
         if (key == "instanceable" && v.kind == Value::Kind::Numbers && !v.numbers.empty())
           prim.instanceable = v.numbers[0] != 0;
+        else if (key == "active" && v.kind == Value::Kind::Numbers && !v.numbers.empty())
+          prim.active = v.numbers[0] != 0 ? 1 : 0;
         else if (key == "variantSets" && op != "delete")
           for (const std::string& s : v.strings) prim.variant_set_or_add(s);
       }

@@ -378,10 +378,16 @@ TEST(UsdReader, TimeSamplesVariantsReferencesAndSeveralMeshes) {
       "  }\n"
       "  def \"ref\" ( prepend references = </src> ) {}\n"
       "}\n"
+      "def Xform \"hidden\" { token visibility = \"invisible\"\n def Mesh \"h\" { int[] faceVertexCounts = [3]\n"
+      "  int[] faceVertexIndices = [0, 1, 2]\n point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)] } }\n"
+      "def Mesh \"off\" ( active = false ) { int[] faceVertexCounts = [3]\n int[] faceVertexIndices = [0, 1, 2]\n"
+      "  point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)] }\n"
       "class \"abstract\" { def Mesh \"no\" { int[] faceVertexCounts = [3]\n int[] faceVertexIndices = [0, 1, 2]\n"
       "  point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)] } }\n";
   const LoadedCage cage = parse_usd(text, "v.usda");
-  ASSERT_EQ(cage.usd.meshes.size(), 2u);  // the selected variant's mesh, the referenced mesh; not /src, not the class
+  // The selected variant's mesh and the referenced mesh; not /src (referenced), the class, the
+  // invisible Xform's mesh or the inactive mesh.
+  ASSERT_EQ(cage.usd.meshes.size(), 2u);
   // The prim's own children first, then those its variant brings.
   EXPECT_EQ(cage.usd.meshes[0].path, "/root/ref/m");
   EXPECT_EQ(cage.usd.meshes[1].path, "/root/vb");
