@@ -429,8 +429,9 @@ class Crate {
   /// Numbers of `n` elements of the layout at `offset` (raw, uncompressed).
   void raw_numbers(std::uint64_t offset, std::uint64_t n, Layout l, bool quat, Value& out) const {
     const int b = scalar_bytes(l.scalar);
+    // The element count first (in doubles: n * components must not wrap around).
+    check_count(n, offset, static_cast<double>(b) * l.components, "an array");
     const std::uint64_t total = n * static_cast<std::uint64_t>(l.components);
-    check_count(total, offset, b, "an array");
     need(offset, total * static_cast<std::uint64_t>(b), "an array");
     out.kind = Value::Kind::Numbers;
     out.width = l.components;
