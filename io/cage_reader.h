@@ -3,18 +3,24 @@
 //   .gltf / .glb    glTF 2.0 with quad recovery (io/gltf_reader.h)
 //   .stl / .ply / .off   meshes, welded and repaired, quads recovered from all-triangle
 //                   files (io/mesh_reader.h)
-//   anything else   read as OBJ
+//   .usd / .usda / .usdc / .usdz   USD subdivision meshes with creases, corners and holes
+//                   (io/usd_reader.h); the encoding is taken from the content
+//   anything else   USD when the content is ("#usda", "PXR-USDC"); refused as "not a format
+//                   subd2nurbs reads" for the extensions of other 3D / CAD formats and for
+//                   binary content (NUL bytes at the start); otherwise read as OBJ
 #pragma once
 
 #include <string>
 
 #include "io/mesh_reader.h"
 #include "io/obj_reader.h"
+#include "io/usd_reader.h"
 
 namespace subd2nurbs {
 
-/// Reads a cage by extension (see the file comment). `options` apply to STL, PLY and OFF.
+/// Reads a cage by extension (see the file comment). `options` apply to STL, PLY and OFF,
+/// `usd` to USD files.
 /// \throw InputError naming the file (and line or element) if it cannot be read.
-LoadedCage read_cage(const std::string& path, const MeshReadOptions& options = {});
+LoadedCage read_cage(const std::string& path, const MeshReadOptions& options = {}, const UsdReadOptions& usd = {});
 
 }  // namespace subd2nurbs

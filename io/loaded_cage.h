@@ -1,4 +1,4 @@
-// A cage as every reader returns it (OBJ, glTF, STL, PLY, OFF: io/cage_reader.h): the mesh input
+// A cage as every reader returns it (OBJ, glTF, STL, PLY, OFF, USD: io/cage_reader.h): the mesh input
 // with the file position of each element, the reader's warnings and what it repaired or recovered.
 #pragma once
 
@@ -66,6 +66,27 @@ struct LoadedCage {
     /// and validate_cage refuses it as empty.
     bool point_cloud = false;
   } repair;
+  /// What the USD reader (io/usd_reader.h) read; `applied` is false for the other formats.
+  struct UsdInfo {
+    bool applied = false;
+    std::string encoding;        ///< "usda", "usdc", "usdz/usda", "usdz/usdc"
+    std::string version;         ///< "1.0" (text) or the crate's "0.8.0"
+    double meters_per_unit = 0;  ///< 0: not authored (USD's fallback is 0.01)
+    std::string up_axis;         ///< "Y", "Z", or "" when not authored (USD's fallback is Y)
+    struct Mesh {
+      std::string path;    ///< the prim path, "/Pyramid/geo/shape"
+      std::string scheme;  ///< "catmullClark", "bilinear", "none", "loop"
+      int vertices = 0, faces = 0, creases = 0, corners = 0, holes = 0;
+    };
+    std::vector<Mesh> meshes;  ///< in the cage's order: each mesh's vertices and faces follow the previous one's
+    struct VariantSet {
+      std::string prim;                   ///< the prim path
+      std::string name;                   ///< the variant set
+      std::string selection;              ///< the variant used ("" when the selection names none)
+      std::vector<std::string> variants;  ///< every variant the set offers
+    };
+    std::vector<VariantSet> variant_sets;
+  } usd;
 };
 
 }  // namespace subd2nurbs

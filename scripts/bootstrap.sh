@@ -9,6 +9,7 @@ cd "$(dirname "$0")/.."
 PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libtinyobjloader-dev libtinygltf-dev libcli11-dev
+  liblz4-dev python3-lz4           # LZ4: the USD crate (usdc) reader; python3-lz4 for its test oracle
   libgtest-dev libgmock-dev libbenchmark-dev
   libosd-dev                       # OpenSubdiv: the Catmull-Clark oracle in tests and benchmarks
   pybind11-dev python3-dev python3-numpy   # the Python module (built for /usr/bin/python3)

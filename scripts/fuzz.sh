@@ -16,7 +16,7 @@ PER=${SECONDS_PER_TARGET:-600}
 RUNS=${RUNS:--1}
 JOBS=${JOBS:-2}
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_obj fuzz_gltf fuzz_limit_queries fuzz_convert fuzz_stl fuzz_ply fuzz_off)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(fuzz_obj fuzz_gltf fuzz_limit_queries fuzz_convert fuzz_stl fuzz_ply fuzz_off fuzz_usda fuzz_usdc)
 
 nice -n 10 cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_C_COMPILER=clang -DSUBD2NURBS_FUZZ=ON -DSUBD2NURBS_FUZZ_SANITIZERS="$SANITIZERS" -DSUBD2NURBS_BUILD_TESTS=OFF -DSUBD2NURBS_BUILD_BENCH=OFF \
@@ -35,7 +35,7 @@ mkdir -p "$seeds/fuzz_stl" "$seeds/fuzz_ply" "$seeds/fuzz_off"
 for t in fuzz_stl fuzz_ply fuzz_off; do cp tests/fuzz/seeds/$t/* "$seeds/$t/"; done
 cp tests/data/mesh/*.off "$seeds/fuzz_off/"
 
-dict_for() { case "$1" in fuzz_obj|fuzz_convert) echo tests/fuzz/obj.dict;; fuzz_gltf) echo tests/fuzz/gltf.dict;; *) echo "";; esac; }
+dict_for() { case "$1" in fuzz_obj|fuzz_convert) echo tests/fuzz/obj.dict;; fuzz_gltf) echo tests/fuzz/gltf.dict;; fuzz_usda) echo tests/fuzz/usda.dict;; *) echo "";; esac; }
 seed_for() { case "$1" in fuzz_obj|fuzz_convert) echo "$seeds/obj";; fuzz_stl|fuzz_ply|fuzz_off) echo "$seeds/$1";; *) echo "tests/fuzz/seeds/$1";; esac; }
 
 for t in "${TARGETS[@]}"; do

@@ -70,6 +70,51 @@ std::string histogram_text(const std::map<int, int>& histogram, const char* unit
   return s.empty() ? "-" : s;
 }
 
+/// What the USD reader read: the layer, each mesh with its scheme and tags, the variant sets.
+void print_usd_text(std::ostream& out, const LoadedCage::UsdInfo& u) {
+  if (!u.applied) return;
+  out << "  usd          " << u.encoding << " " << u.version << ", metersPerUnit "
+      << (u.meters_per_unit > 0 ? number(u.meters_per_unit) : std::string("not authored (0.01)")) << ", upAxis "
+      << (u.up_axis.empty() ? std::string("not authored (Y)") : u.up_axis) << ", " << u.meshes.size()
+      << (u.meshes.size() == 1 ? " mesh\n" : " meshes\n");
+  constexpr size_t kListed = 50;
+  for (size_t i = 0; i < u.meshes.size() && i < kListed; ++i) {
+    const auto& m = u.meshes[i];
+    out << "    mesh " << m.path << ": " << m.vertices << " vertices, " << m.faces << " faces, " << m.scheme << ", "
+        << m.creases << " crease edges, " << m.corners << " corners, " << m.holes << " holes\n";
+  }
+  if (u.meshes.size() > kListed) out << "    " << u.meshes.size() - kListed << " more meshes\n";
+  for (const auto& v : u.variant_sets) {
+    out << "    variant set " << v.prim << " " << v.name << " = "
+        << (v.selection.empty() ? std::string("(none)") : v.selection) << " (of ";
+    for (size_t i = 0; i < v.variants.size(); ++i) out << (i ? ", " : "") << v.variants[i];
+    out << ")\n";
+  }
+}
+
+void write_usd_json(JsonWriter& w, const LoadedCage::UsdInfo& u) {
+  w.key("usd");
+  if (!u.applied) {
+    w.null();
+    return;
+  }
+  w.begin_object();
+  w.members("encoding", u.encoding, "version", u.version, "meters_per_unit", u.meters_per_unit, "up_axis", u.up_axis);
+  w.key("meshes").begin_array(4, 2);
+  for (const auto& m : u.meshes)
+    w.begin_object()
+        .members("path", m.path, "vertices", m.vertices, "faces", m.faces, "scheme", m.scheme, "crease_edges", m.creases,
+                 "corners", m.corners, "holes", m.holes)
+        .end_object();
+  w.end_array().key("variant_sets").begin_array(4, 2);
+  for (const auto& v : u.variant_sets) {
+    w.begin_object().members("prim", v.prim, "name", v.name, "selection", v.selection).key("variants").begin_array();
+    for (const std::string& name : v.variants) w.string(name);
+    w.end_array().end_object();
+  }
+  w.end_array().end_object();
+}
+
 void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s, const pipeline::InputRoute& route) {
   const SubdivOptions& o = loaded.level.options;
   const BoundingBox& b = s.bounds;
@@ -102,6 +147,7 @@ void print_text(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
   if (q.applied)
     out << "  recovered    " << q.quads << " quads from " << q.source_triangles << " triangles ("
         << q.triangles_kept << " triangles kept, " << q.fan_vertices << " fan vertices)\n";
+  print_usd_text(out, loaded.cage.usd);
   const PolarDetection polar = detect_polar_structures(loaded.level);
   out << "  polar        " << polar.structures.size() << " polar structure"
       << (polar.structures.size() == 1 ? "" : "s");
@@ -162,6 +208,7 @@ void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
   } else {
     w.null();
   }
+  write_usd_json(w, loaded.cage.usd);
   const PolarDetection polar = detect_polar_structures(loaded.level);
   w.key("polar_structures").begin_array();
   for (const PolarStructure& p : polar.structures)
@@ -178,6 +225,11 @@ void print_json(std::ostream& out, const LoadedInput& loaded, const MeshStats& s
 }  // namespace
 
 // --- loading and output checks shared by the subcommands ---------------------------------
+
+UsdReadOptions& usd_read_options() {
+  static UsdReadOptions options;
+  return options;
+}
 
 void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs) {
   namespace fs = std::filesystem;
@@ -202,10 +254,29 @@ void check_outputs(const std::string& input, const std::vector<std::pair<std::st
 CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::string& description,
                            std::string& mesh) {
   CLI::App* command = app.add_subcommand(name, description);
-  command->add_option("MESH", mesh, "OBJ cage (with OpenSubdiv 't' tags), or glTF / GLB triangles (quads recovered)")
+  command->add_option("MESH", mesh,
+                      "OBJ cage (with OpenSubdiv 't' tags), USD (.usd/.usda/.usdc/.usdz, creases kept), glTF / GLB "
+                      "triangles (quads recovered), or STL / PLY / OFF")
       ->required();
+  command->add_option_function<std::vector<std::string>>(
+      "--variant",
+      [](const std::vector<std::string>& selections) {
+        for (const std::string& s : selections) {
+          try {
+            add_variant_selection(usd_read_options(), s);
+          } catch (const Error& e) {
+            throw CLI::ValidationError("--variant", e.what());
+          }
+        }
+      },
+      "USD input: select variant NAME of variant set SET (SET=NAME; may be repeated); default: the file's "
+      "selection, else the first variant")
+      ->type_name("SET=NAME")
+      ->allow_extra_args(false);  // one SET=NAME per --variant: MESH is never taken for one
   return command;
 }
+
+LoadedInput load_input(const std::string& path) { return pipeline::load_input(path, usd_read_options()); }
 
 void add_limit_options(CLI::App& command, LimitOptionValues& values, const std::string& faces_meaning) {
   command.add_option_function<double>(

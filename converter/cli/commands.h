@@ -37,7 +37,10 @@ std::string error_message(const Error& e, const std::string& input);
 /// A cage read and validated, with its warnings: the pipeline's (converter/pipeline/input.h), the
 /// same for every front end.
 using pipeline::LoadedInput;
-using pipeline::load_input;
+/// pipeline::load_input with the --variant selections the command was given (add_cage_command).
+LoadedInput load_input(const std::string& path);
+/// The --variant selections of the command being run (one command per process).
+UsdReadOptions& usd_read_options();
 
 /// Checks the outputs before any work (io/atomic_file.h resolve_output_path): each must be
 /// a regular file or not exist yet (a symbolic link is followed: its target is replaced),
@@ -48,7 +51,8 @@ using pipeline::load_input;
 void check_outputs(const std::string& input, const std::vector<std::pair<std::string, std::string>>& outputs);
 
 /// A subcommand that reads a cage: `name` with its description and the required MESH argument
-/// (OBJ, or glTF / GLB: load_input) stored in `mesh`.
+/// (OBJ, glTF / GLB, STL, PLY, OFF, USD: load_input) stored in `mesh`, and --variant SET=NAME
+/// (USD variant selections, for load_input).
 CLI::App* add_cage_command(CLI::App& app, const std::string& name, const std::string& description,
                            std::string& mesh);
 

@@ -241,7 +241,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   // Load: a cage, or a mesh made into a fitted cage (the mesh path, pipeline/mesh_path.h).
   auto t = Clock::now();
   progress.stage("reading " + options.mesh);
-  pipeline::LoadedSource source = pipeline::load_source(options.mesh, all.mesh.input);
+  pipeline::LoadedSource source = pipeline::load_source(options.mesh, all.mesh.input, usd_read_options());
   std::optional<pipeline::MeshCage> made;
   if (source.route.mesh) {
     for (const std::string& w : source.warnings) warn(w);

@@ -6,7 +6,9 @@
 
 namespace subd2nurbs::pipeline {
 
-LoadedInput load_input(const std::string& path) { return load_input(read_cage(path)); }
+LoadedInput load_input(const std::string& path, const UsdReadOptions& usd) {
+  return load_input(read_cage(path, {}, usd));
+}
 
 LoadedInput load_input(LoadedCage cage) {
   LoadedInput result;

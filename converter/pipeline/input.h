@@ -9,6 +9,7 @@
 
 #include "core/refine/refiner.h"
 #include "io/obj_reader.h"
+#include "io/usd_reader.h"
 
 namespace subd2nurbs::pipeline {
 
@@ -22,8 +23,9 @@ struct LoadedInput {
   }
 };
 
-/// Reads and validates a cage. \throw InputError for an unreadable or invalid cage
-LoadedInput load_input(const std::string& path);
+/// Reads and validates a cage; `usd` applies to USD files (the variants to select).
+/// \throw InputError for an unreadable or invalid cage
+LoadedInput load_input(const std::string& path, const UsdReadOptions& usd = {});
 /// Validates a cage already read (its warnings included). \throw InputError for an invalid cage
 LoadedInput load_input(LoadedCage cage);
 

@@ -233,9 +233,9 @@ InputRoute route_input(const LoadedCage& read, const std::string& path, InputKin
   return {true, why + ": a mesh to reproduce"};
 }
 
-LoadedSource load_source(const std::string& path, InputKind requested) {
+LoadedSource load_source(const std::string& path, InputKind requested, const UsdReadOptions& usd) {
   LoadedSource s;
-  LoadedCage read = read_cage(path);
+  LoadedCage read = read_cage(path, {}, usd);
   s.route = route_input(read, path, requested);
   if (!s.route.mesh) {
     s.cage = load_input(std::move(read));

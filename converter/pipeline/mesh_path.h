@@ -67,7 +67,7 @@ struct LoadedSource {
 
 /// Reads `path` and decides its road by the rule (file comment).
 /// \throw InputError (unreadable or invalid file), SettingsError
-LoadedSource load_source(const std::string& path, InputKind requested);
+LoadedSource load_source(const std::string& path, InputKind requested, const UsdReadOptions& usd = {});
 
 /// Decides the road of a cage already read (rule 2 .. 5). `path` gives the format (by extension).
 InputRoute route_input(const LoadedCage& read, const std::string& path, InputKind requested);

@@ -63,11 +63,12 @@ def check_occt():
                            "against FreeCAD's OpenCASCADE" % (subd2nurbs.OCC_VERSION, Part.OCC_VERSION))
 
 
-def read_cage(path):
+def read_cage(path, variant=None):
     """A subd2nurbs.Cage from a file: OBJ with quads, n-gons and OpenSubdiv crease / corner /
-    hole tags (read by subd2nurbs itself; FreeCAD's OBJ reader drops 5+-gons), or glTF / GLB
-    (quads recovered from triangles)."""
-    return subd2nurbs.read_cage(path)
+    hole tags (read by subd2nurbs itself; FreeCAD's OBJ reader drops 5+-gons), USD (.usd /
+    .usda / .usdc / .usdz with creases, corners and holes; `variant` as subd2nurbs.read_cage),
+    or glTF / GLB (quads recovered from triangles), or STL / PLY / OFF."""
+    return subd2nurbs.read_cage(path, variant=variant)
 
 
 def make_cage(source, doc=None, name="Cage"):

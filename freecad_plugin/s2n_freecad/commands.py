@@ -37,7 +37,8 @@ class ImportCage:
     def Activated(self):
         from PySide import QtGui
         path, _ = QtGui.QFileDialog.getOpenFileName(Gui.getMainWindow(), "Import subdivision cage", "",
-                                                    "Subdivision cages (*.obj *.glb *.gltf);;All files (*)")
+                                                    "Subdivision cages (*.obj *.usd *.usda *.usdc *.usdz *.glb *.gltf *.stl *.ply *.off);;"
+                                                    "USD (*.usd *.usda *.usdc *.usdz);;All files (*)")
         if not path:
             return
         doc = App.ActiveDocument or App.newDocument()

@@ -208,13 +208,18 @@ py::dict recovery_dict(const LoadedCage::QuadRecovery& q) {
 
 /// Reads and validates a cage as every front end does (pipeline::load_input): any format
 /// read_cage reads, errors naming the file and line, the warnings as text.
-py::dict read_cage_file(const std::string& path, const std::string& input) {
-  pipeline::LoadedSource source = pipeline::load_source(path, pipeline::input_kind(input));
+/// `input`: auto, mesh or cage (pipeline/mesh_path.h); `variants`: USD variant selections
+/// "SET=NAME" (io/usd_reader.h).
+py::dict read_cage_file(const std::string& path, const std::string& input, const std::vector<std::string>& variants) {
+  UsdReadOptions usd;
+  for (const std::string& v : variants) add_variant_selection(usd, v);
+  pipeline::LoadedSource source = pipeline::load_source(path, pipeline::input_kind(input), usd);
   py::dict route;
   set_items(route, "kind", source.route.mesh ? "mesh" : "cage", "reason", source.route.reason);
   if (source.route.mesh) {  // the mesh's faces as in the file: convert() remeshes them
     py::dict d = cage_dict(source.mesh.input);
-    set_items(d, "warnings", source.warnings, "path", path, "quad_recovery", py::none(), "route", route);
+    set_items(d, "warnings", source.warnings, "path", path, "quad_recovery", py::none(), "route", route, "usd",
+              py::none());
     return d;
   }
   const pipeline::LoadedInput& loaded = *source.cage;
@@ -222,6 +227,26 @@ py::dict read_cage_file(const std::string& path, const std::string& input) {
   py::dict d = cage_dict(cage.input);
   set_items(d, "warnings", loaded.warnings, "path", path, "quad_recovery",
             cage.recovery.applied ? py::object(recovery_dict(cage.recovery)) : py::object(py::none()), "route", route);
+  py::object usd_info = py::none();
+  if (cage.usd.applied) {
+    py::dict u;
+    py::list meshes, sets;
+    for (const auto& m : cage.usd.meshes) {
+      py::dict md;
+      set_items(md, "path", m.path, "scheme", m.scheme, "vertices", m.vertices, "faces", m.faces, "crease_edges",
+                m.creases, "corners", m.corners, "holes", m.holes);
+      meshes.append(md);
+    }
+    for (const auto& v : cage.usd.variant_sets) {
+      py::dict vd;
+      set_items(vd, "prim", v.prim, "name", v.name, "selection", v.selection, "variants", v.variants);
+      sets.append(vd);
+    }
+    set_items(u, "encoding", cage.usd.encoding, "version", cage.usd.version, "meters_per_unit",
+              cage.usd.meters_per_unit, "up_axis", cage.usd.up_axis, "meshes", meshes, "variant_sets", sets);
+    usd_info = u;
+  }
+  d["usd"] = usd_info;
   return d;
 }
 
@@ -719,7 +744,8 @@ PYBIND11_MODULE(_subd2nurbs, m) {
     set_items(d, "kind", r.mesh ? "mesh" : "cage", "reason", r.reason);
     return d;
   });
-  m.def("read_cage", &read_cage_file, py::arg("path"), py::arg("input") = "auto");
+  m.def("read_cage", &read_cage_file, py::arg("path"), py::arg("input") = "auto",
+        py::arg("variants") = std::vector<std::string>{});
   m.def("check_options", [](const py::dict& options) { subdiv_options(options); });
   m.def("setting_names", &pipeline::setting_names);
   m.def("recover_quads", &recover_quads_from);

@@ -212,6 +212,7 @@ class Cage:
         self.warnings = None if warnings is None else list(warnings)
         #: For a cage rebuilt from triangles (glTF, from_triangles): the counts, else None.
         self.quad_recovery = None
+        self.usd = None  # what the USD reader read (read_cage of a USD file), else None
 
     @classmethod
     def _from_dict(cls, d, name):
@@ -251,19 +252,36 @@ class Cage:
         return "<subd2nurbs.Cage %r: %d vertices, %d faces>" % (self.name, self.num_vertices, self.num_faces)
 
 
-def read_cage(path, input="auto"):
+def read_cage(path, variant=None, input="auto"):
     """Reads and validates a cage: OBJ with OpenSubdiv 't' tags (crease, corner, hole,
-    interpolateboundary, ...; see docs/formats.md), errors naming the file and line; glTF /
-    GLB, STL, PLY, OFF triangles, whose quads are recovered (the cage's ``quad_recovery`` says
-    how many).
+    interpolateboundary, ...; see docs/formats.md), errors naming the file and line; USD
+    (.usd / .usda / .usdc / .usdz: Mesh prims with their creases, corners and holes; the cage's
+    ``usd`` says what was read); or glTF / GLB triangles, whose quads are recovered (the cage's
+    ``quad_recovery`` says how many); or STL / PLY / OFF.
+
+    ``variant``: USD variant selections, as {"set": "name"} or "set=name" or a list of those
+    (default: the file's selection, else each set's first variant).
 
     A mesh to reproduce (docs/meshes.md: by the rule, or input="mesh") keeps its faces as in
     the file; convert() remeshes it into a quad cage fitted to it. The result's ``route`` dict
     says which: kind ("mesh" or "cage") and reason."""
-    d = _subd2nurbs.read_cage(str(path), _checked("input", input, lambda x: isinstance(x, str), "a string", str))
+    if variant is None:
+        selections = []
+    elif isinstance(variant, dict):
+        selections = ["%s=%s" % (k, v) for k, v in variant.items()]
+    elif isinstance(variant, str):
+        selections = [variant]
+    else:
+        selections = list(variant)
+    for s in selections:
+        if not isinstance(s, str):
+            raise TypeError("variant: expected 'set=name' strings, got %r" % (s,))
+    d = _subd2nurbs.read_cage(str(path), _checked("input", input, lambda x: isinstance(x, str), "a string", str),
+                              selections)
     cage = Cage._from_dict(d, str(path))
     cage.quad_recovery = d["quad_recovery"]
     cage.route = d["route"]
+    cage.usd = d["usd"]
     return cage
 
 

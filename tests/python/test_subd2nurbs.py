@@ -409,6 +409,40 @@ class Triangles(unittest.TestCase):
         self.assertEqual(cage.num_faces, n)
 
 
+class UsdInput(unittest.TestCase):
+    """read_cage of USD files (issue #29): variants by keyword, what was read in cage.usd, the
+    same cage as the command line reads (its `info --json` counts)."""
+
+    geo = os.path.join(CORPUS, "..", "usd", "geo.usda")
+
+    def test_variants_select_creases_corners_holes(self):
+        default = s2n.read_cage(self.geo)
+        self.assertEqual(default.usd["variant_sets"][0]["selection"], "quad_holes")
+        self.assertEqual(len(default.holes), default.usd["meshes"][0]["holes"])
+        self.assertEqual(len(default.holes), 4)  # holeIndices = [0, 1, 2, 3] in the file
+        edges = s2n.read_cage(self.geo, variant={"geo": "quad_creases", "creases": "edges"})
+        self.assertEqual(len(edges.creases), 6)  # creaseLengths = [2, 2, 2, 2, 2, 2]
+        self.assertTrue(all(c[2] == 100 for c in edges.creases))  # creaseSharpnesses, as written
+        corners = s2n.read_cage(self.geo, variant=["geo=quad_creases", "creases=corners"])
+        self.assertEqual(sorted(c[0] for c in corners.corners), [0, 2])  # cornerIndices = [0, 2]
+        self.assertTrue(np.array_equal(np.asarray(corners.vertices), np.asarray(edges.vertices)))
+        with self.assertRaises(s2n.SettingsError):
+            s2n.read_cage(self.geo, variant="no-equals-sign")
+        with self.assertRaises(s2n.CageError):
+            s2n.read_cage(self.geo, variant="size=big")
+
+    def test_same_cage_as_the_command_line(self):
+        cli = os.environ.get("SUBD2NURBS_CLI")
+        if not cli:
+            self.skipTest("SUBD2NURBS_CLI not set")
+        out = subprocess.run([cli, "info", "--json", "--variant", "geo=quad_creases", "--variant", "creases=edges",
+                              self.geo], capture_output=True, text=True, check=True).stdout
+        info = json.loads(out)
+        cage = s2n.read_cage(self.geo, variant={"geo": "quad_creases", "creases": "edges"})
+        self.assertEqual((info["vertices"], info["faces"]), (cage.num_vertices, cage.num_faces))
+        self.assertEqual(info["creases"]["infinite_edges"], len(cage.creases))
+
+
 class Diagnostics(unittest.TestCase):
     def test_many_poles_that_are_not_polar_give_one_note(self):
         """A triangulated torus: every vertex is an all-triangle vertex of valence 6 and none
