@@ -5,6 +5,8 @@ the same meshes in the same run; prints a Markdown section for docs/benchmarks.m
 
 Usage: bench_meshes.py BUILD_DIR [REPS]   (default 3 repetitions)
        BENCH_MESHES_RAW=FILE bench_meshes.py ...   also dumps the measurements as JSON
+       BENCH_MESHES_ONLY=NAME bench_meshes.py ...  one mesh only ("fandisk", "bob limit scan", ...)
+       bench_meshes.py --from-raw FILE...          the table again from such dumps
 
 Per mesh and repetition, each in a fresh process:
   * ours: `subd2nurbs convert MESH -o X.step --report R.json --keep-cage C.obj -q`: wall time and
@@ -41,6 +43,11 @@ else:
     bpy.ops.import_scene.obj(filepath=src, axis_forward="Y", axis_up="Z")
 obj = bpy.context.selected_objects[0]
 bpy.context.view_layer.objects.active = obj
+# Blender's STL import keeps every facet's own vertices: weld them as our reader does.
+bpy.ops.object.mode_set(mode="EDIT")
+bpy.ops.mesh.select_all(action="SELECT")
+bpy.ops.mesh.remove_doubles(threshold=1e-7)
+bpy.ops.object.mode_set(mode="OBJECT")
 t = time.perf_counter()
 r = bpy.ops.object.quadriflow_remesh(target_faces=target, use_preserve_sharp=True, use_preserve_boundary=True,
                                      seed=0, mode="FACES")
@@ -126,19 +133,24 @@ def limit_scan(exe, cage, n, out, tmp):
     """A dense triangulation of `cage`'s exact limit surface: an n x n grid per quad, evaluated
     by `subd2nurbs limit`, written as STL (the shared edges' points weld)."""
     faces = [l for l in open(cage) if l.startswith("f ")]
+    grids = []  # (face, sub-face or None): a quad is one grid, an n-gon n (its ptex sub-faces)
+    for f, line in enumerate(faces):
+        size = len(line.split()) - 1
+        grids.extend([(f, None)] if size == 4 else [(f, s) for s in range(size)])
     queries = os.path.join(tmp, "queries.txt")
     with open(queries, "w") as q:
-        for f in range(len(faces)):
+        for f, sub in grids:
+            prefix = "%d" % f if sub is None else "%d %d" % (f, sub)
             for i in range(n + 1):
                 for j in range(n + 1):
-                    q.write("%d %.17g %.17g\n" % (f, i / n, j / n))
+                    q.write("%s %.17g %.17g\n" % (prefix, i / n, j / n))
     _, _, text, _, _ = run([exe, "limit", cage, queries], tmp)
     pts = [tuple(map(float, l.split()[:3])) for l in text.splitlines() if l.strip()]
     k = n + 1
     with open(out, "w") as s:
         s.write("solid scan\n")
-        for f in range(len(faces)):
-            base = f * k * k
+        for g in range(len(grids)):
+            base = g * k * k
             for i in range(n):
                 for j in range(n):
                     a, b, c, d = base + i * k + j, base + (i + 1) * k + j, base + (i + 1) * k + j + 1, base + i * k + j + 1
@@ -156,6 +168,12 @@ def two_sided(d):
 
 
 def main():
+    if sys.argv[1] == "--from-raw":  # the table again from BENCH_MESHES_RAW dumps (concatenated)
+        results = []
+        for path in sys.argv[2:]:
+            results.extend(json.load(open(path)))
+        print_table(results, len(results[0]["runs"]))
+        return
     build = sys.argv[1]
     reps = int(sys.argv[2]) if len(sys.argv) > 2 else 3
     exe = os.path.join(build, "subd2nurbs")
@@ -168,12 +186,15 @@ def main():
     meshes.append(("fandisk", os.path.join(REAL, "fandisk.off"), fandisk_ply, [], None))
     for name in ("plate_holes.STL", "featuretype.STL"):
         meshes.append((name, os.path.join(REAL, name), os.path.join(REAL, name), [], None))
-    scan = os.path.join(tmp, "blub_limit.stl")
-    # 112 quads x 18 x 18 x 2 = 72 576 triangles (a scan of the size of the Stanford bunny), cage
-    # of at most 2 x the original's faces asked for
-    cage_faces = limit_scan(exe, os.path.join(REAL, "blub_control_mesh.obj"), 18, scan, tmp)
-    meshes.append(("blub limit scan", scan, scan, ["--input", "mesh", "--target-faces", str(2 * cage_faces)],
+    scan = os.path.join(tmp, "bob_limit.stl")
+    # 334 quads x 10 x 10 x 2 = 66 800 triangles (a scan of the size of the Stanford bunny), a cage
+    # of 2 x the original's faces asked for
+    cage_faces = limit_scan(exe, os.path.join(REAL, "bob_controlmesh.obj"), 10, scan, tmp)
+    meshes.append(("bob limit scan", scan, scan, ["--input", "mesh", "--target-faces", str(2 * cage_faces)],
                    cage_faces))
+    only = os.environ.get("BENCH_MESHES_ONLY")
+    if only:
+        meshes = [m for m in meshes if m[0] == only]
     results = []
     for name, src, blend_src, extra, original in meshes:
         rows = []

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "common/json_text.h"
 #include "common/run_command.h"
 #include "core/eval/target_distance.h"
 #include "fit/shape_fit_test_util.h"
@@ -40,17 +41,6 @@ void write_xyz(const std::string& path, const std::vector<Point3>& points, const
   std::fprintf(f, "# x y z\n");
   for (const Point3& p : points) std::fprintf(f, "%.17g %.17g %.17g\n", p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]);
   std::fclose(f);
-}
-
-/// The number after `"key": ` following the keys of `path` in order, in JSON text (NaN if absent).
-double json_number(const std::string& text, const std::vector<std::string>& path) {
-  size_t at = 0;
-  for (const std::string& key : path) {
-    at = text.find("\"" + key + "\": ", at);
-    if (at == std::string::npos) return std::nan("");
-    at += key.size() + 4;
-  }
-  return std::strtod(text.c_str() + at, nullptr);
 }
 
 /// The larger of the two maxima of a two-sided distance ("before" / "after" / "target").

@@ -42,6 +42,7 @@
 #include <sstream>
 #include <algorithm>
 
+#include "common/json_text.h"
 #include "common/run_command.h"
 #include "common/shapes.h"
 #include "io/obj_reader.h"
@@ -53,17 +54,6 @@ using namespace subd2nurbs::testing;
 namespace {
 
 const std::string kExe = SUBD2NURBS_EXE;
-
-/// The number after `"key": ` following the keys of `path` in order, in JSON text (NaN if absent).
-double json_number(const std::string& text, const std::vector<std::string>& path) {
-  size_t at = 0;
-  for (const std::string& key : path) {
-    at = text.find("\"" + key + "\": ", at);
-    if (at == std::string::npos) return std::nan("");
-    at += key.size() + 4;
-  }
-  return std::strtod(text.c_str() + at, nullptr);
-}
 
 struct Triangles {
   std::vector<gp_Pnt> points;
