@@ -289,6 +289,34 @@ void curvature(const Dense& d, Fields& fl, double alignment) {
   }
 }
 
+// Breadth-first propagation over the vertex graph, shared by both fields' initialisation: from the
+// vertices `seeded` (set[v] = 1), each unset neighbour w of a reached vertex v is set by
+// spread(v, w); when the queue runs dry (a component without seeds), the next unset vertex with
+// neighbours is seeded by seed(v) and the walk goes on.
+template <class Spread, class Seed, class Check>
+void propagate(const Fields& fl, std::vector<char>& set, std::deque<int>& queue, Spread&& spread, Seed&& seed_vertex,
+               Check&& check) {
+  for (int seed = 0;; ++seed) {
+    while (!queue.empty()) {
+      int v = queue.front();
+      queue.pop_front();
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        int w = fl.adj[i];
+        if (set[w]) continue;
+        spread(v, w);
+        set[w] = 1;
+        queue.push_back(w);
+      }
+    }
+    while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
+    if (seed >= fl.n) break;
+    seed_vertex(seed);
+    set[seed] = 1;
+    queue.push_back(seed);
+    check();
+  }
+}
+
 template <class Check>
 void init_cross_field(Fields& fl, Check&& check) {
   fl.q.assign(fl.n, V3::Zero());
@@ -305,26 +333,13 @@ void init_cross_field(Fields& fl, Check&& check) {
     set[v] = 1;
     queue.push_back(v);
   }
-  for (int seed = 0;; ++seed) {
-    while (!queue.empty()) {
-      int v = queue.front();
-      queue.pop_front();
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        int w = fl.adj[i];
-        if (set[w]) continue;
+  propagate(
+      fl, set, queue,
+      [&](int v, int w) {
         V3 t = fl.q[v] - fl.normal[w] * fl.normal[w].dot(fl.q[v]);
         fl.q[w] = t.norm() > 1e-9 ? V3(t.normalized()) : any_perpendicular(fl.normal[w]);
-        set[w] = 1;
-        queue.push_back(w);
-      }
-    }
-    while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
-    if (seed >= fl.n) break;
-    fl.q[seed] = any_perpendicular(fl.normal[seed]);
-    set[seed] = 1;
-    queue.push_back(seed);
-    check();
-  }
+      },
+      [&](int v) { fl.q[v] = any_perpendicular(fl.normal[v]); }, check);
   for (int v = 0; v < fl.n; ++v)
     if (!set[v]) fl.q[v] = any_perpendicular(fl.normal[v]);
 }
@@ -375,27 +390,14 @@ void init_position_field(Fields& fl, Check&& check) {
       set[v] = 1;
       queue.push_back(v);
     }
-  for (int seed = 0;; ++seed) {
-    while (!queue.empty()) {
-      int v = queue.front();
-      queue.pop_front();
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        int w = fl.adj[i];
-        if (set[w]) continue;
+  propagate(
+      fl, set, queue,
+      [&](int v, int w) {
         const V3& n = fl.normal[w];
         fl.o[w] = fl.o[v] - n * n.dot(fl.o[v] - fl.p[w]);
         constrain_position(fl, w);
-        set[w] = 1;
-        queue.push_back(w);
-      }
-    }
-    while (seed < fl.n && (set[seed] || fl.offsets[seed] == fl.offsets[seed + 1])) ++seed;
-    if (seed >= fl.n) break;
-    fl.o[seed] = fl.p[seed];
-    set[seed] = 1;
-    queue.push_back(seed);
-    check();
-  }
+      },
+      [&](int v) { fl.o[v] = fl.p[v]; }, check);
 }
 
 void smooth_position_vertex(Fields& fl, int v) {
@@ -770,6 +772,310 @@ struct Projector {
   }
 };
 
+
+// The input's polygons fan-triangulated, with its features; `area` its area.
+Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area) {
+  Dense d;
+  for (const auto& x : mesh.positions) d.p.push_back(V3(x[0], x[1], x[2]));
+  d.corner.assign(mesh.num_vertices(), 0);
+  for (int c : features.corners) d.corner[c] = 1;
+  for (const auto& e : features.edges) d.feature.insert(edge_key(e[0], e[1]));
+  int begin = 0;
+  area = 0;
+  for (int size : mesh.face_sizes) {
+    for (int k = 1; k + 1 < size; ++k) {
+      Tri t{mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]};
+      d.t.push_back(t);
+      area += 0.5 * (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]).norm();
+    }
+    begin += size;
+  }
+  return d;
+}
+
+// Collapses every edge whose ends share a lattice point (link condition, features kept).
+// Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
+// along their chains); each grows from its centre, the vertex of highest priority, by collapsing
+// its neighbours into it ring by ring; then any vertex into a same-point neighbour of higher priority.
+template <class Check>
+void collapse_to_lattice(const Dense& d, const Fields& fl, double s, Collapser& col, Check&& check) {
+  auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
+  std::vector<int> cluster(fl.n);
+  std::iota(cluster.begin(), cluster.end(), 0);
+  for (int u = 0; u < fl.n; ++u)
+    for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
+      int v = fl.adj[i];
+      if (v < u || !same_point(u, v)) continue;
+      bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
+      if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
+      cluster[find_root(cluster, u)] = find_root(cluster, v);
+    }
+  std::vector<int> centre_of(fl.n, -1);
+  for (int u = 0; u < fl.n; ++u) {
+    int r = find_root(cluster, u);
+    if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
+  }
+  for (int pass = 0; pass < 200; ++pass) {
+    int changed = 0;
+    for (int u = 0; u < fl.n; ++u) {
+      int c = centre_of[find_root(cluster, u)];
+      int tmp[2];
+      if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
+        continue;
+      if (col.can_collapse(u, c)) {
+        col.collapse(u, c);
+        ++changed;
+      }
+    }
+    check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
+    if (changed == 0) break;
+  }
+  std::vector<int> nu, cands;
+  for (int pass = 0; pass < 200; ++pass) {
+    int changed = 0;
+    for (int u = 0; u < fl.n; ++u) {
+      if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
+      col.neighbours(u, nu);
+      cands.clear();
+      for (int v : nu)
+        if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
+      std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
+      for (int v : cands)
+        if (col.can_collapse(u, v)) {
+          col.collapse(u, v);
+          ++changed;
+          break;
+        }
+    }
+    check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
+    if (changed == 0) break;
+  }
+}
+
+// The coarse triangles left by the collapses (vertices renumbered; dense_of: coarse -> dense vertex).
+std::vector<Tri> coarse_triangles(const Collapser& col, int n, std::vector<int>& dense_of) {
+  std::vector<int> coarse_of(n, -1);
+  dense_of.clear();
+  for (int v = 0; v < n; ++v)
+    if (col.alive[v] && !col.vf[v].empty()) {
+      coarse_of[v] = static_cast<int>(dense_of.size());
+      dense_of.push_back(v);
+    }
+  std::vector<Tri> tris;
+  for (size_t i = 0; i < col.f.size(); ++i)
+    if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
+  return tris;
+}
+
+// Augmenting paths (alternating between unused and used pairs, breadth first, bounded) from each
+// unmatched triangle to another; cand[t][k]: t's pairable neighbour across its edge k, or -1.
+void augment_matching(const std::vector<std::array<int, 3>>& cand, std::vector<int>& mate) {
+  const int nt = static_cast<int>(mate.size());
+  std::vector<int> from(nt, -1), seen(nt, -1);
+  for (int t = 0; t < nt; ++t) {
+    if (mate[t] >= 0) continue;
+    std::vector<int> queue{t};
+    seen[t] = t;
+    int end_a = -1, end_b = -1;
+    for (size_t head = 0; head < queue.size() && head < 400 && end_b < 0; ++head) {
+      int a = queue[head];
+      for (int k = 0; k < 3 && end_b < 0; ++k) {
+        int b = cand[a][k];
+        if (b < 0 || b == mate[a] || seen[b] == t) continue;
+        if (mate[b] < 0) {
+          end_a = a;
+          end_b = b;
+        } else if (seen[mate[b]] != t) {
+          seen[b] = t;
+          seen[mate[b]] = t;
+          from[mate[b]] = a;
+          queue.push_back(mate[b]);
+        }
+      }
+    }
+    if (end_b < 0) continue;
+    // flip the path: end_b - end_a, then each a's old mate pairs with a's predecessor
+    int a = end_a, b = end_b;
+    while (true) {
+      int old = mate[a];
+      mate[a] = b;
+      mate[b] = a;
+      if (a == t) break;
+      b = old;
+      a = from[a];
+    }
+  }
+}
+
+// Pairs the coarse triangles into quads (diagonal edges first, never across a feature edge);
+// returns the quads, then the unpaired triangles; `quads` their count.
+template <class IsFeature>
+std::vector<std::vector<int>> pair_triangles(const Dense& d, const Fields& fl, double s, const std::vector<Tri>& tris,
+                                             const std::vector<int>& dense_of, IsFeature&& coarse_feature, int& quads) {
+  // Candidates: across "diagonal" edges (lattice displacement (±1, ±1)).
+  std::unordered_map<std::uint64_t, int> half;
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+  struct Pair {
+    double score;
+    int f, g, k;
+  };
+  std::vector<Pair> pairs;
+  auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
+    int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
+    int w = -1;
+    for (int j = 0; j < 3; ++j)
+      if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
+    quad = {x, w, y, z};
+  };
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      int x = tris[i][k], y = tris[i][(k + 1) % 3];
+      auto it = half.find(half_key(y, x));
+      if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
+      std::array<int, 4> quad;
+      quad_of(int(i), k, it->second, quad);
+      if (quad[1] == quad[3]) continue;  // two triangles sharing two edges
+      V3 c[4];
+      for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
+      double quality = quad_quality(c);
+      if (quality < 0.2) continue;
+      int dx = dense_of[x], dy = dense_of[y];
+      V3 disp = fl.o[dy] - fl.o[dx];
+      V3 tx = fl.normal[dx].cross(fl.q[dx]);
+      double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
+      bool diagonal = a == 1 && b == 1;
+      pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
+  });
+  // Greedy matching, best pairs first; then augmenting paths (alternating between unused and
+  // used pairs, breadth first, bounded) from each unpaired triangle to another.
+  int nt = static_cast<int>(tris.size());
+  std::vector<int> mate(nt, -1);
+  std::vector<std::array<int, 3>> cand(nt, {-1, -1, -1});  // neighbour across edge k if pairable
+  for (const Pair& pr : pairs) {
+    cand[pr.f][pr.k] = pr.g;
+    for (int j = 0; j < 3; ++j)
+      if (tris[pr.g][j] == tris[pr.f][(pr.k + 1) % 3]) cand[pr.g][j] = pr.f;
+  }
+  for (const Pair& pr : pairs) {
+    if (mate[pr.f] >= 0 || mate[pr.g] >= 0) continue;
+    mate[pr.f] = pr.g;
+    mate[pr.g] = pr.f;
+  }
+  augment_matching(cand, mate);
+  std::vector<std::vector<int>> polygons;
+  for (int f = 0; f < nt; ++f) {
+    int g = mate[f];
+    if (g < f) continue;
+    int k = 0;
+    while (cand[f][k] != g) ++k;
+    std::array<int, 4> quad;
+    quad_of(f, k, g, quad);
+    polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
+  }
+  quads = static_cast<int>(polygons.size());
+  for (int f = 0; f < nt; ++f)
+    if (mate[f] < 0) polygons.push_back({tris[f][0], tris[f][1], tris[f][2]});
+  return polygons;
+}
+
+// One split: every polygon into quads (corner, edge midpoints, centre) on the input surface;
+// feature edges into two feature edges, feature corners tagged.
+template <class IsFeature>
+MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& fl,
+                           const std::vector<std::vector<int>>& polygons, const std::vector<int>& dense_of,
+                           IsFeature&& coarse_feature) {
+  const int nc = static_cast<int>(dense_of.size());
+  Projector proj(d, fl);
+  MeshInput cage;
+  cage.options = mesh.options;
+  for (int v = 0; v < nc; ++v) {
+    const V3& x = d.p[dense_of[v]];
+    cage.positions.push_back({x.x(), x.y(), x.z()});
+  }
+  std::unordered_map<std::uint64_t, int> midpoint;
+  std::vector<std::uint64_t> feature_keys;
+  auto mid = [&](int a, int b) {
+    auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
+    if (!inserted) return it->second;
+    bool feat = coarse_feature(a, b);
+    int da = std::min(dense_of[a], dense_of[b]);
+    V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
+    it->second = static_cast<int>(cage.positions.size());
+    cage.positions.push_back({x.x(), x.y(), x.z()});
+    if (feat) {
+      feature_keys.push_back(edge_key(a, it->second));
+      feature_keys.push_back(edge_key(it->second, b));
+    }
+    return it->second;
+  };
+  for (const auto& poly : polygons) {
+    int m = static_cast<int>(poly.size());
+    V3 centre = V3::Zero();
+    int start = dense_of[poly[0]];
+    for (int v : poly) {
+      centre += d.p[dense_of[v]];
+      start = std::min(start, dense_of[v]);
+    }
+    V3 x = proj.project(centre / m, start, false);
+    int c = static_cast<int>(cage.positions.size());
+    cage.positions.push_back({x.x(), x.y(), x.z()});
+    std::vector<int> mids(m);
+    for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
+    for (int k = 0; k < m; ++k) {
+      cage.face_sizes.push_back(4);
+      cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
+    }
+  }
+  std::sort(feature_keys.begin(), feature_keys.end());
+  for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
+  for (int v = 0; v < nc; ++v)
+    if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
+  return cage;
+}
+
+// Checks the cage (manifold, oriented, each component's Euler characteristic and boundary loops
+// as the input's) and fills the statistics.
+void check_cage(const MeshInput& mesh, QuadRemeshResult& result) {
+  QuadRemeshStats& st = result.stats;
+  PolyMesh pm;
+  try {
+    pm = PolyMesh::build(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
+  } catch (const Error& e) {
+    throw Error(ErrorKind::Fit, std::string("quad remesh: the extracted cage is not a valid mesh: ") + e.what());
+  }
+  Topology ti = topology(mesh.num_vertices(), mesh.face_sizes, mesh.face_indices);
+  Topology tc = topology(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
+  st.euler_input = ti.euler;
+  st.euler_cage = tc.euler;
+  st.boundaries_input = ti.boundaries;
+  st.boundaries_cage = tc.boundaries;
+  st.components_input = ti.components;
+  st.components_cage = tc.components;
+  if (ti.per_component != tc.per_component)
+    throw Error(ErrorKind::Fit, "quad remesh: the cage's topology (Euler characteristic " + std::to_string(tc.euler) +
+                                    ", " + std::to_string(tc.boundaries) + " boundaries, " +
+                                    std::to_string(tc.components) + " components) differs from the mesh's (" +
+                                    std::to_string(ti.euler) + ", " + std::to_string(ti.boundaries) + ", " +
+                                    std::to_string(ti.components) + ")");
+  st.faces = result.cage.num_faces();
+  st.vertices = result.cage.num_vertices();
+  st.feature_edges = static_cast<int>(result.cage.creases.size());
+  st.corners = static_cast<int>(result.cage.corners.size());
+  std::vector<char> is_corner(result.cage.num_vertices(), 0);
+  for (const auto& c : result.cage.corners) is_corner[c.vertex] = 1;
+  for (int v = 0; v < pm.num_vertices(); ++v) {
+    if (pm.is_unused_vertex(v) || is_corner[v]) continue;
+    int regular = pm.is_boundary_vertex(v) ? 3 : 4;
+    if (pm.valence(v) != regular) ++st.extraordinary_vertices;
+  }
+  st.feature_chains_in = result.features.chains + result.features.dropped_short_chains;
+  st.feature_chains_kept = result.features.chains;
+}
+
 }  // namespace
 
 QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
@@ -795,22 +1101,8 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     st.input_vertices = mesh.num_vertices();
     st.input_faces = mesh.num_faces();
 
-    // Dense triangle mesh (fan triangulation), its features.
-    Dense d;
-    for (const auto& x : mesh.positions) d.p.push_back(V3(x[0], x[1], x[2]));
-    d.corner.assign(mesh.num_vertices(), 0);
-    for (int c : result.features.corners) d.corner[c] = 1;
-    for (const auto& e : result.features.edges) d.feature.insert(edge_key(e[0], e[1]));
-    int begin = 0;
     double area = 0;
-    for (int size : mesh.face_sizes) {
-      for (int k = 1; k + 1 < size; ++k) {
-        Tri t{mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]};
-        d.t.push_back(t);
-        area += 0.5 * (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]).norm();
-      }
-      begin += size;
-    }
+    Dense d = make_dense(mesh, result.features, area);
     if (!(area > 0)) throw Error(ErrorKind::Input, "quad remesh: the mesh has zero area");
     double h = options.target_faces > 0 ? std::sqrt(area / options.target_faces) : options.edge_length;
     double s = 2 * h;  // extraction lattice; the final split halves it
@@ -845,225 +1137,16 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
 
-      // Collapse every edge whose ends share a lattice point (link condition, features kept).
       Collapser col(d, fl);
-      // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
-      // along their chains); each grows from its centre, the vertex of highest priority, by
-      // collapsing its neighbours into it ring by ring.
-      auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
-      std::vector<int> cluster(fl.n);
-      std::iota(cluster.begin(), cluster.end(), 0);
-      for (int u = 0; u < fl.n; ++u)
-        for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
-          int v = fl.adj[i];
-          if (v < u || !same_point(u, v)) continue;
-          bool fu = fl.kind[u] != 0, fv = fl.kind[v] != 0;
-          if (fu && fv && !d.feature.count(edge_key(u, v))) continue;
-          cluster[find_root(cluster, u)] = find_root(cluster, v);
-        }
-      std::vector<int> centre_of(fl.n, -1);
-      for (int u = 0; u < fl.n; ++u) {
-        int r = find_root(cluster, u);
-        if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
-      }
-      for (int pass = 0; pass < 200; ++pass) {
-        int changed = 0;
-        for (int u = 0; u < fl.n; ++u) {
-          int c = centre_of[find_root(cluster, u)];
-          int tmp[2];
-          if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
-            continue;
-          if (col.can_collapse(u, c)) {
-            col.collapse(u, c);
-            ++changed;
-          }
-        }
-        check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
-        if (changed == 0) break;
-      }
-      std::vector<int> nu, cands;
-      for (int pass = 0; pass < 200; ++pass) {
-        int changed = 0;
-        for (int u = 0; u < fl.n; ++u) {
-          if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
-          col.neighbours(u, nu);
-          cands.clear();
-          for (int v : nu)
-            if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
-          std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
-          for (int v : cands)
-            if (col.can_collapse(u, v)) {
-              col.collapse(u, v);
-              ++changed;
-              break;
-            }
-        }
-        check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
-        if (changed == 0) break;
-      }
-
-      // The coarse triangle mesh.
-      std::vector<int> coarse_of(fl.n, -1), dense_of;
-      for (int v = 0; v < fl.n; ++v)
-        if (col.alive[v] && !col.vf[v].empty()) {
-          coarse_of[v] = static_cast<int>(dense_of.size());
-          dense_of.push_back(v);
-        }
-      std::vector<Tri> tris;
-      for (size_t i = 0; i < col.f.size(); ++i)
-        if (col.face_alive[i]) tris.push_back({coarse_of[col.f[i][0]], coarse_of[col.f[i][1]], coarse_of[col.f[i][2]]});
-      int nc = static_cast<int>(dense_of.size());
+      collapse_to_lattice(d, fl, s, col, check);
+      std::vector<int> dense_of;
+      const std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);
       auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
-
-      // Pair triangles into quads across "diagonal" edges (lattice displacement (±1, ±1)).
-      std::unordered_map<std::uint64_t, int> half;
-      for (size_t i = 0; i < tris.size(); ++i)
-        for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
-      struct Pair {
-        double score;
-        int f, g, k;
-      };
-      std::vector<Pair> pairs;
-      auto quad_of = [&](int fi, int k, int g, std::array<int, 4>& quad) {
-        int x = tris[fi][k], y = tris[fi][(k + 1) % 3], z = tris[fi][(k + 2) % 3];
-        int w = -1;
-        for (int j = 0; j < 3; ++j)
-          if (tris[g][j] != x && tris[g][j] != y) w = tris[g][j];
-        quad = {x, w, y, z};
-      };
-      for (size_t i = 0; i < tris.size(); ++i)
-        for (int k = 0; k < 3; ++k) {
-          int x = tris[i][k], y = tris[i][(k + 1) % 3];
-          auto it = half.find(half_key(y, x));
-          if (it == half.end() || it->second < int(i) || coarse_feature(x, y)) continue;
-          std::array<int, 4> quad;
-          quad_of(int(i), k, it->second, quad);
-          if (quad[1] == quad[3]) continue;  // two triangles sharing two edges
-          V3 c[4];
-          for (int j = 0; j < 4; ++j) c[j] = d.p[dense_of[quad[j]]];
-          double quality = quad_quality(c);
-          if (quality < 0.2) continue;
-          int dx = dense_of[x], dy = dense_of[y];
-          V3 disp = fl.o[dy] - fl.o[dx];
-          V3 tx = fl.normal[dx].cross(fl.q[dx]);
-          double a = std::abs(std::round(disp.dot(fl.q[dx]) / s)), b = std::abs(std::round(disp.dot(tx) / s));
-          bool diagonal = a == 1 && b == 1;
-          pairs.push_back({(diagonal ? 1.0 : 0.0) + quality, int(i), it->second, k});
-        }
-      std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-        return a.score != b.score ? a.score > b.score : a.f != b.f ? a.f < b.f : a.k < b.k;
-      });
-      // Greedy matching, best pairs first; then augmenting paths (alternating between unused and
-      // used pairs, breadth first, bounded) from each unpaired triangle to another.
-      int nt = static_cast<int>(tris.size());
-      std::vector<int> mate(nt, -1), mate_k(nt, -1);
-      std::vector<std::array<int, 3>> cand(nt, {-1, -1, -1});  // neighbour across edge k if pairable
-      for (const Pair& pr : pairs) {
-        cand[pr.f][pr.k] = pr.g;
-        for (int j = 0; j < 3; ++j)
-          if (tris[pr.g][j] == tris[pr.f][(pr.k + 1) % 3]) cand[pr.g][j] = pr.f;
-      }
-      for (const Pair& pr : pairs) {
-        if (mate[pr.f] >= 0 || mate[pr.g] >= 0) continue;
-        mate[pr.f] = pr.g;
-        mate[pr.g] = pr.f;
-      }
-      std::vector<int> from(nt, -1), seen(nt, -1);
-      for (int t = 0; t < nt; ++t) {
-        if (mate[t] >= 0) continue;
-        std::vector<int> queue{t};
-        seen[t] = t;
-        int end_a = -1, end_b = -1;
-        for (size_t head = 0; head < queue.size() && head < 400 && end_b < 0; ++head) {
-          int a = queue[head];
-          for (int k = 0; k < 3 && end_b < 0; ++k) {
-            int b = cand[a][k];
-            if (b < 0 || b == mate[a] || seen[b] == t) continue;
-            if (mate[b] < 0) {
-              end_a = a;
-              end_b = b;
-            } else if (seen[mate[b]] != t) {
-              seen[b] = t;
-              seen[mate[b]] = t;
-              from[mate[b]] = a;
-              queue.push_back(mate[b]);
-            }
-          }
-        }
-        if (end_b < 0) continue;
-        // flip the path: end_b - end_a, then each a's old mate pairs with a's predecessor
-        int a = end_a, b = end_b;
-        while (true) {
-          int old = mate[a];
-          mate[a] = b;
-          mate[b] = a;
-          if (a == t) break;
-          b = old;
-          a = from[a];
-        }
-      }
-      std::vector<std::vector<int>> polygons;
-      for (int f = 0; f < nt; ++f) {
-        int g = mate[f];
-        if (g < f) continue;
-        int k = 0;
-        while (cand[f][k] != g) ++k;
-        std::array<int, 4> quad;
-        quad_of(f, k, g, quad);
-        polygons.push_back({quad[0], quad[1], quad[2], quad[3]});
-      }
-      st.coarse_quads = static_cast<int>(polygons.size());
-      for (int f = 0; f < nt; ++f)
-        if (mate[f] < 0) polygons.push_back({tris[f][0], tris[f][1], tris[f][2]});
+      const std::vector<std::vector<int>> polygons =
+          pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
       st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
       check(0.92);
-
-      // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface.
-      Projector proj(d, fl);
-      MeshInput& cage = result.cage;
-      cage.options = mesh.options;
-      for (int v = 0; v < nc; ++v) {
-        const V3& x = d.p[dense_of[v]];
-        cage.positions.push_back({x.x(), x.y(), x.z()});
-      }
-      std::unordered_map<std::uint64_t, int> midpoint;
-      std::vector<std::uint64_t> feature_keys;
-      auto mid = [&](int a, int b) {
-        auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
-        if (!inserted) return it->second;
-        bool feat = coarse_feature(a, b);
-        int da = std::min(dense_of[a], dense_of[b]);
-        V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
-        it->second = static_cast<int>(cage.positions.size());
-        cage.positions.push_back({x.x(), x.y(), x.z()});
-        if (feat) {
-          feature_keys.push_back(edge_key(a, it->second));
-          feature_keys.push_back(edge_key(it->second, b));
-        }
-        return it->second;
-      };
-      for (const auto& poly : polygons) {
-        int m = static_cast<int>(poly.size());
-        V3 centre = V3::Zero();
-        int start = dense_of[poly[0]];
-        for (int v : poly) {
-          centre += d.p[dense_of[v]];
-          start = std::min(start, dense_of[v]);
-        }
-        V3 x = proj.project(centre / m, start, false);
-        int c = static_cast<int>(cage.positions.size());
-        cage.positions.push_back({x.x(), x.y(), x.z()});
-        std::vector<int> mids(m);
-        for (int k = 0; k < m; ++k) mids[k] = mid(poly[k], poly[(k + 1) % m]);
-        for (int k = 0; k < m; ++k) {
-          cage.face_sizes.push_back(4);
-          cage.face_indices.insert(cage.face_indices.end(), {poly[k], mids[k], c, mids[(k + m - 1) % m]});
-        }
-      }
-      std::sort(feature_keys.begin(), feature_keys.end());
-      for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
-      for (int v = 0; v < nc; ++v)
-        if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
+      result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
       double ratio = result.cage.num_faces() * h * h / area;
       st.attempts = attempt + 1;
@@ -1074,40 +1157,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       break;
     }
 
-    // Checks and statistics: the cage must be a manifold with the input's topology.
-    PolyMesh pm;
-    try {
-      pm = PolyMesh::build(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
-    } catch (const Error& e) {
-      throw Error(ErrorKind::Fit, std::string("quad remesh: the extracted cage is not a valid mesh: ") + e.what());
-    }
-    Topology ti = topology(mesh.num_vertices(), mesh.face_sizes, mesh.face_indices);
-    Topology tc = topology(result.cage.num_vertices(), result.cage.face_sizes, result.cage.face_indices);
-    st.euler_input = ti.euler;
-    st.euler_cage = tc.euler;
-    st.boundaries_input = ti.boundaries;
-    st.boundaries_cage = tc.boundaries;
-    st.components_input = ti.components;
-    st.components_cage = tc.components;
-    if (ti.per_component != tc.per_component)
-      throw Error(ErrorKind::Fit, "quad remesh: the cage's topology (Euler characteristic " + std::to_string(tc.euler) +
-                                      ", " + std::to_string(tc.boundaries) + " boundaries, " +
-                                      std::to_string(tc.components) + " components) differs from the mesh's (" +
-                                      std::to_string(ti.euler) + ", " + std::to_string(ti.boundaries) + ", " +
-                                      std::to_string(ti.components) + ")");
-    st.faces = result.cage.num_faces();
-    st.vertices = result.cage.num_vertices();
-    st.feature_edges = static_cast<int>(result.cage.creases.size());
-    st.corners = static_cast<int>(result.cage.corners.size());
-    std::vector<char> is_corner(result.cage.num_vertices(), 0);
-    for (const auto& c : result.cage.corners) is_corner[c.vertex] = 1;
-    for (int v = 0; v < pm.num_vertices(); ++v) {
-      if (pm.is_unused_vertex(v) || is_corner[v]) continue;
-      int regular = pm.is_boundary_vertex(v) ? 3 : 4;
-      if (pm.valence(v) != regular) ++st.extraordinary_vertices;
-    }
-    st.feature_chains_in = result.features.chains + result.features.dropped_short_chains;
-    st.feature_chains_kept = result.features.chains;
+    check_cage(mesh, result);
     check(1);
   } catch (const CancelSignal&) {
     QuadRemeshResult cancelled;
