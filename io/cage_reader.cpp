@@ -37,14 +37,28 @@ std::string head(const std::string& path) {
 
 }  // namespace
 
-LoadedCage read_cage(const std::string& path, const MeshReadOptions& options, const UsdReadOptions& usd) {
+CageFormat cage_format(const std::string& path) {
   const std::string ext = lowercase_extension(path);
-  if (ext == ".obj") return read_obj(path);
-  if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
-  if (ext == ".stl") return read_stl(path, options);
-  if (ext == ".ply") return read_ply(path, options);
-  if (ext == ".off") return read_off(path, options);
-  if (ext == ".usd" || ext == ".usda" || ext == ".usdc" || ext == ".usdz") return read_usd(path, usd);
+  if (ext == ".obj") return CageFormat::Obj;
+  if (ext == ".glb" || ext == ".gltf") return CageFormat::Gltf;
+  if (ext == ".stl") return CageFormat::Stl;
+  if (ext == ".ply") return CageFormat::Ply;
+  if (ext == ".off") return CageFormat::Off;
+  if (ext == ".usd" || ext == ".usda" || ext == ".usdc" || ext == ".usdz") return CageFormat::Usd;
+  return CageFormat::Other;
+}
+
+LoadedCage read_cage(const std::string& path, const MeshReadOptions& options, const UsdReadOptions& usd) {
+  switch (cage_format(path)) {
+    case CageFormat::Obj: return read_obj(path);
+    case CageFormat::Gltf: return read_gltf(path);
+    case CageFormat::Stl: return read_stl(path, options);
+    case CageFormat::Ply: return read_ply(path, options);
+    case CageFormat::Off: return read_off(path, options);
+    case CageFormat::Usd: return read_usd(path, usd);
+    case CageFormat::Other: break;
+  }
+  const std::string ext = lowercase_extension(path);
   if (foreign_extension(ext))
     throw InputError(path, 0, "not a format subd2nurbs reads: '" + printable(ext) +
                                   "' files are not read (OBJ, glTF/GLB, STL, PLY, OFF and USD are; export the cage to one of those)");

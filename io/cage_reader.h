@@ -18,6 +18,14 @@
 
 namespace subd2nurbs {
 
+/// The reader a path's extension (case-insensitive) selects; Other: by content (USD, else OBJ)
+/// or refused (read_cage).
+enum class CageFormat { Obj, Gltf, Stl, Ply, Off, Usd, Other };
+CageFormat cage_format(const std::string& path);
+
+/// STL, PLY or OFF: the mesh formats MeshReadOptions apply to (welded, repaired, quads recovered).
+inline bool is_mesh_format(CageFormat f) { return f == CageFormat::Stl || f == CageFormat::Ply || f == CageFormat::Off; }
+
 /// Reads a cage by extension (see the file comment). `options` apply to STL, PLY and OFF,
 /// `usd` to USD files.
 /// \throw InputError naming the file (and line or element) if it cannot be read.

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
+#include <unordered_map>
 #include <utility>
 
 #include "converter/pipeline/settings_error.h"
@@ -40,7 +42,41 @@ bool all_triangles(const MeshInput& m) {
   return std::all_of(m.face_sizes.begin(), m.face_sizes.end(), [](int n) { return n == 3; });
 }
 
-bool mesh_format(const std::string& ext) { return ext == ".stl" || ext == ".ply" || ext == ".off"; }
+/// The road by rules 2 .. 5 (the header's comment); `recovery`: the quad recovery of the
+/// file's triangles when already made (else made here when needed).
+InputRoute route(const LoadedCage& read, const std::string& path, InputKind requested,
+                 const QuadRecoveryResult* recovery) {
+  if (requested == InputKind::Mesh) return {true, "the input was declared a mesh"};
+  if (requested == InputKind::Cage) return {false, "the input was declared a cage"};
+  const MeshInput& in = read.input;
+  const bool file_triangles = read.recovery.applied || all_triangles(in);
+  if (!file_triangles) {
+    const long others = std::count_if(in.face_sizes.begin(), in.face_sizes.end(), [](int n) { return n != 3; });
+    return {false, "it has " + std::to_string(others) + " faces that are not triangles: a cage"};
+  }
+  if (!in.creases.empty() || !in.corners.empty() || !in.holes.empty())
+    return {false, "it has crease, corner or hole tags: a cage"};
+  int triangles = 0, unpaired = 0;
+  if (read.recovery.applied) {
+    triangles = read.recovery.source_triangles;
+    unpaired = read.recovery.triangles_kept - read.recovery.fan_triangles;
+  } else {
+    QuadRecoveryResult made;
+    const QuadRecoveryResult& r = recovery ? *recovery : (made = recover_quads(in));
+    triangles = r.input_triangles;
+    unpaired = r.triangles_kept - r.fan_triangles;
+  }
+  if (unpaired == 0)
+    return {false, "its " + std::to_string(triangles) + " triangles pair back into quads: a triangulated cage"};
+  const std::string why = "its " + std::to_string(triangles) + " triangles do not pair back into quads (" +
+                          std::to_string(unpaired) + " stay triangles)";
+  const CageFormat format = cage_format(path);
+  const bool mesh_file = is_mesh_format(format) || format == CageFormat::Gltf;
+  if (!mesh_file && triangles < kMinMeshTriangles)
+    return {false, why + ", but fewer than " + std::to_string(kMinMeshTriangles) +
+                       " triangles outside an STL, PLY, OFF or glTF file are taken as a triangle cage"};
+  return {true, why + ": a mesh to reproduce"};
+}
 
 /// The file's faces as triangles (polygons fan-triangulated), without tags.
 void triangulate(MeshInput& m) {
@@ -87,6 +123,82 @@ double segment_distance2(const Point3& p, const Point3& a, const Point3& b) {
   return dot(d, d);
 }
 
+/// The mesh's feature edges in a uniform grid (hashed cells of about two mean edge lengths), for
+/// the nearest edge to a point among those that pass a filter: the cells are searched ring by
+/// ring around the point's cell until no closer edge can remain.
+class FeatureEdgeGrid {
+ public:
+  explicit FeatureEdgeGrid(const std::vector<MeshFeatureEdge>& edges) : edges_(edges) {
+    if (edges.empty()) return;
+    double total = 0;
+    for (int k = 0; k < 3; ++k) lo_[k] = INFINITY, hi_[k] = -INFINITY;
+    for (const MeshFeatureEdge& e : edges) {
+      total += norm(sub(e.b, e.a));
+      for (int k = 0; k < 3; ++k)
+        lo_[k] = std::min({lo_[k], e.a[k], e.b[k]}), hi_[k] = std::max({hi_[k], e.a[k], e.b[k]});
+    }
+    const double extent = std::max({hi_[0] - lo_[0], hi_[1] - lo_[1], hi_[2] - lo_[2]});
+    cell_ = std::max(2 * total / static_cast<double>(edges.size()), extent / 256);
+    if (!(cell_ > 0)) cell_ = 1;
+    for (int i = 0; i < static_cast<int>(edges.size()); ++i) {
+      const Cell a = cell_of(edges[i].a), b = cell_of(edges[i].b);
+      for (int x = std::min(a[0], b[0]); x <= std::max(a[0], b[0]); ++x)
+        for (int y = std::min(a[1], b[1]); y <= std::max(a[1], b[1]); ++y)
+          for (int z = std::min(a[2], b[2]); z <= std::max(a[2], b[2]); ++z) cells_[key({x, y, z})].push_back(i);
+    }
+    const Cell top = cell_of(hi_);
+    max_ring_ = std::max({top[0], top[1], top[2]}) + 1;
+  }
+
+  /// The index of the nearest edge to p that `accept` takes (-1 if none), its squared distance in d2.
+  template <class Accept>
+  int nearest(const Point3& p, Accept&& accept, double& d2) const {
+    d2 = INFINITY;
+    if (edges_.empty()) return -1;
+    Cell c = cell_of(p);
+    // p outside the grid's box: start the rings at the nearest cell inside it
+    for (int k = 0; k < 3; ++k) c[k] = std::clamp(c[k], 0, max_ring_);
+    int best = -1;
+    for (int ring = 0; ring <= max_ring_ + 1; ++ring) {
+      for (int x = c[0] - ring; x <= c[0] + ring; ++x)
+        for (int y = c[1] - ring; y <= c[1] + ring; ++y)
+          for (int z = c[2] - ring; z <= c[2] + ring; ++z) {
+            if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != ring) continue;
+            const auto it = cells_.find(key({x, y, z}));
+            if (it == cells_.end()) continue;
+            for (int i : it->second) {
+              const MeshFeatureEdge& e = edges_[static_cast<std::size_t>(i)];
+              if (!accept(e)) continue;
+              const double d = segment_distance2(p, e.a, e.b);
+              if (d < d2 || (d == d2 && i < best)) d2 = d, best = i;
+            }
+          }
+      // every point of a cell at ring r + 1 is at least r cells away from p's projection onto the
+      // grid's box (in the start cell), hence from p (the projection onto a box shortens distances)
+      const double reach = ring * cell_;
+      if (best >= 0 && d2 <= reach * reach) break;
+    }
+    return best;
+  }
+
+ private:
+  using Cell = std::array<int, 3>;
+  Cell cell_of(const Point3& p) const {
+    Cell c;
+    for (int k = 0; k < 3; ++k) c[k] = static_cast<int>(std::floor(std::clamp(p[k] - lo_[k], 0.0, hi_[k] - lo_[k]) / cell_));
+    return c;
+  }
+  static std::uint64_t key(const Cell& c) {
+    return (std::uint64_t(std::uint32_t(c[0]) & 0x1fffff) << 42) | (std::uint64_t(std::uint32_t(c[1]) & 0x1fffff) << 21) |
+           (std::uint64_t(std::uint32_t(c[2]) & 0x1fffff));
+  }
+  const std::vector<MeshFeatureEdge>& edges_;
+  Point3 lo_{}, hi_{};
+  double cell_ = 1;
+  int max_ring_ = 0;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
+
 /// (u, v) of the point at fraction t along edge `corner` (0..3) of a quad's ptex face.
 std::pair<double, double> quad_edge_uv(int corner, double t) {
   switch (corner) {
@@ -106,6 +218,7 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
   if (mesh_edges.empty()) return s;
   const PolyMesh& m = cage.mesh;
   const LimitEvaluator limit(cage, positions);
+  const FeatureEdgeGrid grid(mesh_edges);
   double sum = 0;
   for (int e = 0; e < m.num_edges(); ++e) {
     if (m.is_boundary_edge(e) || cage.edge_sharpness[e] < kInfiniteSharpness) continue;
@@ -126,14 +239,17 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
       // The closest mesh feature edge running along the curve (within 30 degrees of its
       // direction: near a corner the closest edge may belong to another curve).
       const Point3 along = cross(a.normal, b.normal);
-      double best = INFINITY, mesh_angle = 0;
-      for (const MeshFeatureEdge& me : mesh_edges) {
-        const Point3 dir = sub(me.b, me.a);
-        if (norm(along) > 0.1 && norm(dir) > 0 && std::abs(dot(along, dir)) < 0.866 * norm(along) * norm(dir)) continue;
-        const double d = segment_distance2(a.p, me.a, me.b);
-        if (d < best) best = d, mesh_angle = me.angle;
-      }
-      if (!std::isfinite(best)) continue;
+      double best = INFINITY;
+      const int nearest = grid.nearest(
+          a.p,
+          [&](const MeshFeatureEdge& me) {
+            const Point3 dir = sub(me.b, me.a);
+            return !(norm(along) > 0.1 && norm(dir) > 0 &&
+                     std::abs(dot(along, dir)) < 0.866 * norm(along) * norm(dir));
+          },
+          best);
+      if (nearest < 0) continue;
+      const double mesh_angle = mesh_edges[static_cast<std::size_t>(nearest)].angle;
       const double diff = std::abs(surface - mesh_angle);
       sum += diff;
       ++s.samples;
@@ -203,51 +319,41 @@ int automatic_target_faces(const MeshInput& mesh) {
 }
 
 InputRoute route_input(const LoadedCage& read, const std::string& path, InputKind requested) {
-  if (requested == InputKind::Mesh) return {true, "the input was declared a mesh"};
-  if (requested == InputKind::Cage) return {false, "the input was declared a cage"};
-  const MeshInput& in = read.input;
-  const bool file_triangles = read.recovery.applied || all_triangles(in);
-  if (!file_triangles) {
-    const long others = std::count_if(in.face_sizes.begin(), in.face_sizes.end(), [](int n) { return n != 3; });
-    return {false, "it has " + std::to_string(others) + " faces that are not triangles: a cage"};
-  }
-  if (!in.creases.empty() || !in.corners.empty() || !in.holes.empty())
-    return {false, "it has crease, corner or hole tags: a cage"};
-  const std::string ext = lowercase_extension(path);
-  int triangles = 0, unpaired = 0;
-  if (read.recovery.applied) {
-    triangles = read.recovery.source_triangles;
-    unpaired = read.recovery.triangles_kept - read.recovery.fan_triangles;
-  } else {
-    const QuadRecoveryResult r = recover_quads(in);
-    triangles = r.input_triangles;
-    unpaired = r.triangles_kept - r.fan_triangles;
-  }
-  if (unpaired == 0)
-    return {false, "its " + std::to_string(triangles) + " triangles pair back into quads: a triangulated cage"};
-  const std::string why = "its " + std::to_string(triangles) + " triangles do not pair back into quads (" +
-                          std::to_string(unpaired) + " stay triangles)";
-  const bool mesh_file = mesh_format(ext) || ext == ".gltf" || ext == ".glb";
-  if (!mesh_file && triangles < kMinMeshTriangles)
-    return {false, why + ", but fewer than " + std::to_string(kMinMeshTriangles) +
-                       " triangles outside an STL, PLY, OFF or glTF file are taken as a triangle cage"};
-  return {true, why + ": a mesh to reproduce"};
+  return route(read, path, requested, nullptr);
 }
 
 LoadedSource load_source(const std::string& path, InputKind requested, const UsdReadOptions& usd) {
   LoadedSource s;
-  LoadedCage read = read_cage(path, {}, usd);
-  s.route = route_input(read, path, requested);
-  if (!s.route.mesh) {
-    s.cage = load_input(std::move(read));
-    return s;
-  }
-  if (mesh_format(lowercase_extension(path))) {
+  if (!is_mesh_format(cage_format(path))) {
+    LoadedCage read = read_cage(path, {}, usd);
+    s.route = route_input(read, path, requested);
+    if (s.route.mesh) {
+      s.mesh = std::move(read);  // OBJ as read; glTF: its recovered quads triangulated again
+    } else {
+      s.cage = load_input(std::move(read));
+      return s;
+    }
+  } else {
+    // STL, PLY, OFF: read once without quad recovery (the mesh road wants the triangles); the
+    // recovery is made here, and applied only on the cage road, as read_cage would have.
     MeshReadOptions raw;
     raw.recover_quads = false;
-    s.mesh = read_cage(path, raw);
-  } else {
-    s.mesh = std::move(read);  // OBJ as read; glTF: its recovered quads triangulated again
+    LoadedCage read = read_cage(path, raw, usd);
+    std::optional<QuadRecoveryResult> recovery;
+    if (requested != InputKind::Mesh && read.repair.triangles_only) recovery = recover_quads(read.input);
+    s.route = route(read, path, requested, recovery ? &*recovery : nullptr);
+    if (!s.route.mesh) {
+      if (recovery) {
+        std::vector<int> face_line;
+        for (const std::vector<int>& sources : recovery->sources)
+          face_line.push_back(read.face_line[static_cast<std::size_t>(sources[0])]);
+        read.face_line = std::move(face_line);
+        take_recovered_quads(read, std::move(*recovery));
+      }
+      s.cage = load_input(std::move(read));
+      return s;
+    }
+    s.mesh = std::move(read);
   }
   for (const Diagnostic& d : s.mesh.diagnostics) s.warnings.push_back(format_diagnostic(s.mesh, d));
   return s;
