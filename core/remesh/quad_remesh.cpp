@@ -907,6 +907,92 @@ void augment_matching(const std::vector<std::array<int, 3>>& cand, std::vector<i
   }
 }
 
+// Edge flips on the coarse triangles towards regular valences (6 inside, 4 on the boundary;
+// corners free) and lattice edges: an interior edge that is no feature edge is flipped when the
+// new edge is a lattice edge (displacement (±1, 0), (0, ±1) or (±1, ±1)) where the old one was
+// not, without raising the summed valence excess of the four vertices, or when the excess drops
+// and the new edge is no worse on the lattice; the new edge must not be an edge yet and both new
+// triangles must face the way the old ones did (within 60 degrees). Flips keep the topology (same vertices,
+// edges, faces) and every feature edge; fewer irregular coarse vertices mean fewer extraordinary
+// vertices in the cage. Returns the number of flips.
+template <class IsFeature>
+int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
+                            IsFeature&& coarse_feature) {
+  const int nc = static_cast<int>(dense_of.size());
+  std::unordered_map<std::uint64_t, int> half;  // directed edge -> triangle
+  std::unordered_map<std::uint64_t, int> count;  // undirected edge -> faces
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+      count[edge_key(tris[i][k], tris[i][(k + 1) % 3])] += 1;
+    }
+  std::vector<int> valence(nc, 0);
+  std::vector<char> boundary(nc, 0);
+  for (const auto& [key, n] : count) {
+    int a = int(key >> 32), b = int(key & 0xffffffffu);
+    valence[a] += 1;
+    valence[b] += 1;
+    if (n == 1) boundary[a] = boundary[b] = 1;
+  }
+  auto excess = [&](int v, int change) {
+    if (fl.kind[dense_of[v]] == 2) return 0;
+    return std::abs(valence[v] + change - (boundary[v] ? 4 : 6));
+  };
+  auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
+  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
+  // 1 when the edge is not a lattice edge (displacement other than (±1, 0), (0, ±1), (±1, ±1))
+  auto off_lattice = [&](int a, int b) {
+    const int da = dense_of[a], db = dense_of[b];
+    const V3 disp = fl.o[db] - fl.o[da];
+    const V3 t = fl.normal[da].cross(fl.q[da]);
+    const double x = std::abs(std::round(disp.dot(fl.q[da]) / fl.s)), y = std::abs(std::round(disp.dot(t) / fl.s));
+    return x <= 1 && y <= 1 && x + y > 0 ? 0 : 1;
+  };
+  int flips = 0;
+  for (int pass = 0; pass < 10; ++pass) {
+    int changed = 0;
+    for (size_t i = 0; i < tris.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
+        if (a > b) continue;  // each interior edge once (from its triangle with a < b)
+        auto it = half.find(half_key(b, a));
+        if (it == half.end() || coarse_feature(a, b)) continue;
+        const int j = it->second;
+        int dd = -1;
+        for (int m = 0; m < 3; ++m)
+          if (tris[j][m] != a && tris[j][m] != b) dd = tris[j][m];
+        if (dd < 0 || dd == c || count.count(edge_key(c, dd))) continue;
+        const int before = excess(a, 0) + excess(b, 0) + excess(c, 0) + excess(dd, 0);
+        const int after = excess(a, -1) + excess(b, -1) + excess(c, 1) + excess(dd, 1);
+        const int lattice_old = off_lattice(a, b), lattice_new = off_lattice(c, dd);
+        const bool better = (lattice_new < lattice_old && after <= before) || (lattice_new <= lattice_old && after < before);
+        if (!better) continue;
+        const V3 old_n = normal(a, b, c).normalized() + normal(b, a, dd).normalized();
+        const V3 n1 = normal(a, dd, c), n2 = normal(dd, b, c);
+        const double lo = old_n.norm();
+        if (!(lo > 0) || n1.dot(old_n) <= 0.5 * n1.norm() * lo || n2.dot(old_n) <= 0.5 * n2.norm() * lo) continue;
+        // flip: (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c)
+        for (int t : {int(i), j})
+          for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
+        tris[i] = {a, dd, c};
+        tris[j] = {dd, b, c};
+        for (int t : {int(i), j})
+          for (int m = 0; m < 3; ++m) half[half_key(tris[t][m], tris[t][(m + 1) % 3])] = t;
+        count.erase(edge_key(a, b));
+        count[edge_key(c, dd)] = 2;
+        valence[a] -= 1;
+        valence[b] -= 1;
+        valence[c] += 1;
+        valence[dd] += 1;
+        ++changed;
+        break;  // triangle i changed: its other edges next pass
+      }
+    flips += changed;
+    if (changed == 0) break;
+  }
+  return flips;
+}
+
 // Pairs the coarse triangles into quads (diagonal edges first, never across a feature edge);
 // returns the quads, then the unpaired triangles; `quads` their count.
 template <class IsFeature>
@@ -1140,8 +1226,9 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       Collapser col(d, fl);
       collapse_to_lattice(d, fl, s, col, check);
       std::vector<int> dense_of;
-      const std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);
+      std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);
       auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
+      if (options.regularize_valence) st.flips = flip_to_regular_valence(d, fl, tris, dense_of, coarse_feature);
       const std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
       st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;

@@ -19,6 +19,7 @@ struct QuadRemeshOptions {
   FeatureOptions features;
   double curvature_alignment = 1.0;  ///< weight of principal-curvature alignment of the cross field (0 = off)
   int smoothing_iterations = 0;      ///< 0 = automatic
+  bool regularize_valence = true;    ///< edge flips on the coarse triangles before pairing (fewer extraordinary vertices)
 };
 
 struct QuadRemeshStats {
@@ -32,6 +33,7 @@ struct QuadRemeshStats {
   int dense_vertices = 0;      ///< vertices of the input after long edges were split (the fields' domain)
   int coarse_triangles = 0;    ///< triangles left unpaired after the extraction (each becomes 3 quads)
   int coarse_quads = 0;        ///< quads paired by the extraction (each becomes 4 quads)
+  int flips = 0;               ///< coarse edges flipped towards regular valences (regularize_valence)
   int attempts = 0;            ///< position field + extraction runs (2: the first gave > 1.3x the faces asked for)
 };
 

@@ -247,6 +247,31 @@ TEST(QuadRemesh, DrilledBoxKeepsGenusEdgesAndCircles) {
   EXPECT_EQ(corners.size(), 8u);
 }
 
+// The coarse edge flips (regularize_valence) keep the topology and the features, and do not add
+// irregular vertices: on the torus (Euler characteristic 0: a cage without extraordinary
+// vertices exists) and on the drilled box (8 corners, 14 feature curves), with flips the cage has
+// at most as many extraordinary vertices as without, and the flips ran.
+TEST(QuadRemesh, ValenceFlipsKeepTopologyAndLowerIrregularity) {
+  for (int shape = 0; shape < 2; ++shape) {
+    MeshInput m = shape == 0 ? test::torus(2, 0.7, 90, 36) : test::drilled_box(0.4, 64, 8, 16);
+    QuadRemeshOptions o;
+    o.target_faces = 400;
+    o.regularize_valence = false;
+    QuadRemeshResult off = quad_remesh(m, o);
+    o.regularize_valence = true;
+    QuadRemeshResult on = quad_remesh(m, o);
+    check_cage(m, off, 400);
+    check_cage(m, on, 400);
+    EXPECT_EQ(off.stats.flips, 0);
+    EXPECT_GT(on.stats.flips, 0);
+    EXPECT_LE(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices) << "shape " << shape;
+    EXPECT_EQ(on.cage.corners.size(), off.cage.corners.size());
+    std::printf("  shape %d: %d flips, extraordinary vertices %d -> %d, unpaired triangles %d -> %d\n", shape,
+                on.stats.flips, off.stats.extraordinary_vertices, on.stats.extraordinary_vertices,
+                off.stats.coarse_triangles, on.stats.coarse_triangles);
+  }
+}
+
 TEST(QuadRemesh, Deterministic) {
   MeshInput m = test::drilled_box(0.4, 32, 6, 8);
   QuadRemeshResult a = remesh(m, 250), b = remesh(m, 250);
