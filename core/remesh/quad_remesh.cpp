@@ -912,7 +912,8 @@ void augment_matching(const std::vector<std::array<int, 3>>& cand, std::vector<i
 // new edge is a lattice edge (displacement (±1, 0), (0, ±1) or (±1, ±1)) where the old one was
 // not, without raising the summed valence excess of the four vertices, or when the excess drops
 // and the new edge is no worse on the lattice; the new edge must not be an edge yet and both new
-// triangles must face the way the old ones did (within 60 degrees). Flips keep the topology (same vertices,
+// triangles must face the way the old ones did (within 60 degrees) and their smallest angle must
+// not be smaller than the old pair's. Flips keep the topology (same vertices,
 // edges, faces) and every feature edge; fewer irregular coarse vertices mean fewer extraordinary
 // vertices in the cage. Returns the number of flips.
 template <class IsFeature>
@@ -948,6 +949,11 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
     const double x = std::abs(std::round(disp.dot(fl.q[da]) / fl.s)), y = std::abs(std::round(disp.dot(t) / fl.s));
     return x <= 1 && y <= 1 && x + y > 0 ? 0 : 1;
   };
+  auto min_angle = [&](int a, int b, int c) {
+    const V3 &x = pos(a), &y = pos(b), &z = pos(c);
+    auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
+    return std::min({angle(y - x, z - x), angle(z - y, x - y), angle(x - z, y - z)});
+  };
   int flips = 0;
   for (int pass = 0; pass < 10; ++pass) {
     int changed = 0;
@@ -971,6 +977,8 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
         const V3 n1 = normal(a, dd, c), n2 = normal(dd, b, c);
         const double lo = old_n.norm();
         if (!(lo > 0) || n1.dot(old_n) <= 0.5 * n1.norm() * lo || n2.dot(old_n) <= 0.5 * n2.norm() * lo) continue;
+        if (std::min(min_angle(a, dd, c), min_angle(dd, b, c)) < std::min(min_angle(a, b, c), min_angle(b, a, dd)))
+          continue;  // the pair's smallest angle must not shrink (the cage's quads stay even)
         // flip: (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c)
         for (int t : {int(i), j})
           for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
