@@ -62,7 +62,8 @@ START_FAILURE = "start-failure"  # the converter could not be started
 
 #: The columns of summary.csv, in order.
 CSV_COLUMNS = ("input", "output", "status", "exit_code", "message", "faces", "poles", "deviation",
-               "deviation_relative", "g1_angle_deg", "time_s", "peak_memory_mb", "input_hash", "settings_hash")
+               "deviation_relative", "g1_angle_deg", "time_s", "cpu_s", "peak_memory_mb", "input_hash",
+               "settings_hash")
 
 SUMMARY_FORMAT = "subd2nurbs-batch-summary"
 #: On a Dask scheduler's cluster, inputs up to this size are sent as bytes (send_inputs "auto").
@@ -341,6 +342,18 @@ def terminate_running():
         threading.Thread(target=_kill_group, args=(proc,), daemon=True).start()
 
 
+def stop_run(run_id):
+    """Stops the converters of the batch `run_id` that this process (a Dask worker) is running,
+    and no other's: the interrupted client's cancelled tasks do not keep the workers busy.
+    Returns how many."""
+    with _running_lock:
+        procs = [p for p in _running if getattr(p, "subd2nurbs_run", None) == run_id]
+    for proc in procs:
+        proc.subd2nurbs_interrupted = True
+        threading.Thread(target=_kill_group, args=(proc,), daemon=True).start()
+    return len(procs)
+
+
 def _message(stderr_text):
     lines = [l.strip() for l in stderr_text.splitlines() if l.strip()]
     errors = [l for l in lines if "error" in l.lower() or "out of memory" in l.lower()]
@@ -382,7 +395,8 @@ def _json_quoted(text):
 def convert_one(task, payload=None):
     """Converts one file with the command line in a process of its own and returns its summary
     row. `task`: cli, input, output and report (absolute paths), args (the settings' arguments),
-    timeout (s, 0: none), memory (bytes of address space, 0: none). Pure and idempotent (the
+    timeout (s, 0: none), memory (bytes of address space, 0: none), env (variables for the
+    converter: the client's SOURCE_DATE_EPOCH). Pure and idempotent (the
     outputs are written atomically), so a backend may run it again elsewhere.
 
     With `payload` (the bytes of :func:`pack_input`: the input and the files it refers to, for
@@ -466,8 +480,8 @@ def _convert_sent(task, payload):
         if os.path.exists(local_report):
             with open(local_report, "rb") as f:
                 report = f.read()
-            for here, there in renames:  # the report's "input" and "output": the client's paths
-                report = report.replace(_json_quoted(here), _json_quoted(there))
+            for here, there in renames:  # "input", "output", warnings: the client's paths
+                report = report.replace(_json_quoted(here)[1:-1], _json_quoted(there)[1:-1])
             files["report"] = report
         row["files"] = files
         return row
@@ -477,7 +491,7 @@ def _convert_sent(task, payload):
 
 def _empty_row():
     return {"status": None, "exit_code": None, "message": "", "faces": None, "poles": None, "deviation": None,
-            "deviation_relative": None, "g1_angle_deg": None, "time_s": None, "peak_memory_mb": None}
+            "deviation_relative": None, "g1_angle_deg": None, "time_s": None, "cpu_s": None, "peak_memory_mb": None}
 
 
 def _run_converter(task, input_path, output, report_path, renames=()):
@@ -493,12 +507,14 @@ def _run_converter(task, input_path, output, report_path, renames=()):
     start = time.monotonic()
     try:
         proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
-                                preexec_fn=_limits(task.get("memory") or 0), start_new_session=True)
+                                preexec_fn=_limits(task.get("memory") or 0), start_new_session=True,
+                                env=dict(os.environ, **task["env"]) if task.get("env") else None)
     except OSError as e:
         err.close()
         row.update(status=START_FAILURE, message="cannot start %s: %s" % (task["cli"], e.strerror or e))
         return row
     proc.subd2nurbs_interrupted = False
+    proc.subd2nurbs_run = task.get("run")
     with _running_lock:
         _running.add(proc)
     waited = []
@@ -521,6 +537,7 @@ def _run_converter(task, input_path, output, report_path, renames=()):
     for here, there in renames:
         stderr_text = stderr_text.replace(here, there)
     row["time_s"] = round(elapsed, 3)
+    row["cpu_s"] = round(usage.ru_utime + usage.ru_stime, 3)  # the converter's threads, user + system
     row["peak_memory_mb"] = round(usage.ru_maxrss / 1024.0, 1)  # KiB on Linux
     code = proc.returncode
     if proc.subd2nurbs_interrupted:
@@ -550,7 +567,10 @@ def _run_converter(task, input_path, output, report_path, renames=()):
             if not os.path.exists(output):
                 row.update(status=NO_OUTPUT, exit_code=0, message="exit code 0 but no output file")
             else:
-                row.update(status="ok", exit_code=0, message="; ".join(report.get("warnings") or [])[:MESSAGE_LIMIT])
+                warnings = "; ".join(report.get("warnings") or [])
+                for here, there in renames:
+                    warnings = warnings.replace(here, there)
+                row.update(status="ok", exit_code=0, message=warnings[:MESSAGE_LIMIT])
                 row.update(_measures(report))
     return row
 
@@ -724,7 +744,7 @@ class LocalPool:
         for future in as_completed(futures):
             yield futures[future], future.result()
 
-    def interrupt(self):
+    def interrupt(self, run_id=None):
         self.executor.shutdown(wait=False, cancel_futures=True)
         terminate_running()
 
@@ -772,7 +792,8 @@ class DaskBackend:
         payload = None
         if task.pop("send", False):
             payload = pack_input(task["input"])
-        # A key of the task's content: the same file and settings is the same task (pure).
+        # A key of the task's content, this run's id included: a task of an interrupted run that
+        # is still ending on a worker is not taken for this run's.
         digest = hashlib.sha256(json.dumps(task, sort_keys=True).encode()).hexdigest()[:24]
         return self.client.submit(convert_one, task, payload, key="subd2nurbs-convert-" + digest, pure=False,
                                   retries=1)
@@ -814,9 +835,11 @@ class DaskBackend:
             future.release()
             yield key, row
 
-    def interrupt(self):
+    def interrupt(self, run_id=None):
         try:
             self.client.cancel([f for _, f in self.futures.values()])
+            if run_id:  # cancelling does not stop a task that runs: stop its converter
+                self.client.run(stop_run, run_id, wait=True)
         except Exception:
             pass
 
@@ -913,6 +936,11 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
     outdir = os.path.abspath(outdir)
     base_settings = normalized_settings(settings, rows)
 
+    # The client's SOURCE_DATE_EPOCH (the STEP and IGES headers' dates) goes with every task:
+    # a Dask worker's own environment need not have it.
+    env = {k: os.environ[k] for k in ("SOURCE_DATE_EPOCH",) if k in os.environ}
+    run_id = "%s-%d-%s" % (os.uname().nodename, os.getpid(), os.urandom(4).hex())
+
     _stopping.clear()
     previous = {} if force else _previous_rows(outdir)
     results = [None] * len(jobs)
@@ -940,7 +968,7 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
         tasks.append((i, {"cli": cli, "input": os.path.abspath(job.input),
                           "output": os.path.join(outdir, job.output), "report": os.path.join(outdir, job.report),
                           "args": args, "timeout": timeout, "memory": memory, "send": send,
-                          "input_hash": row["input_hash"]}))
+                          "input_hash": row["input_hash"], "env": env, "run": run_id}))
 
     # Largest inputs first: a long conversion started last would leave the other workers idle.
     tasks.sort(key=lambda t: -_size(t[1]["input"]))
@@ -972,7 +1000,7 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
             except KeyboardInterrupt:
                 interrupted = True
                 if backend:
-                    backend.interrupt()
+                    backend.interrupt(run_id)
     finally:
         progress.finish()
         for row in results:
