@@ -24,7 +24,12 @@ The Python API::
     summary.counts          # {"ok": 85, "invalid-input": 2}
     summary.files[0]        # the summary row of the first input (a dict)
 
-Dask (Debian ``python3-distributed``) is optional: without it the local pool works.
+Dask (Debian ``python3-distributed``) is optional: without it the local pool works. On a
+scheduler's cluster the inputs up to ``--send-limit`` (8M) are sent to the workers as bytes and
+their outputs and reports come back (``--send-inputs always|never`` to choose); the larger ones
+are read and written by the workers on the client's paths (a shared folder). The client's
+``SOURCE_DATE_EPOCH`` goes with every task: STEP and IGES files are then byte-identical whatever
+the order, the worker count or the backend.
 """
 
 import argparse
