@@ -67,12 +67,14 @@ print(json.dumps({"wall": wall, "driver_mb": 0, "ok": ok, "files": len(names), "
 """
 
 
-def dask_cluster(tmp):
+def dask_cluster(tmp, tuned=True):
+    from subd2nurbs import batch
+    env = dict(os.environ, **(batch.dask_environment() if tuned else {}))
     scheduler_file = os.path.join(tmp, "scheduler.json")
     log = open(os.path.join(tmp, "dask.log"), "w")
     procs = [subprocess.Popen([shutil.which("dask-scheduler"), "--host", "127.0.0.1", "--port", "0",
                                "--no-dashboard", "--scheduler-file", scheduler_file], stdout=log,
-                              stderr=subprocess.STDOUT)]
+                              stderr=subprocess.STDOUT, env=env)]
     deadline = time.monotonic() + 120
     while not os.path.exists(scheduler_file):
         if time.monotonic() > deadline:
@@ -82,7 +84,7 @@ def dask_cluster(tmp):
         procs.append(subprocess.Popen([shutil.which("dask-worker"), "--scheduler-file", scheduler_file, "--nthreads",
                                        "1", "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--name", name,
                                        "--local-directory", os.path.join(tmp, name)], stdout=log,
-                                      stderr=subprocess.STDOUT))
+                                      stderr=subprocess.STDOUT, env=env))
     import distributed
     with distributed.Client(scheduler_file=scheduler_file, timeout="120s") as client:
         client.wait_for_workers(2, timeout=120)
@@ -119,12 +121,14 @@ def main():
     ap.add_argument("input", help="a folder of .obj files (not searched recursively by the loop)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--level", help="convert --level (default: the tolerance's choice)")
+    ap.add_argument("--dask-defaults", action="store_true",
+                    help="Dask's default settings for the cluster (not batch.DASK_CONFIG's quieter monitors)")
     a = ap.parse_args()
     cli = os.path.abspath(a.cli)
     settings = {"level": a.level} if a.level else {}
     extra = ["--level", a.level] if a.level else []
     tmp = tempfile.mkdtemp(prefix="s2n-batch-bench-")
-    address, procs, log = dask_cluster(tmp)
+    address, procs, log = dask_cluster(tmp, tuned=not a.dask_defaults)
     configs = [(LOOP_NAME, LOOP, {"extra": extra}),
                (ONE, DRIVER, {"workers": 1, "settings": settings}),
                ("local pool, 2 workers", DRIVER, {"workers": 2, "settings": settings}),

@@ -766,6 +766,22 @@ def _import_distributed():
                          "apt-get install python3-distributed (or pip install distributed)") from None
 
 
+#: Dask settings for the processes of a batch cluster: no statistical profiler (it samples the
+#: running task's stack 100 times a second) and the event loop's, memory and system monitors at
+#: 1-2 s instead of 20-500 ms. An idle scheduler with 2 workers then takes about 0.014 instead of
+#: 0.1 of a core (docs/benchmarks.md section 11), which the conversions get instead. As
+#: environment variables (for dask-scheduler / dask-worker): :func:`dask_environment`.
+DASK_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.admin.tick.interval": "1s",
+               "distributed.worker.memory.monitor-interval": "1s",
+               "distributed.admin.system-monitor.interval": "2s"}
+
+
+def dask_environment():
+    """DASK_CONFIG as the environment variables Dask's programs read."""
+    return {"DASK_" + key.upper().replace(".", "__").replace("-", "_"): str(value)
+            for key, value in DASK_CONFIG.items()}
+
+
 class DaskBackend:
     """The same tasks on a Dask cluster: a scheduler's address, or a local cluster of `local`
     worker processes with one thread each. A task's input is read by the worker from the
@@ -787,8 +803,10 @@ class DaskBackend:
             except (OSError, TimeoutError) as e:
                 raise BatchError("cannot reach the Dask scheduler at %s: %s" % (scheduler, e)) from None
         else:
-            self.cluster = distributed.LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
-                                                    dashboard_address=None)
+            import dask
+            with dask.config.set(DASK_CONFIG):  # passed on to the workers by their nannies
+                self.cluster = distributed.LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
+                                                        dashboard_address=None)
             self.client = distributed.Client(self.cluster)
         self.futures = {}
 
@@ -1038,7 +1056,8 @@ def _parser(rows):
         description="Convert a library of cages and meshes with subd2nurbs convert, each file in a process of "
                     "its own with a time and memory limit; writes OUTDIR/summary.json and summary.csv.",
         epilog="Exit codes: 0 every file converted, 1 usage error, 2 some files failed (see the summary), "
-               "130 interrupted (run again to resume).")
+               "130 interrupted (run again to resume). `subd2nurbs-batch --dask-env` prints the environment "
+               "(quieter Dask monitors) to start dask-scheduler and dask-worker with.")
     p.add_argument("inputs", nargs="*", metavar="INPUT", help="folders (searched recursively for %s) or files"
                    % " ".join(EXTENSIONS))
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="output folder (mirrors the input tree)")
@@ -1074,6 +1093,11 @@ def _stop_on_signal(signum, frame):
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv == ["--dask-env"]:  # for the shell that starts dask-scheduler / dask-worker
+        for name, value in dask_environment().items():
+            print("export %s=%s" % (name, value))
+        return 0
     try:
         rows = settings_rows()
     except ImportError as e:

@@ -444,6 +444,7 @@ class Dask(BatchTestCase):
         cls.procs = {}
         # Not the workers' own: the batch passes its SOURCE_DATE_EPOCH on with each task.
         worker_env = {k: v for k, v in os.environ.items() if k != "SOURCE_DATE_EPOCH"}
+        worker_env.update(batch.dask_environment())  # as README advises (subd2nurbs-batch --dask-env)
         cls.procs["scheduler"] = cls.start(
             [dask_program("dask-scheduler"), "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
              "--scheduler-file", cls.scheduler_file], worker_env)
