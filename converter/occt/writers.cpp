@@ -4,6 +4,8 @@
 #include <BRepTools.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESControl_Writer.hxx>
+#include <IGESData_GlobalSection.hxx>
+#include <IGESData_IGESModel.hxx>
 #include <STEPControl_Controller.hxx>
 #include <STEPControl_Writer.hxx>
 
@@ -67,7 +69,8 @@ namespace {
 /// The STEP header's time stamp from SOURCE_DATE_EPOCH (seconds since 1970, UTC; the
 /// reproducible-builds convention), so that the same input gives a byte-identical file; empty
 /// (OCCT's clock time) when the variable is unset or not a number.
-std::string source_date_stamp() {
+/// `format` is strftime's: "%Y-%m-%dT%H:%M:%S" for STEP, "%Y%m%d.%H%M%S" for IGES.
+std::string source_date_stamp(const char* format = "%Y-%m-%dT%H:%M:%S") {
   const char* text = std::getenv("SOURCE_DATE_EPOCH");
   if (text == nullptr || *text == '\0') return {};
   char* end = nullptr;
@@ -78,7 +81,7 @@ std::string source_date_stamp() {
   std::tm utc{};
   if (gmtime_r(&t, &utc) == nullptr) return {};
   char stamp[32];
-  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%S", &utc);
+  if (std::strftime(stamp, sizeof stamp, format, &utc) == 0) return {};
   return stamp;
 }
 
@@ -118,6 +121,18 @@ void write_iges(const TopoDS_Shape& shape, const std::string& file, const std::s
     if (!writer.AddShape(shape))
       throw ExportError("iges-transfer", -1, "the IGES translator refused the shape");
     writer.ComputeModel();
+    // With SOURCE_DATE_EPOCH the global section's two dates (of the file, of the model's last
+    // change; IGES 5.3 "YYYYMMDD.HHNNSS") come from it instead of the clock, and the author field
+    // (OCCT puts the login name there) is left empty: the same input gives a byte-identical file
+    // whoever converts it, whenever.
+    const std::string stamp = source_date_stamp("%Y%m%d.%H%M%S");
+    if (!stamp.empty()) {
+      IGESData_GlobalSection header = writer.Model()->GlobalSection();
+      header.SetDate(new TCollection_HAsciiString(stamp.c_str()));
+      header.SetLastChangeDate(new TCollection_HAsciiString(stamp.c_str()));
+      header.SetAuthorName(new TCollection_HAsciiString(""));
+      writer.Model()->SetGlobalSection(header);
+    }
     if (!writer.Write(file.c_str()))
       throw WriteError(path, "the IGES writer could not write the file");
   });

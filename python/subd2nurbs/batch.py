@@ -24,7 +24,12 @@ The Python API::
     summary.counts          # {"ok": 85, "invalid-input": 2}
     summary.files[0]        # the summary row of the first input (a dict)
 
-Dask (Debian ``python3-distributed``) is optional: without it the local pool works.
+Dask (Debian ``python3-distributed``) is optional: without it the local pool works. On a
+scheduler's cluster the inputs up to ``--send-limit`` (8M) are sent to the workers as bytes and
+their outputs and reports come back (``--send-inputs always|never`` to choose); the larger ones
+are read and written by the workers on the client's paths (a shared folder). The client's
+``SOURCE_DATE_EPOCH`` goes with every task: STEP and IGES files are then byte-identical whatever
+the order, the worker count or the backend.
 """
 
 import argparse
@@ -62,9 +67,13 @@ START_FAILURE = "start-failure"  # the converter could not be started
 
 #: The columns of summary.csv, in order.
 CSV_COLUMNS = ("input", "output", "status", "exit_code", "message", "faces", "poles", "deviation",
-               "deviation_relative", "g1_angle_deg", "time_s", "peak_memory_mb", "input_hash", "settings_hash")
+               "deviation_relative", "g1_angle_deg", "time_s", "cpu_s", "peak_memory_mb", "input_hash",
+               "settings_hash")
 
 SUMMARY_FORMAT = "subd2nurbs-batch-summary"
+#: On a Dask scheduler's cluster, inputs up to this size are sent as bytes (send_inputs "auto").
+SEND_LIMIT = 8 << 20
+SEND_MODES = ("auto", "always", "never")
 JOURNAL = ".subd2nurbs-batch.journal"
 KILL_GRACE_S = 3.0
 MESSAGE_LIMIT = 500
@@ -338,6 +347,18 @@ def terminate_running():
         threading.Thread(target=_kill_group, args=(proc,), daemon=True).start()
 
 
+def stop_run(run_id):
+    """Stops the converters of the batch `run_id` that this process (a Dask worker) is running,
+    and no other's: the interrupted client's cancelled tasks do not keep the workers busy.
+    Returns how many."""
+    with _running_lock:
+        procs = [p for p in _running if getattr(p, "subd2nurbs_run", None) == run_id]
+    for proc in procs:
+        proc.subd2nurbs_interrupted = True
+        threading.Thread(target=_kill_group, args=(proc,), daemon=True).start()
+    return len(procs)
+
+
 def _message(stderr_text):
     lines = [l.strip() for l in stderr_text.splitlines() if l.strip()]
     errors = [l for l in lines if "error" in l.lower() or "out of memory" in l.lower()]
@@ -355,17 +376,135 @@ def _measures(report):
             "g1_angle_deg": continuity.get("max_normal_angle_deg")}
 
 
-def convert_one(task):
+def _json_quoted(text):
+    """`text` as the converter's JSON writer quotes it (io/json_writer.cpp), as bytes."""
+    out = bytearray(b'"')
+    for c in os.fsencode(text):
+        if c == 0x22:
+            out += b'\\"'
+        elif c == 0x5C:
+            out += b'\\\\'
+        elif c == 0x0A:
+            out += b'\\n'
+        elif c == 0x0D:
+            out += b'\\r'
+        elif c == 0x09:
+            out += b'\\t'
+        elif c < 0x20:
+            out += b'\\u%04x' % c
+        else:
+            out.append(c)
+    return bytes(out + b'"')
+
+
+def convert_one(task, payload=None):
     """Converts one file with the command line in a process of its own and returns its summary
     row. `task`: cli, input, output and report (absolute paths), args (the settings' arguments),
-    timeout (s, 0: none), memory (bytes of address space, 0: none). Pure and idempotent (the
-    outputs are written atomically), so a backend may run it again elsewhere."""
+    timeout (s, 0: none), memory (bytes of address space, 0: none), env (variables for the
+    converter: the client's SOURCE_DATE_EPOCH). Pure and idempotent (the
+    outputs are written atomically), so a backend may run it again elsewhere.
+
+    With `payload` (the bytes of :func:`pack_input`: the input and the files it refers to, for
+    a worker that cannot see the client's path) the input is written to a private temporary
+    folder under its own name, converted there, and the row carries the output's and the
+    report's bytes (row["files"], {"output": bytes, "report": bytes}) for the client to write;
+    the paths in the messages and the report are the client's."""
+    if payload is not None:
+        return _convert_sent(task, payload)
+    if not os.path.isfile(task["input"]):
+        row = _empty_row()
+        row.update(status=START_FAILURE, message="%s: the worker cannot read this file (not on a path it shares "
+                                                 "with the client?); files up to the send limit are sent as bytes"
+                                                 % task["input"])
+        return row
     for path in (task["output"], task["report"]):
         os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
-    command = [task["cli"], "convert", task["input"], "-o", task["output"], "--report", task["report"], "-q"]
+    return _run_converter(task, task["input"], task["output"], task["report"])
+
+
+def pack_input(path):
+    """The bytes a worker needs to convert `path` without seeing it: the file and, for a .gltf,
+    the external buffers it names (relative "uri"s; images are not read by the converter), as
+    {"name": the file's name, "depth": how many folders up the buffers reach, "files": [(path
+    relative to the input's folder, bytes)]}, pickled."""
+    import pickle
+    folder, name = os.path.split(os.path.abspath(path))
+    with open(path, "rb") as f:
+        files = [(name, f.read())]
+    depth = 0
+    if name.lower().endswith(".gltf"):
+        from urllib.parse import unquote
+        try:
+            buffers = json.loads(files[0][1].decode("utf-8")).get("buffers") or []
+        except (ValueError, UnicodeDecodeError, AttributeError):
+            buffers = []  # the converter says what is wrong with it
+        seen = set()
+        for buffer in buffers:
+            uri = buffer.get("uri") if isinstance(buffer, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:") or "://" in uri or os.path.isabs(unquote(uri)):
+                continue
+            rel = os.path.normpath(unquote(uri))
+            source = os.path.join(folder, rel)
+            if rel in seen or not os.path.isfile(source):
+                continue  # a missing buffer: the converter reports it
+            seen.add(rel)
+            with open(source, "rb") as f:
+                files.append((rel, f.read()))
+            ups = 0
+            for part in rel.split(os.sep):
+                if part != "..":
+                    break
+                ups += 1
+            depth = max(depth, ups)
+    return pickle.dumps({"name": name, "depth": depth, "files": files}, protocol=4)
+
+
+def _convert_sent(task, payload):
+    import pickle
+    data = pickle.loads(payload)
+    tmp = tempfile.mkdtemp(prefix="subd2nurbs-batch-")
+    try:
+        folder = os.path.join(tmp, "in", *(["d"] * data["depth"]))
+        os.makedirs(folder)
+        local_input = os.path.join(folder, data["name"])
+        for rel, blob in data["files"]:
+            path = os.path.normpath(os.path.join(folder, rel))
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            with open(path, "wb") as f:
+                f.write(blob)
+        os.makedirs(os.path.join(tmp, "out"))
+        local_output = os.path.join(tmp, "out", os.path.basename(task["output"]))
+        local_report = os.path.join(tmp, "out", "report", os.path.basename(task["report"]))
+        os.makedirs(os.path.dirname(local_report))
+        renames = [(local_input, task["input"]), (local_output, task["output"]), (local_report, task["report"])]
+        row = _run_converter(task, local_input, local_output, local_report, renames)
+        files = {}
+        if os.path.exists(local_output):
+            with open(local_output, "rb") as f:
+                files["output"] = f.read()
+        if os.path.exists(local_report):
+            with open(local_report, "rb") as f:
+                report = f.read()
+            for here, there in renames:  # "input", "output", warnings: the client's paths
+                report = report.replace(_json_quoted(here)[1:-1], _json_quoted(there)[1:-1])
+            files["report"] = report
+        row["files"] = files
+        return row
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _empty_row():
+    return {"status": None, "exit_code": None, "message": "", "faces": None, "poles": None, "deviation": None,
+            "deviation_relative": None, "g1_angle_deg": None, "time_s": None, "cpu_s": None, "peak_memory_mb": None}
+
+
+def _run_converter(task, input_path, output, report_path, renames=()):
+    """Runs the converter on `input_path` into `output` and `report_path` and classifies the
+    outcome. `renames`: (path here, path to show) pairs for the messages."""
+    command = [task["cli"], "convert", input_path, "-o", output, "--report", report_path, "-q"]
     command += task["args"]
-    row = {"status": None, "exit_code": None, "message": "", "faces": None, "poles": None, "deviation": None,
-           "deviation_relative": None, "g1_angle_deg": None, "time_s": None, "peak_memory_mb": None}
+    row = _empty_row()
     if _stopping.is_set():
         row.update(status=INTERRUPTED, message="the batch was interrupted")
         return row
@@ -373,12 +512,14 @@ def convert_one(task):
     start = time.monotonic()
     try:
         proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err,
-                                preexec_fn=_limits(task.get("memory") or 0), start_new_session=True)
+                                preexec_fn=_limits(task.get("memory") or 0), start_new_session=True,
+                                env=dict(os.environ, **task["env"]) if task.get("env") else None)
     except OSError as e:
         err.close()
         row.update(status=START_FAILURE, message="cannot start %s: %s" % (task["cli"], e.strerror or e))
         return row
     proc.subd2nurbs_interrupted = False
+    proc.subd2nurbs_run = task.get("run")
     with _running_lock:
         _running.add(proc)
     waited = []
@@ -398,7 +539,10 @@ def convert_one(task):
     err.seek(0)
     stderr_text = err.read(1 << 20).decode("utf-8", "replace")
     err.close()
+    for here, there in renames:
+        stderr_text = stderr_text.replace(here, there)
     row["time_s"] = round(elapsed, 3)
+    row["cpu_s"] = round(usage.ru_utime + usage.ru_stime, 3)  # the converter's threads, user + system
     row["peak_memory_mb"] = round(usage.ru_maxrss / 1024.0, 1)  # KiB on Linux
     code = proc.returncode
     if proc.subd2nurbs_interrupted:
@@ -419,16 +563,19 @@ def convert_one(task):
         row.update(status=status, exit_code=code, message=message)
     else:
         try:
-            with open(task["report"], encoding="utf-8") as f:
+            with open(report_path, encoding="utf-8") as f:
                 report = json.load(f)
         except (OSError, ValueError) as e:
             report = None
             row.update(status=NO_OUTPUT, exit_code=0, message="no readable report: %s" % e)
         if report is not None:
-            if not os.path.exists(task["output"]):
+            if not os.path.exists(output):
                 row.update(status=NO_OUTPUT, exit_code=0, message="exit code 0 but no output file")
             else:
-                row.update(status="ok", exit_code=0, message="; ".join(report.get("warnings") or [])[:MESSAGE_LIMIT])
+                warnings = "; ".join(report.get("warnings") or [])
+                for here, there in renames:
+                    warnings = warnings.replace(here, there)
+                row.update(status="ok", exit_code=0, message=warnings[:MESSAGE_LIMIT])
                 row.update(_measures(report))
     return row
 
@@ -477,11 +624,19 @@ class Summary:
         _write_atomic(os.path.join(outdir, "summary.csv"), text.getvalue())
 
 
-def _write_atomic(path, text):
+def _write_atomic(path, data):
+    """Writes text or bytes to `path` through a temporary file renamed over it."""
     tmp = "%s.%d.tmp" % (path, os.getpid())
-    with open(tmp, "w", encoding="utf-8") as f:
-        f.write(text)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data.encode("utf-8") if isinstance(data, str) else data)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.remove(tmp)
+        except OSError:
+            pass
+        raise
 
 
 def _previous_rows(outdir):
@@ -594,7 +749,7 @@ class LocalPool:
         for future in as_completed(futures):
             yield futures[future], future.result()
 
-    def interrupt(self):
+    def interrupt(self, run_id=None):
         self.executor.shutdown(wait=False, cancel_futures=True)
         terminate_running()
 
@@ -611,10 +766,31 @@ def _import_distributed():
                          "apt-get install python3-distributed (or pip install distributed)") from None
 
 
+#: Dask settings for the processes of a batch cluster: no statistical profiler (it samples the
+#: running task's stack 100 times a second) and the event loop's, memory and system monitors at
+#: 1-2 s instead of 20-500 ms. An idle scheduler with 2 workers then takes about 0.014 instead of
+#: 0.1 of a core (docs/benchmarks.md section 11), which the conversions get instead. As
+#: environment variables (for dask-scheduler / dask-worker): :func:`dask_environment`.
+DASK_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.admin.tick.interval": "1s",
+               "distributed.worker.memory.monitor-interval": "1s",
+               "distributed.admin.system-monitor.interval": "2s"}
+
+
+def dask_environment():
+    """DASK_CONFIG as the environment variables Dask's programs read."""
+    return {"DASK_" + key.upper().replace(".", "__").replace("-", "_"): str(value)
+            for key, value in DASK_CONFIG.items()}
+
+
 class DaskBackend:
     """The same tasks on a Dask cluster: a scheduler's address, or a local cluster of `local`
-    worker processes with one thread each. The files are read and written by the workers on a
-    shared path; the rows come back. A lost worker's tasks are run again by Dask on another."""
+    worker processes with one thread each. A task's input is read by the worker from the
+    client's path (a shared path) or, when the task says "send", sent as bytes with the task
+    (pack_input; held by the scheduler, so a lost worker's task can run again elsewhere) and its
+    output and report come back as bytes.
+    Tasks are handed to the scheduler in their order (largest first) a few at a time, so that
+    only those in flight are held in memory. A lost worker's tasks are run again by Dask on
+    another."""
 
     name = "dask"
 
@@ -627,27 +803,66 @@ class DaskBackend:
             except (OSError, TimeoutError) as e:
                 raise BatchError("cannot reach the Dask scheduler at %s: %s" % (scheduler, e)) from None
         else:
-            self.cluster = distributed.LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
-                                                    dashboard_address=None)
+            import dask
+            with dask.config.set(DASK_CONFIG):  # passed on to the workers by their nannies
+                self.cluster = distributed.LocalCluster(n_workers=local, threads_per_worker=1, processes=True,
+                                                        dashboard_address=None)
             self.client = distributed.Client(self.cluster)
-        self.futures = []
+        self.futures = {}
+
+    def _submit(self, task):
+        task = dict(task)
+        payload = None
+        if task.pop("send", False):
+            payload = pack_input(task["input"])
+        # A key of the task's content, this run's id included: a task of an interrupted run that
+        # is still ending on a worker is not taken for this run's.
+        digest = hashlib.sha256(json.dumps(task, sort_keys=True).encode()).hexdigest()[:24]
+        return self.client.submit(convert_one, task, payload, key="subd2nurbs-convert-" + digest, pure=False,
+                                  retries=1)
 
     def run(self, tasks):
+        import warnings
         from distributed import as_completed
-        keys = {}
-        for key, task in tasks:
-            # A key of the task's content: the same file and settings is the same task (pure).
-            digest = hashlib.sha256(json.dumps(task, sort_keys=True).encode()).hexdigest()[:24]
-            future = self.client.submit(convert_one, task, key="subd2nurbs-convert-" + digest, pure=False,
-                                        retries=1)
-            keys[future.key] = key
-            self.futures.append(future)
-        for future in as_completed(self.futures):
-            yield keys[future.key], future.result()
-
-    def interrupt(self):
+        # Inputs sent as bytes are task arguments on purpose (see the class): not Dask's advice
+        # to scatter them, which would lose them with the worker holding them.
+        warnings.filterwarnings("ignore", message="Large object of size")
+        pending = list(reversed(tasks))  # popped from the end: in the tasks' order
         try:
-            self.client.cancel(self.futures)
+            threads = sum(self.client.nthreads().values())
+        except Exception:
+            threads = 0
+        window = max(8, 3 * threads)  # enough queued that no worker waits for the next submit
+        done = as_completed()
+        while pending or self.futures:
+            while pending and len(self.futures) < window:
+                key, task = pending.pop()
+                try:
+                    future = self._submit(task)
+                except OSError as e:  # the input vanished or became unreadable since the start
+                    row = _empty_row()
+                    row.update(status=START_FAILURE, message="%s: cannot read it: %s" % (task["input"], e.strerror or e))
+                    yield key, row
+                    continue
+                self.futures[future.key] = (key, future)
+                done.add(future)
+            if not self.futures:
+                continue
+            future = next(done)
+            key, _ = self.futures.pop(future.key)
+            try:
+                row = future.result()
+            except Exception as e:  # lost more often than the retries allow, or the task itself failed
+                row = _empty_row()
+                row.update(status=CRASH, message=("the Dask task failed: %s: %s" % (type(e).__name__, e))[:MESSAGE_LIMIT])
+            future.release()
+            yield key, row
+
+    def interrupt(self, run_id=None):
+        try:
+            self.client.cancel([f for _, f in self.futures.values()])
+            if run_id:  # cancelling does not stop a task that runs: stop its converter
+                self.client.run(stop_run, run_id, wait=True)
         except Exception:
             pass
 
@@ -683,9 +898,33 @@ def default_memory(workers):
     return total // max(1, workers)
 
 
+def _receive(outcome, row, outdir, remote):
+    """Writes the output and report a worker sent back (outcome["files"], removed from it)
+    atomically into `outdir`; on a remote cluster, checks that an output the worker wrote on the
+    shared path is visible here."""
+    files = outcome.pop("files", None)
+    if files is not None:
+        try:
+            for kind in ("output", "report"):
+                if kind in files:
+                    path = os.path.join(outdir, row[kind])
+                    os.makedirs(os.path.dirname(path), exist_ok=True)
+                    _write_atomic(path, files[kind])
+        except OSError as e:
+            outcome.update(status=EXIT_CLASSES[3], exit_code=None,
+                           message="cannot write what the worker sent back: %s" % e)
+            return
+    if outcome.get("status") == "ok":
+        missing = [row[k] for k in ("output", "report") if not os.path.exists(os.path.join(outdir, row[k]))]
+        if missing:
+            outcome.update(status=NO_OUTPUT, message="%s: converted%s, but not here (the output folder is not "
+                           "shared with the workers: let the inputs be sent, --send-inputs always)" % (
+                               ", ".join(missing), " by a worker" if remote else ""))
+
+
 def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers=None, dask_local=0,
         output_format="step", timeout=0, memory=None, retry_failed=False, force=False, cli=None, progress=None,
-        quiet=True):
+        quiet=True, send_inputs="auto", send_limit=SEND_LIMIT):
     """Converts every file of `inputs` (folders, searched recursively, or files) and of
     `manifest` (CSV or JSON) into `outdir`, mirroring the input tree, and writes
     outdir/summary.json and summary.csv. `settings`: {name: value} of docs/settings.md for every
@@ -693,12 +932,19 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
     (``tcp://host:port``), or None for the local pool of `workers` processes (default: one per
     core); `dask_local`: a local Dask cluster of that many workers instead. `timeout` (s) and
     `memory` (bytes or "2G"; default the machine's memory / workers, none on a remote
-    cluster; 0: no limit) bound each file. Returns the :class:`Summary`. KeyboardInterrupt
+    cluster; 0: no limit) bound each file. `send_inputs`: on a Dask cluster, "auto" sends the
+    inputs up to `send_limit` bytes (or "8M") as bytes to a scheduler's workers (not to a
+    --dask-local cluster, which shares this machine's files) and lets the workers read the larger
+    ones from the client's path; "always" sends every input, "never" none; a sent input's output
+    and report come back and are written here. Returns the :class:`Summary`. KeyboardInterrupt
     stops the converters, writes the summary of what is done (the rest "interrupted") and is
     raised again."""
     rows = settings_rows()
     if scheduler or dask_local:
         _import_distributed()  # before any work: says how to install it
+    if send_inputs not in SEND_MODES:
+        raise BatchError("send_inputs is one of %s, not %r" % (", ".join(SEND_MODES), send_inputs))
+    send_limit = memory_bytes(send_limit)
     if output_format not in FORMATS:
         raise BatchError("unknown output format %r (%s)" % (output_format, ", ".join(FORMATS)))
     jobs = collect_jobs(inputs, settings, output_format, manifest, rows)
@@ -712,6 +958,11 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
     os.makedirs(outdir, exist_ok=True)
     outdir = os.path.abspath(outdir)
     base_settings = normalized_settings(settings, rows)
+
+    # The client's SOURCE_DATE_EPOCH (the STEP and IGES headers' dates) goes with every task:
+    # a Dask worker's own environment need not have it.
+    env = {k: os.environ[k] for k in ("SOURCE_DATE_EPOCH",) if k in os.environ}
+    run_id = "%s-%d-%s" % (os.uname().nodename, os.getpid(), os.urandom(4).hex())
 
     _stopping.clear()
     previous = {} if force else _previous_rows(outdir)
@@ -731,9 +982,16 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
             results[i] = dict(prev, input=job.input)
             continue
         results[i] = row
+        if not (scheduler or dask_local) or send_inputs == "never":
+            send = False
+        elif send_inputs == "always":
+            send = True
+        else:
+            send = bool(scheduler) and _size(job.input) <= send_limit
         tasks.append((i, {"cli": cli, "input": os.path.abspath(job.input),
                           "output": os.path.join(outdir, job.output), "report": os.path.join(outdir, job.report),
-                          "args": args, "timeout": timeout, "memory": memory}))
+                          "args": args, "timeout": timeout, "memory": memory, "send": send,
+                          "input_hash": row["input_hash"], "env": env, "run": run_id}))
 
     # Largest inputs first: a long conversion started last would leave the other workers idle.
     tasks.sort(key=lambda t: -_size(t[1]["input"]))
@@ -756,6 +1014,7 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
             try:
                 for i, outcome in (backend.run(tasks) if backend else ()):
                     row = results[i]
+                    _receive(outcome, row, outdir, backend.name == "dask" and scheduler)
                     row.update(outcome)
                     if row["status"] != INTERRUPTED:
                         journal.write(json.dumps(row) + "\n")
@@ -764,7 +1023,7 @@ def run(inputs, outdir, settings=None, scheduler=None, *, manifest=None, workers
             except KeyboardInterrupt:
                 interrupted = True
                 if backend:
-                    backend.interrupt()
+                    backend.interrupt(run_id)
     finally:
         progress.finish()
         for row in results:
@@ -797,7 +1056,8 @@ def _parser(rows):
         description="Convert a library of cages and meshes with subd2nurbs convert, each file in a process of "
                     "its own with a time and memory limit; writes OUTDIR/summary.json and summary.csv.",
         epilog="Exit codes: 0 every file converted, 1 usage error, 2 some files failed (see the summary), "
-               "130 interrupted (run again to resume).")
+               "130 interrupted (run again to resume). `subd2nurbs-batch --dask-env` prints the environment "
+               "(quieter Dask monitors) to start dask-scheduler and dask-worker with.")
     p.add_argument("inputs", nargs="*", metavar="INPUT", help="folders (searched recursively for %s) or files"
                    % " ".join(EXTENSIONS))
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="output folder (mirrors the input tree)")
@@ -812,6 +1072,11 @@ def _parser(rows):
     p.add_argument("--force", action="store_true", help="convert every file, ignoring the last run")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler's workers")
     p.add_argument("--dask-local", type=int, default=0, metavar="N", help="run on a local Dask cluster of N workers")
+    p.add_argument("--send-inputs", choices=SEND_MODES, default="auto",
+                   help="on a Dask cluster: send the inputs to the workers as bytes (and get the outputs back) instead "
+                        "of a shared path; auto (default): those up to --send-limit on a --scheduler cluster")
+    p.add_argument("--send-limit", default="8M", metavar="SIZE",
+                   help="the largest input sent as bytes with --send-inputs auto (default 8M)")
     p.add_argument("--cli", metavar="PATH", help="the subd2nurbs command line (default $SUBD2NURBS_CLI or PATH)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     g = p.add_argument_group("conversion settings (those of subd2nurbs convert, docs/settings.md)")
@@ -828,6 +1093,11 @@ def _stop_on_signal(signum, frame):
 
 
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv == ["--dask-env"]:  # for the shell that starts dask-scheduler / dask-worker
+        for name, value in dask_environment().items():
+            print("export %s=%s" % (name, value))
+        return 0
     try:
         rows = settings_rows()
     except ImportError as e:
@@ -847,7 +1117,8 @@ def main(argv=None):
         summary = run(args.inputs, args.output, settings, args.scheduler, manifest=args.manifest,
                       workers=args.workers, dask_local=args.dask_local, output_format=args.format,
                       timeout=args.timeout, memory=args.memory_limit, retry_failed=args.retry_failed,
-                      force=args.force, cli=args.cli, quiet=args.quiet)
+                      force=args.force, cli=args.cli, quiet=args.quiet, send_inputs=args.send_inputs,
+                      send_limit=args.send_limit)
     except BatchError as e:
         sys.stderr.write("subd2nurbs-batch: %s\n" % e)
         return 1

@@ -6,7 +6,12 @@ docs (subd2nurbs --help) gives them; a converted file is byte-identical to a pla
 `subd2nurbs convert` of the same file (SOURCE_DATE_EPOCH fixes the STEP time stamp) and its
 summary row holds the numbers of that run's report; a converter that hangs is killed at the time
 limit (its process is gone afterwards); an interrupted run resumed converts exactly the files the
-first one had not finished and ends with the outputs of an uninterrupted run.
+first one had not finished and ends with the outputs of an uninterrupted run (local pool and
+Dask); a real Dask cluster (2 workers on 127.0.0.1 in working folders of their own, without
+SOURCE_DATE_EPOCH: the batch passes it on) gives the local pool's bytes and rows, reading the
+shared path or with the inputs sent as bytes (the converter's log on the workers: temporary
+copies only), also after losing a worker; IGES and BREP files are byte-identical for 1 and 2
+workers, the cluster and a plain convert, the IGES dates those of SOURCE_DATE_EPOCH.
 
 Environment: SUBD2NURBS_CLI (the command line), SUBD2NURBS_CORPUS_DIR, PYTHONPATH (build/python).
 """
@@ -73,11 +78,11 @@ def batch_command(*args):
 
 
 def stable(row):
-    """A summary row without what differs between runs: time, memory, where the input tree lies
+    """A summary row without what differs between runs: times, memory, where the input tree lies
     (also in the messages)."""
     rel = os.path.splitext(row["output"])[0] + os.path.splitext(row["input"])[1]  # ROOT/rel is the input
     root = row["input"][:len(row["input"]) - len(rel)]
-    out = {k: v for k, v in row.items() if k not in ("time_s", "peak_memory_mb", "input")}
+    out = {k: v for k, v in row.items() if k not in ("time_s", "cpu_s", "peak_memory_mb", "input")}
     out["message"] = out["message"].replace(root, "ROOT/")[:300]  # cut at 500 characters with the root
     return out
 
@@ -107,6 +112,64 @@ def journal_lines(outdir):
             return sum(1 for line in f if line.endswith("\n"))
     except OSError:
         return 0
+
+
+def write_cube_gltf(path, bin_rel):
+    """A unit cube as 12 triangles in a .gltf whose buffer is the external file `bin_rel`
+    (relative to the .gltf, may go up: "../buffers/cube.bin")."""
+    import struct
+    v = [(x, y, z) for x in (0., 1.) for y in (0., 1.) for z in (0., 1.)]
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = [t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))]
+    pos = b"".join(struct.pack("<3f", *p) for p in v)
+    idx = b"".join(struct.pack("<3H", *t) for t in tris)
+    doc = {"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
+           "buffers": [{"uri": bin_rel, "byteLength": len(pos + idx)}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(pos)},
+                           {"buffer": 0, "byteOffset": len(pos), "byteLength": len(idx)}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3",
+                          "min": [0, 0, 0], "max": [1, 1, 1]},
+                         {"bufferView": 1, "componentType": 5123, "count": 36, "type": "SCALAR"}]}
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(doc, f)
+    buffer = os.path.normpath(os.path.join(os.path.dirname(path), bin_rel))
+    os.makedirs(os.path.dirname(buffer), exist_ok=True)
+    with open(buffer, "wb") as f:
+        f.write(pos + idx)
+
+
+# A converter that logs the input path it is given and the working directory, then is the real one.
+LOGGING_CONVERTER = """#!/bin/sh
+printf '%s\\t%s\\n' "$2" "$(pwd)" >> "{log}"
+exec "{cli}" "$@"
+"""
+
+
+def logging_converter(folder):
+    """(the converter's path, its log's path)."""
+    log = os.path.join(folder, "inputs.log")
+    fake = os.path.join(folder, "logging-subd2nurbs")
+    with open(fake, "w", encoding="utf-8") as f:
+        f.write(LOGGING_CONVERTER.replace("{log}", log).replace("{cli}", CLI))
+    os.chmod(fake, 0o755)
+    return fake, log
+
+
+def report_without_times(path):
+    """A convert report without what differs between runs of the same conversion: the times
+    and where the output folder is."""
+    with open(path, encoding="utf-8") as f:
+        report = json.load(f)
+    for key in ("timings_ms", "quality_ms", "quality_wait_ms", "output"):
+        report.pop(key, None)
+    return report
+
+
+def same_bytes(a, b):
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        return fa.read() == fb.read()
 
 
 SHARED = {}
@@ -297,6 +360,43 @@ class Limits(unittest.TestCase):
         self.assertEqual(cube["status"], "ok", cube)
 
 
+# A few shapes of the corpus with different structure (quads, a torus, a pole, triangles, a
+# crease), for the format tests.
+FEW = ("catmark_cube", "catmark_torus", "catmark_pole8", "catmark_toroidal_tet", "catmark_edgecorner")
+
+
+class Formats(unittest.TestCase):
+    """IGES and BREP are deterministic too: with SOURCE_DATE_EPOCH the files of 1 and 2 workers
+    (different orders and concurrency) and of a plain `subd2nurbs convert` are byte-identical;
+    the IGES global section's dates are those of the epoch (1700000000 is 2023-11-14 22:13:20
+    UTC) and it names no author."""
+
+    def test_iges_and_brep_identical(self):
+        tmp = tempfile.mkdtemp(prefix="s2n-batch-fmt-")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        files = [os.path.join(CORPUS, n + ".obj") for n in FEW]
+        for fmt in ("iges", "brep"):
+            one = batch.run(files, os.path.join(tmp, fmt + "1"), FAST, workers=1, cli=CLI, output_format=fmt)
+            two = batch.run(list(reversed(files)), os.path.join(tmp, fmt + "2"), FAST, workers=2, cli=CLI,
+                            output_format=fmt)
+            self.assertEqual(one.counts, {"ok": len(FEW)})
+            self.assertEqual(two.counts, {"ok": len(FEW)})
+            for stem in FEW:
+                plain = os.path.join(tmp, "%s.%s" % (stem, fmt))
+                time.sleep(1.1 if fmt == "iges" and stem == FEW[0] else 0)  # another second of the clock
+                subprocess.run([CLI, "convert", os.path.join(CORPUS, stem + ".obj"), "-o", plain, "-q", "--level",
+                                "0"], check=True, env=env())
+                for run_dir in (fmt + "1", fmt + "2"):
+                    self.assertTrue(same_bytes(plain, os.path.join(tmp, run_dir, "%s.%s" % (stem, fmt))),
+                                    (stem, run_dir))
+        with open(os.path.join(tmp, "iges1", "catmark_cube.iges"), encoding="ascii") as f:
+            lines = f.read().splitlines()
+        global_section = "".join(line[:72] for line in lines if line[72:73] == "G")
+        self.assertEqual(global_section.count("15H20231114.221320"), 2, global_section)
+        login = os.environ.get("USER") or os.environ.get("LOGNAME") or "root"
+        self.assertNotIn("%dH%s," % (len(login), login), global_section)
+
+
 # The slowest shapes (over 0.5 s each), left out of the runs that compare backends and resume
 # (two thirds of the time).
 HEAVY = ("catmark_pole360", "catmark_rook", "catmark_car", "catmark_bishop", "catmark_lefthanded",
@@ -342,27 +442,30 @@ class Dask(BatchTestCase):
         cls.scheduler_file = os.path.join(cls.cluster, "scheduler.json")
         cls.logs = []
         cls.procs = {}
-        worker_env = dict(os.environ, SOURCE_DATE_EPOCH=EPOCH)
+        # Not the workers' own: the batch passes its SOURCE_DATE_EPOCH on with each task.
+        worker_env = {k: v for k, v in os.environ.items() if k != "SOURCE_DATE_EPOCH"}
+        worker_env.update(batch.dask_environment())  # as README advises (subd2nurbs-batch --dask-env)
         cls.procs["scheduler"] = cls.start(
             [dask_program("dask-scheduler"), "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
              "--scheduler-file", cls.scheduler_file], worker_env)
         wait_for(lambda: os.path.exists(cls.scheduler_file), "the scheduler file", 120)
-        for name in ("w1", "w2"):
+        for name in ("w1", "w2"):  # each in a working folder of its own
+            os.makedirs(os.path.join(cls.cluster, name))
             cls.procs[name] = cls.start(
                 [dask_program("dask-worker"), "--scheduler-file", cls.scheduler_file, "--nthreads", "1",
                  "--no-nanny", "--no-dashboard", "--host", "127.0.0.1", "--name", name,
-                 "--local-directory", os.path.join(cls.cluster, name)], worker_env)
+                 "--local-directory", os.path.join(cls.cluster, name)], worker_env, os.path.join(cls.cluster, name))
         import distributed
         with distributed.Client(scheduler_file=cls.scheduler_file, timeout="120s") as client:
             client.wait_for_workers(2, timeout=120)
             cls.address = client.scheduler.address
 
     @classmethod
-    def start(cls, command, environment):
+    def start(cls, command, environment, cwd=None):
         log = open(os.path.join(cls.cluster, os.path.basename(command[0]) + "-%d.log" % len(cls.logs)), "w")
         cls.logs.append(log)
         return subprocess.Popen(command, env=environment, stdout=log, stderr=subprocess.STDOUT,
-                                start_new_session=True)
+                                start_new_session=True, cwd=cwd)
 
     @classmethod
     def tearDownClass(cls):
@@ -381,12 +484,98 @@ class Dask(BatchTestCase):
 
     def test_1_same_as_local_pool(self):
         out = os.path.join(self.tmp, "dask")
-        s = batch.run([light_tree(os.path.join(self.tmp, "light"))], out, FAST, scheduler=self.address, cli=CLI)
+        # The workers read and write the client's paths (this machine's files: a shared path).
+        s = batch.run([light_tree(os.path.join(self.tmp, "light"))], out, FAST, scheduler=self.address, cli=CLI,
+                      send_inputs="never")
         self.assertEqual(s.backend, "dask")
         self.assertEqual(s.converted, len(s.files))
         check_like_reference(self, out, s.files)
 
-    def test_2_lost_worker(self):
+    def test_0_inputs_sent_as_bytes(self):
+        """--send-inputs always: every input goes to the workers as bytes. The converter on the
+        workers is given a private temporary copy (its log: a path in a subd2nurbs-batch-
+        temporary folder, not the input tree, removed afterwards, run in the worker's own
+        working folder); the outputs come back byte-identical to the local pool's, the summary
+        rows are the same (messages naming the client's paths) and so are the reports (their
+        "input" the client's path)."""
+        work = tempfile.mkdtemp(prefix="s2n-sent-")
+        self.addCleanup(shutil.rmtree, work, True)
+        fake, log = logging_converter(work)
+        light = light_tree(os.path.join(self.tmp, "light"))
+        out = os.path.join(self.tmp, "dask-sent")
+        s = batch.run([light], out, FAST, scheduler=self.address, cli=fake, send_inputs="always")
+        self.assertEqual(s.converted, len(s.files))
+        check_like_reference(self, out, s.files)
+        reports = 0
+        for row in s.files:
+            if row["status"] != "ok":
+                continue
+            mine = report_without_times(os.path.join(out, row["report"]))
+            self.assertEqual(mine.pop("input"), os.path.abspath(row["input"]))
+            theirs = report_without_times(os.path.join(self.reference, row["report"]))
+            theirs.pop("input")
+            # Warnings name the input: each run's own input tree.
+            self.assertEqual(json.dumps(mine, sort_keys=True).replace(light, "ROOT"),
+                             json.dumps(theirs, sort_keys=True).replace(self.inputs, "ROOT"), row["output"])
+            reports += 1
+        self.assertGreater(reports, 50)
+        with open(log, encoding="utf-8") as f:
+            given = [line.rstrip("\n").split("\t") for line in f]
+        self.assertEqual(len(given), len(s.files))
+        workers = {os.path.join(self.cluster, "w1"), os.path.join(self.cluster, "w2")}
+        for path, cwd in given:
+            self.assertIn("subd2nurbs-batch-", path)
+            self.assertFalse(os.path.realpath(path).startswith(os.path.realpath(light)), path)
+            self.assertFalse(os.path.exists(path), path)  # the temporary copy is removed
+            self.assertIn(cwd, workers)
+        self.assertEqual(sorted(os.path.basename(p) for p, _ in given),
+                         sorted(os.path.basename(r["input"]) for r in s.files))
+
+    def test_0_sent_gltf_buffers_and_iges(self):
+        """A .gltf whose external buffer lies in a folder beside its own ("../buffers/...") is
+        sent with its buffer; IGES files converted by the cluster from sent inputs are
+        byte-identical to a plain convert's."""
+        tmp = tempfile.mkdtemp(prefix="s2n-sent-gltf-")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        gltf = os.path.join(tmp, "in", "models", "cube.gltf")
+        write_cube_gltf(gltf, "../buffers/cube.bin")
+        files = [gltf] + [os.path.join(CORPUS, n + ".obj") for n in FEW]
+        for fmt in ("step", "iges"):
+            out = os.path.join(tmp, "out-" + fmt)
+            s = batch.run(files, out, FAST, scheduler=self.address, cli=CLI, send_inputs="always",
+                          output_format=fmt)
+            self.assertEqual(s.counts, {"ok": len(files)}, s.files)
+            for path in files:
+                stem = os.path.splitext(os.path.basename(path))[0]
+                plain = os.path.join(tmp, "plain-%s.%s" % (stem, fmt))
+                subprocess.run([CLI, "convert", path, "-o", plain, "-q", "--level", "0"], check=True, env=env())
+                self.assertTrue(same_bytes(plain, os.path.join(out, "%s.%s" % (stem, fmt))), (stem, fmt))
+
+    def test_2_interrupt_and_resume(self):
+        """SIGINT to a batch on the cluster (inputs sent as bytes): it ends with exit code 130
+        and its summary; the same command again converts exactly the files left and ends with
+        the local pool's outputs and rows."""
+        out = os.path.join(self.tmp, "dask-interrupted")
+        args = batch_command(light_tree(os.path.join(self.tmp, "light")), "-o", out, "--scheduler", self.address,
+                             "--send-inputs", "always", "--level", "0")
+        first = subprocess.Popen(args, env=env(), stderr=subprocess.DEVNULL)
+        wait_for(lambda: journal_lines(out) >= 10 or first.poll() is not None, "10 files converted")
+        self.assertIsNone(first.poll(), "the batch ended before it was interrupted")
+        first.send_signal(signal.SIGINT)
+        self.assertEqual(first.wait(timeout=300), 130)
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            part = json.load(f)
+        self.assertTrue(part["run"]["interrupted"])
+        left = [r["output"] for r in part["files"] if r["status"] == "interrupted"]
+        self.assertTrue(left)
+        second = subprocess.run(args, env=env(), stderr=subprocess.DEVNULL, timeout=600)
+        self.assertEqual(second.returncode, 2)  # some inputs fail, as in the reference
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            final = json.load(f)
+        self.assertEqual(final["run"]["converted"], len(left))
+        check_like_reference(self, out, final["files"])
+
+    def test_3_lost_worker(self):
         """SIGKILL to one worker mid-run: its task runs again on the other; every file done."""
         out = os.path.join(self.tmp, "dask-lost")
         args = batch_command(light_tree(os.path.join(self.tmp, "light")), "-o", out, "--scheduler", self.address,
