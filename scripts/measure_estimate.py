@@ -112,25 +112,37 @@ def table(paths):
     for p in paths:
         with open(p) as f:
             rows += [json.loads(line) for line in f if line.strip()]
-    print("| model | estimate | peak RSS | ratio | CPU s | wall s | measured class | estimated class | STEP |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| model | peak RSS | estimate before any work | ratio | estimate as built | ratio | CPU s | class measured | class estimated | STEP |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     mb = lambda b: "%.0f MB" % (b / 1e6) if b is not None else "-"
-    worst = []
+    flag = lambda x: "" if 0.5 <= x <= 2 else " (!)"
+    before, built, classes = [], [], [0, 0, 0]
     for r in rows:
-        if r.get("rc") != 0 or not r.get("estimate_bytes"):
-            print("| %s | %s | - | - | - | - | exit %s | - | - |" % (r["model"], mb(r.get("estimate_bytes")), r.get("rc")))
+        if r.get("rc") != 0:
+            print("| %s | - | %s | - | - | - | - | exit %s | - | - |" % (r["model"], mb(r.get("estimate_bytes")), r.get("rc")))
             continue
-        ratio = r["estimate_bytes"] / r["rss"]
-        worst.append(ratio)
+        a = r["estimate_bytes"] / r["rss"]
+        before.append(a)
+        b = r.get("estimate_built_bytes")
+        bt = "-"
+        if b:
+            built.append(b / r["rss"])
+            bt = "%.2f%s" % (b / r["rss"], flag(b / r["rss"]))
         measured = time_class(r["cpu"])
         est = r.get("estimate_class") or "-"
-        mark = "" if est in ("-", measured) else " (!)"
-        print("| %s | %s | %s | %.2f%s | %.1f | %.1f | %s | %s%s | %s |" % (
-            r["model"], mb(r["estimate_bytes"]), mb(r["rss"]), ratio, "" if 0.5 <= ratio <= 2 else " (!)",
-            r["cpu"], r["wall"], measured, est, mark, mb(r.get("step_bytes"))))
-    if worst:
-        print("\n%d models: ratio %.2f .. %.2f, %d outside 0.5 .. 2." % (
-            len(worst), min(worst), max(worst), sum(1 for x in worst if not 0.5 <= x <= 2)))
+        names = [c[1] for c in CLASSES]
+        if est in names:
+            off = abs(names.index(est) - names.index(measured))
+            classes[min(off, 2)] += 1
+        print("| %s | %s | %s | %.2f%s | %s | %s | %.1f | %s | %s%s | %s |" % (
+            r["model"], mb(r["rss"]), mb(r["estimate_bytes"]), a, flag(a), mb(b), bt, r["cpu"], measured, est,
+            "" if est in ("-", measured) else " (!)", mb(r.get("step_bytes"))))
+    print()
+    for what, xs in (("before any work", before), ("as built", built)):
+        if xs:
+            print("Estimate %s / measured peak RSS over %d models: %.2f .. %.2f, %d outside 0.5 .. 2.  " % (
+                what, len(xs), min(xs), max(xs), sum(1 for x in xs if not 0.5 <= x <= 2)))
+    print("Time class (as built) against the measured CPU time: %d right, %d one class off, %d further off." % tuple(classes))
 
 
 if __name__ == "__main__":
