@@ -304,12 +304,12 @@ def main():
 
     # --- sizes: resource guards ---
     c.add("grid_520.obj", grid(520),
-          # 270 400 B-rep faces at about 48 KB each (OCCT's shapes and STEP model): 12.4 GiB, above
-          # 3/4 of the runner's 4 GiB address space.
-          {"default": OK, "convert": {"exit": 1, "message": r"would need about 12\.4 GiB of memory \(limit .*--max-memory"},
+          # 270 400 regular quads, packed into one face: 936 MiB estimated (#32: about 3.2 KB a quad
+          # measured, docs/hardening.md), refused under a 512 MiB limit.
+          {"default": OK, "convert": {"exit": 1, "message": r"would need about 936 MiB of memory \(limit 512 MiB\).*--max-memory"},
            "python": {"exit": 1, "message": r"SettingsError: .*memory"},
            "refine": {"exit": 1, "message": r"about 6\.92e\+07 faces .*--max-faces"}},
-          args={"refine": ["-l", "4"]})
+          args={"refine": ["-l", "4"], "convert": ["--max-memory", "512M"], "python": {"max_memory": "512M"}})
     c.add("grid_100.obj", grid(100), {}, kind="signal")
     # A semi-sharp crease makes the patch builder refine until it has decayed (5 levels here),
     # but only the pieces next to it: the 10k-quad grid converts (it once refined the whole
@@ -321,9 +321,9 @@ def main():
           {"default": OK, "refine": {"exit": 1, "message": r"refining 6 faces to level 11 would make about 2\.52e\+07 faces"}},
           args={"refine": ["-l", "11"]})
     # 12 extra levels cost the cube a few knots per corner (it once meant 6 x 4^14 faces): the
-    # estimate, 1 110 pieces, passes the default and is refused below it.
+    # estimate, 1 062 pieces (960 built), passes the default and is refused below it.
     c.add("cube_level_12.obj", CUBE,
-          {"default": OK, "convert": {"exit": 1, "message": r"level 12 would make about 1\.11e\+03 .*--max-faces"},
+          {"default": OK, "convert": {"exit": 1, "message": r"level 12 would make about 1\.06e\+03 .*--max-faces"},
            "python": {"exit": 1, "message": r"SettingsError: .*level 12"}},
           args={"convert": ["--level", "12", "--max-faces", "1000"], "python": {"level": 12, "max_faces": 1000}})
     c.add("cube_max_memory.obj", CUBE,

@@ -182,6 +182,10 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
         << (c.tolerance.is_default ? ", the default 1e-4 of the model size" : "") << "): "
         << (c.tolerance.met ? "met" : "NOT met") << "; " << c.tolerance.fans_deepened
         << " vertices' fans deepened, by up to " << c.tolerance.used << " levels\n";
+  err << "  estimate   peak memory " << pipeline::bytes_text(c.estimate.bytes) << ", "
+      << pipeline::time_class(c.estimate.seconds) << " of CPU time (before any work: "
+      << pipeline::bytes_text(c.estimate_before.bytes) << ", " << pipeline::time_class(c.estimate_before.seconds)
+      << ")\n";
 }
 
 /// The settings of `options`, checked by the pipeline's rules before any work: the table's

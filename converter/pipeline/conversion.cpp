@@ -240,17 +240,32 @@ struct Run {
   void warn(DiagnosticCode code, const std::string& message) const {
     report({Severity::Warning, code, message, -1, "", ""});
   }
-  /// The resource limits allow `extra` levels.
-  bool fits(int extra) const {
+  EstimateOptions estimate_options() const {
+    EstimateOptions o;
+    o.build_brep = settings.build_brep;
+    o.packed = settings.faces == FaceMode::Packed;
+    o.quality = settings.quality_samples.has_value();
+    o.polar = settings.patch.polar;
+    return o;
+  }
+  /// The resource limits allow `estimate`.
+  bool fits(const ResourceEstimate& estimate) const {
     try {
-      check_resources(estimate_conversion(base, extra, settings.build_brep), settings.limits, kDefaultMaxConvertFaces,
-                      "", "");
+      check_resources(estimate, settings.limits, kDefaultMaxConvertFaces, "", "");
       return true;
     } catch (const ResourceError&) {
       return false;
     }
   }
 };
+
+/// The fans of a build as the estimate costs them, with their levels below the coarse level.
+std::vector<FanCost> fan_costs(const PatchBuild& build) {
+  std::vector<FanCost> costs;
+  for (const IrregularFan& f : build.info.fans)
+    costs.push_back({f.valence, f.sectors, std::max(1, f.level - build.info.coarse_level)});
+  return costs;
+}
 
 /// A cage with a surface to convert: not every face a hole, and of a size double precision
 /// resolves at its distance from the origin. \throw InvalidMeshError
@@ -366,6 +381,23 @@ void tolerance_stage(const Run& r) {
   deviation_stage(r);
   tr.first_max = c.deviation.max;
   std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
+  // The estimate with the fans as built, updated as fans deepen: each deepening is checked
+  // against the limits before the deeper build (the fans of one vertex deepen together).
+  const EstimateOptions eo = r.estimate_options();
+  std::vector<FanCost> costs = fan_costs(c.build);
+  ResourceEstimate total = estimate_conversion(r.base, costs, eo);
+  std::vector<std::vector<int>> fans_of_vertex(extra.size());
+  for (size_t fi = 0; fi < c.build.info.fans.size(); ++fi)
+    fans_of_vertex[c.build.info.fans[fi].vertex].push_back(static_cast<int>(fi));
+  auto deepened = [&](int vertex, int by) {
+    ResourceEstimate e = total;
+    for (int fi : fans_of_vertex[vertex]) {
+      FanCost deeper = costs[fi];
+      deeper.levels += by;
+      e = e - fan_estimate(costs[fi], eo) + fan_estimate(deeper, eo);
+    }
+    return e;
+  };
   bool by_limits = false;  // the last cap came from the face and memory limits (a setting may lift it)
   for (int round = 0; round < kToleranceRounds; ++round) {
     const std::vector<int> before = extra;
@@ -376,13 +408,15 @@ void tolerance_stage(const Run& r) {
       const int want = extra[fan.vertex] + std::max(1, fan_extra_levels_for_tolerance(fan, fd.max, tr.absolute));
       tr.needed = std::max(tr.needed, want);
       const int use = std::min(want, kMaxFanExtraLevels);
-      if (use > extra[fan.vertex] && !r.fits(use)) {  // the limits bound every fan alike
+      if (use > extra[fan.vertex] && !r.fits(deepened(fan.vertex, use - extra[fan.vertex]))) {
         tr.capped = true;
         tr.cap_reason = "the face and memory limits";
         by_limits = true;
         continue;
       }
       if (use > extra[fan.vertex]) {
+        total = deepened(fan.vertex, use - extra[fan.vertex]);
+        for (int fi : fans_of_vertex[fan.vertex]) costs[fi].levels += use - extra[fan.vertex];
         extra[fan.vertex] = use;
         deeper = true;
       } else if (want > kMaxFanExtraLevels) {
@@ -541,7 +575,8 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   c.tolerance_absolute = settings.absolute;
   const int level = settings.level.value_or(0);
   check_has_surface(base, positions);
-  check_resources(estimate_conversion(base, level, settings.build_brep), settings.limits, kDefaultMaxConvertFaces,
+  c.estimate_before = estimate_conversion(base, level, run.estimate_options());
+  check_resources(c.estimate_before, settings.limits, kDefaultMaxConvertFaces,
                   "converting " + std::to_string(base.mesh.num_faces()) + " cage faces at level " +
                       std::to_string(level),
                   level > 0 ? "use a lower level" : "simplify the cage");
@@ -550,6 +585,8 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   // Patches, at the level asked for or at the minimum level first for a tolerance.
   patches_stage(run, level);
   if (tolerance_given) tolerance_stage(run);
+  // The estimate with the fans as built (their levels known now), before the B-rep.
+  c.estimate = estimate_conversion(base, fan_costs(c.build), run.estimate_options());
 
   // The optional quality stage runs on a thread of its own from here on, beside the other
   // stages: first what depends on the cage alone (the exact limit, the quadric fits at the

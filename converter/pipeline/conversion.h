@@ -235,6 +235,10 @@ struct ConversionResult {
   FitReport fit;
   std::vector<Point3> cage;  ///< the cage converted: the input's positions, or the fitted cage
   std::optional<QualityReport> quality;  ///< ConversionSettings::quality_samples given
+  /// The resource estimate (resources.h): before any work, from the cage's topology (what the
+  /// limits were first checked against), and with the fans as built (their levels known after
+  /// the tolerance stage), before packing and the B-rep.
+  ResourceEstimate estimate_before, estimate;
   std::optional<PreviewMesh> preview;    ///< ConversionSettings::preview given
   /// The input was a mesh (mesh_path.h): what made the cage from it; set by the caller.
   std::optional<MeshPathReport> mesh;

@@ -293,6 +293,14 @@ std::string report_json(const ConversionResult& c) {
   write_deviation(w, c, size);
   write_curvature_radius(w, c.exported.set);
   if (c.mesh) write_mesh_path(w.key("mesh"), *c.mesh);
+  w.key("estimate").begin_object();
+  for (const auto& [key, e] : {std::pair{"before_work", &c.estimate_before}, std::pair{"before_brep", &c.estimate}}) {
+    w.key(key).begin_object();
+    w.members("bytes", e->bytes, "cpu_seconds", e->seconds, "time_class", time_class(e->seconds));
+    w.members("pieces", e->faces, "exported_faces", e->exported_faces, "exported_poles", e->exported_poles);
+    w.end_object();
+  }
+  w.end_object();
   const Timings& ms = c.ms;
   w.key("timings_ms").begin_object();
   w.members("load", ms.load, "fit", ms.fit, "patches", ms.patches, "continuity", ms.continuity,

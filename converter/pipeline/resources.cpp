@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "converter/pipeline/text.h"
+#include "core/polar/polar_structure.h"
 #include "io/input_file.h"
 
 namespace subd2nurbs::pipeline {
@@ -58,43 +59,190 @@ bool parse_memory_size(const std::string& text, double& bytes) {
   return true;
 }
 
-ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep) {
-  // The patch builder refines only locally (core/patch, docs/patches.md): its work is the
-  // polynomial pieces. Every coarse quad is one piece, plus at each irregular corner 3 per level
-  // down to its fan's zone and the zone's 4, plus along each semi-sharp edge two rows of pieces
-  // per level until its sharpness has decayed. The B-rep and the STEP writer then cost per face.
+std::string time_class(double seconds) {
+  if (seconds < 1) return "under a second";
+  if (seconds < 10) return "seconds";
+  if (seconds < 60) return "tens of seconds";
+  if (seconds < 600) return "minutes";
+  return "ten minutes or more";
+}
+
+namespace {
+
+/// The part of the estimate that the fans' levels do not change: the coarse quads, the semi-sharp
+/// edges, the exported faces and the process; and the fans the topology predicts.
+struct CageCost {
+  double quads = 0;            ///< of the coarsest all-quad level
+  double irregular_quads = 0;  ///< of those, the quads with an irregular corner (a patch and a face each)
+  double semi_pieces = 0, semi_poles = 0;
+  double caps = 0, cap_poles = 0;  ///< polar caps: one face each
+  std::vector<FanCost> fans;   ///< valence and quads at each irregular vertex; levels 2
+};
+
+/// Is coarse vertex v a fan of the patch builder (an extraordinary vertex)? Interior: valence
+/// other than 4; boundary: other than 2 faces (valence 3) or a corner's single face.
+bool irregular_vertex(const PolyMesh& m, int v) {
+  const int f = m.vertex_face_count(v);
+  if (f == 0) return false;
+  return m.is_boundary_vertex(v) ? f > 2 : f != 4;
+}
+
+CageCost cage_cost(const SubdivLevel& base, bool polar) {
   const PolyMesh& m = base.mesh;
-  const double coarse_quads = m.all_quads() ? m.num_faces() : m.num_corners();
-  const int extra = std::max(0, extra_levels);
-  double irregular_corners = 0;
+  CageCost c;
+  std::vector<char> irregular(m.num_vertices(), 0), pole(m.num_vertices(), 0), in_cap(m.num_faces(), 0);
+  // A polar structure is one cap patch (docs/math.md 4): no fan at its pole, its triangles'
+  // quads one face.
+  if (polar)
+    for (const PolarStructure& s : detect_polar_structures(base).structures) {
+      pole[s.pole] = 1;
+      for (int f : s.cap_faces) in_cap[f] = 1;
+      c.caps += 1;
+      c.cap_poles += 16.0 * s.valence;
+    }
+  // The coarse level: the cage when every face outside the caps is a quad, else level 1.
+  bool quads = true;
+  double corners = 0, quad_faces = 0;
+  for (int f = 0; f < m.num_faces(); ++f)
+    if (!in_cap[f]) {
+      quads = quads && m.face_size(f) == 4;
+      corners += m.face_size(f);
+      quad_faces += 1;
+    }
+  c.quads = quads ? quad_faces : corners;
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (!pole[v] && irregular_vertex(m, v)) {
+      irregular[v] = 1;
+      c.fans.push_back({m.valence(v), m.vertex_face_count(v), 2});
+    }
   for (int f = 0; f < m.num_faces(); ++f) {
-    if (m.face_size(f) != 4) irregular_corners += m.face_size(f);  // each child quad's centre corner
-    for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
-      const int v = m.corner_vertex(h);
-      if (m.is_boundary_vertex(v) || m.valence(v) != 4) irregular_corners += m.face_size(f) == 4 ? 1 : 2;
+    const int n = m.face_size(f);
+    if (n != 4 && !in_cap[f]) c.fans.push_back({n, n, 2});  // the face point: a level-1 vertex of valence n
+    if (n == 4) {
+      bool any = false;
+      for (int h = m.face_begin(f); h < m.face_end(f); ++h) any = any || irregular[m.corner_vertex(h)];
+      c.irregular_quads += any ? 1 : 0;
+    } else if (!in_cap[f]) {
+      c.irregular_quads += n;  // each child quad has the face point at a corner
     }
   }
-  double semi_pieces = 0;
+  // Semi-sharp edges: the builder refines the quads beside one until its sharpness decays (at
+  // most ceil(s) + 1 levels), a row of pieces along it per level on each side, and their
+  // patches get the knots of those rows.
   for (int e = 0; e < m.num_edges(); ++e) {
     const float s = base.edge_sharpness[e];
     if (!(s > 0 && s < kInfiniteSharpness)) continue;
-    const int levels = static_cast<int>(std::ceil(s)) + 1;
-    semi_pieces += 2.0 * 4.0 * std::pow(2.0, levels);  // two faces, two rows per level, 2^j per row
+    const int levels = std::min(static_cast<int>(std::ceil(s)) + 1, 12);
+    const double along = std::pow(2.0, levels);
+    c.semi_pieces += 3.0 * along;  // measured: 2.7 .. 3.1 x along on the corpus
+    c.semi_poles += 0.5 * along;   // most of those knots are removed again (one polynomial)
   }
+  return c;
+}
+
+ResourceEstimate estimate(const CageCost& c, const std::vector<FanCost>& fans, const EstimateOptions& o) {
   ResourceEstimate e;
-  e.faces = coarse_quads + irregular_corners * (3.0 * (2 + extra) + 4) + semi_pieces;
-  e.patches = coarse_quads;
-  e.poles = 16.0 * coarse_quads + irregular_corners * 2.0 * (2 + extra) * 8.0;
-  e.bytes = e.faces * kConvertBytesPerPiece + coarse_quads * (build_brep ? kConvertBytesPerFace : kConvertBytesPerFaceNoBrep);
-  // Irregular vertices: one eigenbasis per distinct valence (limit evaluation), each with a
-  // few (2n+8)^2 matrices of doubles. n-gons give level-1 vertices of valence n.
+  const double regular = std::max(0.0, c.quads - c.irregular_quads);
+  e.patches = c.quads;
+  e.faces = c.quads + c.semi_pieces;
+  e.poles = 16.0 * c.quads + c.semi_poles + c.cap_poles;
+  const double irregular_faces = c.irregular_quads + c.caps;
+  if (o.packed) {
+    // Regular regions pack into rectangles of about one pole per quad; the quads at irregular
+    // vertices stay a face each, and the regions between them make about 1 face in 8 more.
+    const double packs = 0.125 * irregular_faces + (regular > 0 ? 1 : 0);
+    e.exported_faces = irregular_faces + packs;
+    e.exported_poles = regular + 16.0 * (packs + c.irregular_quads) + c.semi_poles + c.cap_poles;
+  } else {
+    e.exported_faces = c.quads + c.caps;
+    e.exported_poles = e.poles;
+  }
+  e.bytes = kProcessBytes + kBytesPerQuad * c.quads + kBytesPerPiece * c.semi_pieces +
+            kBytesPerPatchPole * (c.semi_poles + c.cap_poles);
+  if (o.build_brep)
+    e.bytes += kBytesPerFace * e.exported_faces + kBytesPerEdge * 2.2 * e.exported_faces +
+               kBytesPerFacePole * e.exported_poles;
+  else
+    e.bytes += kBytesPerFacePoleNoBrep * e.exported_poles;
+  e.seconds = kStartSeconds + kSecondsPerPiece * e.faces + kSecondsPerPole * e.exported_poles +
+              (o.build_brep ? kSecondsPerFace * e.exported_faces : 0.0);
   std::set<int> valences;
-  for (int v = 0; v < m.num_vertices(); ++v)
-    if (!m.is_boundary_vertex(v) && m.valence(v) != 4) valences.insert(m.valence(v));
-  for (int f = 0; f < m.num_faces(); ++f)
-    if (m.face_size(f) != 4) valences.insert(m.face_size(f));
-  for (int n : valences) e.bytes += 4.0 * 8.0 * (2.0 * n + 8) * (2.0 * n + 8);
+  for (const FanCost& f : fans) {
+    e = e + fan_estimate(f, o);
+    valences.insert(f.valence);
+  }
+  // The quality stage's exact limit: Stam's eigenbasis per valence, a few (2n+8)^2 matrices,
+  // and their O(n^3) eigen-decomposition; and samples on every patch.
+  if (o.quality) {
+    for (int n : valences) {
+      const double k = 2.0 * n + 8;
+      e.bytes += 5 * 8.0 * k * k;
+      e.seconds += 2e-9 * k * k * k;
+    }
+    e.seconds += 2e-5 * 81 * e.patches;
+  }
   return e;
+}
+
+}  // namespace
+
+ResourceEstimate operator+(const ResourceEstimate& a, const ResourceEstimate& b) {
+  ResourceEstimate e;
+  e.faces = a.faces + b.faces;
+  e.patches = a.patches + b.patches;
+  e.poles = a.poles + b.poles;
+  e.exported_faces = a.exported_faces + b.exported_faces;
+  e.exported_poles = a.exported_poles + b.exported_poles;
+  e.bytes = a.bytes + b.bytes;
+  e.seconds = a.seconds + b.seconds;
+  return e;
+}
+
+ResourceEstimate operator-(const ResourceEstimate& a, const ResourceEstimate& b) {
+  ResourceEstimate e;
+  e.faces = a.faces - b.faces;
+  e.patches = a.patches - b.patches;
+  e.poles = a.poles - b.poles;
+  e.exported_faces = a.exported_faces - b.exported_faces;
+  e.exported_poles = a.exported_poles - b.exported_poles;
+  e.bytes = a.bytes - b.bytes;
+  e.seconds = a.seconds - b.seconds;
+  return e;
+}
+
+ResourceEstimate fan_estimate(const FanCost& f, const EstimateOptions& o) {
+  // Per quad at the vertex: 3 pieces per level down to the zone and the zone's 4 and 1, a patch
+  // whose knots halve towards the corner, (levels + 7)^2 poles instead of 16.
+  const double L = std::max(f.levels, 1);
+  const double pieces = f.corners * (3.0 * L + 2);
+  const double poles = f.corners * ((L + 7) * (L + 7) - 16);
+  ResourceEstimate e;
+  e.faces = pieces;
+  e.poles = poles;
+  e.exported_poles = poles;
+  e.bytes = kBytesPerPiece * pieces + kBytesPerPatchPole * poles + kBytesPerFanValence * f.valence +
+            (o.build_brep ? kBytesPerFacePole : kBytesPerFacePoleNoBrep) * poles;
+  e.seconds = kSecondsPerPiece * pieces + kSecondsPerPole * poles + kSecondsPerFanValenceLevel * f.valence * L +
+              kSecondsPerFanValence2Level * f.valence * f.corners * L;
+  return e;
+}
+
+ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, const EstimateOptions& options) {
+  const CageCost c = cage_cost(base, options.polar);
+  std::vector<FanCost> fans = c.fans;
+  for (FanCost& f : fans) f.levels = 2 + std::max(0, extra_levels);
+  return estimate(c, fans, options);
+}
+
+ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep) {
+  EstimateOptions o;
+  o.build_brep = build_brep;
+  return estimate_conversion(base, extra_levels, o);
+}
+
+ResourceEstimate estimate_conversion(const SubdivLevel& base, const std::vector<FanCost>& fans,
+                                     const EstimateOptions& options) {
+  return estimate(cage_cost(base, options.polar), fans, options);
 }
 
 ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels) {

@@ -7,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "converter/pipeline/settings_error.h"
 #include "core/refine/refiner.h"
@@ -20,15 +21,38 @@ namespace subd2nurbs::pipeline {
 constexpr double kDefaultMaxConvertFaces = 4e6;
 constexpr double kDefaultMaxRefineFaces = 2e7;
 
-/// Peak memory, measured (Release build, Debian 12, x86-64, the adaptive builder): per B-rep face
-/// with the B-rep and the STEP writer (OCCT's shapes and STEP model: 45 KB on a 100 000-quad
-/// torus) and without (patch JSON, check); per piece (its Bezier net, the local refinement and
-/// the quality report's share); a refinement per output face (all levels, stencils, the OBJ
-/// text: 370-420 bytes).
-constexpr double kConvertBytesPerFace = 48000;
-constexpr double kConvertBytesPerFaceNoBrep = 6000;
-constexpr double kConvertBytesPerPiece = 1200;
+/// Peak memory of a conversion, per what it allocates (Release build, Debian 12, x86-64; fitted
+/// on the 87 OpenSubdiv shapes, the real models and the costly cases of docs/hardening.md,
+/// `scripts/measure_estimate.py`): the process itself (libraries, OCCT's and the readers'
+/// tables), per polynomial piece of the patch builder (its Bezier net, the quadtree, the local
+/// refinement), per regular coarse quad, per pole of the B-splines at irregular vertices beyond a
+/// regular quad's 16, per valence of an irregular vertex's fan
+/// piece (the 5 rings of its level-k piece, its nets and the deviation's local refinement),
+/// and per exported face, B-rep edge and pole (OCCT's faces, curves and pcurves, the STEP
+/// model's entities and text).
+constexpr double kProcessBytes = 35e6;
+constexpr double kBytesPerQuad = 3200;  ///< a regular quad: its piece, patch, 16 poles, packing
+constexpr double kBytesPerPiece = 360;
+constexpr double kBytesPerPatchPole = 670;
+constexpr double kBytesPerFanValence = 20000;
+constexpr double kBytesPerFace = 49000;
+constexpr double kBytesPerEdge = 14500;
+constexpr double kBytesPerFacePole = 300;
+/// Without the B-rep (patch JSON, check): the exported set and the JSON text.
+constexpr double kBytesPerFacePoleNoBrep = 150;
 constexpr double kRefineBytesPerFace = 450;
+
+/// CPU time of a conversion to STEP (one core of this machine, idle; fitted as the bytes): the
+/// start, per piece, per exported pole and face (the B-rep and the STEP writer), per valence and
+/// level of a fan, and per valence^2 and level: every quad at a valence-n vertex refines a piece
+/// holding the vertex's whole star at each level down to its zone (core/patch/patch_builder.cpp,
+/// leaves_of), which makes a deepened 1000-gon cost tens of seconds.
+constexpr double kStartSeconds = 0.05;
+constexpr double kSecondsPerPiece = 4e-6;
+constexpr double kSecondsPerPole = 1e-5;
+constexpr double kSecondsPerFace = 1e-3;
+constexpr double kSecondsPerFanValenceLevel = 5e-5;
+constexpr double kSecondsPerFanValence2Level = 1.4e-6;
 
 /// Most levels a uniform refinement takes: beyond the face limit for any cage, and 4^levels
 /// stays far from overflowing.
@@ -52,17 +76,56 @@ double memory_size(const std::string& text);
 double default_max_memory();
 
 struct ResourceEstimate {
-  double faces = 0;    ///< work units: convert: polynomial pieces (bound); refine: output faces, exact
+  double faces = 0;    ///< work units: convert: polynomial pieces; refine: output faces, exact
   double patches = 0;  ///< NURBS patches (convert), 0 for refine
   double poles = 0;    ///< their control points
-  double bytes = 0;    ///< peak memory, roughly
+  double exported_faces = 0;  ///< faces of the B-rep / patch JSON (convert)
+  double exported_poles = 0;  ///< their control points
+  double bytes = 0;    ///< peak memory (resident), within 2x of the measured peak (docs/hardening.md)
+  double seconds = 0;  ///< CPU time of one core, roughly (a time class, time_class)
 };
 
-/// Conversion with `extra_levels` beyond the minimum: from the face count (quads of the
-/// coarsest all-quad mesh), the level (raised, as the patch builder does, while semi-sharp
-/// creases have not decayed: up to 5 levels above the coarse mesh), and the irregular vertices (Stam's eigenbasis per
-/// valence, (2n+8)^2 doubles a few times over).
-ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep = true);
+/// The order of magnitude of a time: "under a second", "seconds" (< 10 s), "tens of seconds"
+/// (< 1 min), "minutes" (< 10 min), "ten minutes or more".
+std::string time_class(double seconds);
+
+/// One irregular vertex of the coarsest all-quad level as the estimate costs it: its valence,
+/// the coarse quads at it and the levels its fan goes below the coarse level (2 + extra).
+struct FanCost {
+  int valence = 0;
+  int corners = 0;
+  int levels = 2;
+};
+
+/// What the output is: a B-rep (STEP / IGES / BREP) or not (patch JSON, check); packed faces
+/// or one per quad.
+struct EstimateOptions {
+  bool build_brep = true;
+  bool packed = true;
+  bool polar = true;     ///< polar structures become caps (PatchOptions::polar)
+  bool quality = false;  ///< the quality stage (convert --report, check): Stam's eigenbases per valence
+};
+
+ResourceEstimate operator+(const ResourceEstimate& a, const ResourceEstimate& b);
+ResourceEstimate operator-(const ResourceEstimate& a, const ResourceEstimate& b);
+
+/// Conversion with `extra_levels` beyond the minimum at every fan, before any work: from the
+/// quads of the coarsest all-quad mesh, its irregular vertices (valence, quads at each), the
+/// semi-sharp edges (the builder refines along them until their sharpness decays) and the
+/// output. Regular quads cost one piece and 16 poles each and pack into few faces; a quad at an
+/// irregular vertex costs 3 pieces per level down to its zone and a patch of (levels + 7)^2
+/// poles, one B-rep face of its own.
+ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, const EstimateOptions& options = {});
+ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, bool build_brep);
+
+/// The same with the fans as the patch builder found them (the levels a tolerance gave each):
+/// `fans` replace the irregular vertices the topology predicts.
+ResourceEstimate estimate_conversion(const SubdivLevel& base, const std::vector<FanCost>& fans,
+                                     const EstimateOptions& options = {});
+
+/// What one fan adds to an estimate (estimate_conversion is the cage's part plus every fan's):
+/// the difference of two of them is what deepening that fan costs.
+ResourceEstimate fan_estimate(const FanCost& fan, const EstimateOptions& options = {});
 
 /// Uniform refinement to `levels`: faces exact (corners x 4^(levels-1) after the first level).
 ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels);
