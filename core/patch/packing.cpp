@@ -461,7 +461,15 @@ void side_curve(const NurbsPatch& p, int side, double t0, double t1, BoundaryCur
   const double lo = U.front(), hi = U.back();
   auto x_of = [&](double t) { return t == 0 ? (backwards ? hi : lo) : t == 1 ? (backwards ? lo : hi)
                                                                       : backwards ? hi - t * (hi - lo) : lo + t * (hi - lo); };
-  const double xa = std::min(x_of(t0), x_of(t1)), xb = std::max(x_of(t0), x_of(t1));
+  // t is a ratio of whole quads (at / n); lo + t (hi - lo) can miss the knot it means by a
+  // rounding error (23/42 * 42 = 22.999999999999996), and inserting that would put two knots
+  // 4e-15 apart into the curve, which OCCT refuses. A value that close to a knot is that knot.
+  const double snap = 1e-12 * (hi - lo);
+  auto on_knot = [&](double x) {
+    const auto it = std::lower_bound(U.begin(), U.end(), x - snap);
+    return it != U.end() && std::abs(*it - x) <= snap ? *it : x;
+  };
+  const double xa = on_knot(std::min(x_of(t0), x_of(t1))), xb = on_knot(std::max(x_of(t0), x_of(t1)));
   for (double x : {xa, xb})
     if (x > lo && x < hi)
       while (std::count(U.begin(), U.end(), x) < 3) insert_knot(U, P, x);

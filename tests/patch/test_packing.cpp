@@ -19,6 +19,7 @@
 #include "core/eval/continuity.h"
 #include "core/nurbs/nurbs_eval.h"
 #include "core/patch/packing.h"
+#include "io/cage_reader.h"
 #include "io/obj_reader.h"
 #include "patch/patch_test_util.h"
 
@@ -262,6 +263,26 @@ TEST(PackingSlow, AtLeastThreeTimesFewerFacesOnRealModels) {
   for (const char* name : {"catmark_pawn", "catmark_bishop", "catmark_rook"}) {
     const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj");
     check(name, build_patches(SubdivLevel::from_input(cage.input), cage.input.positions));
+  }
+}
+
+// A real quad remesh whose packed faces have sides cut into pieces at whole quads that
+// floating point does not hit exactly (23/42 x 42 = 22.999999999999996): every piece's curve
+// must keep the side's own knots, whole quads apart, with no near-duplicate beside one (OCCT
+// refuses knots closer than ~1e-15, and the conversion once failed there with exit 4).
+TEST(Packing, SidePiecesKeepWholeQuadKnotsOnARealRemesh) {
+  const LoadedCage cage = read_cage(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk_quads.off");
+  const PatchBuild b = build_patches(SubdivLevel::from_input(cage.input), cage.input.positions);
+  const PackedSet out = pack_patches(b);
+  expect_consistent(b, out);
+  EXPECT_LT(max_packed_difference(b, out), 1e-12 * b.set.model_size);
+  int pieces = 0;
+  for (const NurbsPatch& p : out.set.patches)
+    for (const auto& side : p.split_sides) pieces += static_cast<int>(side.size());
+  EXPECT_GT(pieces, 0);  // the case this test is about is present
+  for (size_t k = 0; k < out.set.curves.size(); ++k) {
+    const auto& t = out.set.curves[k].knots.knots;
+    for (size_t i = 1; i < t.size(); ++i) EXPECT_GT(t[i] - t[i - 1], 1e-6) << "curve " << k << " knot " << i;
   }
 }
 
