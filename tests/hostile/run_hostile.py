@@ -313,7 +313,7 @@ class Runner:
         signal, so the outcome does not depend on the machine's load. A control run with the
         cleanup disabled (SUBD2NURBS_TEST_NO_SIGNAL_CLEANUP) must leave its temporary files: the
         check can fail."""
-        grid = os.path.join(self.corpus, "grid_100.obj")
+        grid = os.path.join(self.corpus, "grid_10.obj")
         for stage in ("output", "commit"):
             for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
                 case = {"name": "signal_%s_at_%s" % (sig.name, stage), "expect": {}}
