@@ -1,3 +1,4 @@
+#include "core/util/number_text.h"
 #include "io/gltf_reader.h"
 
 #include <tiny_gltf.h>
@@ -236,7 +237,7 @@ class Reader {
         for (int r = 0; r < 3; ++r)
           if (!(std::fabs(q[r]) <= kMaxCoordinate))
             fail(where + ", " + prim_name + ": vertex " + std::to_string(i) + " is transformed to " + "xyz"[r] +
-                 " = " + coordinate_text(q[r]) + ", beyond the coordinate limit +-" + coordinate_text(kMaxCoordinate));
+                 " = " + exact_number_text(q[r]) + ", beyond the coordinate limit +-" + coordinate_text(kMaxCoordinate));
         const auto found = weld_.find(q);
         if (found != weld_.end()) {
           id[i] = found->second;

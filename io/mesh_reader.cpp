@@ -1,6 +1,7 @@
 // The repairs every STL, PLY and OFF file goes through (io/mesh_reader.h): checks, welding,
 // degenerate and duplicate faces, unused vertices, orientation, quad recovery; and the text
 // cursor the ASCII readers share.
+#include "core/util/number_text.h"
 #include "io/mesh_reader.h"
 
 #include <algorithm>
@@ -349,7 +350,7 @@ std::vector<std::size_t> checked_face_offsets(const RawMesh& raw, const std::str
                        MeshErrorCode::NonFiniteCoordinate);
       if (std::fabs(x) > kMaxCoordinate)
         throw error_at(name, raw.locator, raw.vertex_unit, raw.vertex_loc[v],
-                       "vertex has " + axis + " = " + number_text(x) + ", beyond the coordinate limit +-" +
+                       "vertex has " + axis + " = " + exact_number_text(x) + ", beyond the coordinate limit +-" +
                            number_text(kMaxCoordinate) + " (scale the model down)",
                        MeshErrorCode::CoordinateOutOfRange);
     }

@@ -9,6 +9,8 @@
 //  2. tinyobjloader (triangulate=false) resolves the face index lists (a/t/n forms, negative
 //     relative indices). Its shapes hold the faces in file order; we concatenate them and check
 //     that they agree with pass 1 face by face.
+#include "core/mesh/poly_mesh.h"
+#include "core/util/number_text.h"
 #include "io/obj_reader.h"
 
 #include <tiny_obj_loader.h>
@@ -424,7 +426,7 @@ InputError locate(const LoadedCage& cage, const InvalidMeshError& e) {
       const int axis = e.index2() >= 0 && e.index2() < 3 ? static_cast<int>(e.index2()) : 0;
       return at(vertex_at(e.index()),
                 vertex_name(cage, e.index()) + " has " + "xyz"[axis] + " = " +
-                    sharpness_text(in.positions.at(static_cast<size_t>(e.index()))[axis]) +
+                    exact_number_text(in.positions.at(static_cast<size_t>(e.index()))[axis]) +
                     ", beyond the coordinate limit +-" + sharpness_text(kMaxCoordinate) +
                     " (scale the model down)");
     }
@@ -462,6 +464,12 @@ InputError locate(const LoadedCage& cage, const InvalidMeshError& e) {
     }
     case MeshErrorCode::InconsistentOrientation: {
       const long later = std::max(e.index(), e.index2()), earlier = std::min(e.index(), e.index2());
+      if (!faces_orientable(in.face_sizes, in.face_indices))
+        return at(face_at(later),
+                  "the surface is not orientable (like a Moebius strip or a Klein bottle): this face and its "
+                  "neighbour on line " + std::to_string(line_at(cage.face_line, earlier)) +
+                      " traverse their shared edge in the same direction, and no reversal of faces mends "
+                      "that; it cannot be converted to a closed oriented body");
       return at(face_at(later),
                 "face is oriented inconsistently with its neighbour on line " +
                     std::to_string(line_at(cage.face_line, earlier)) +

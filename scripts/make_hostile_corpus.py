@@ -311,6 +311,8 @@ def main():
            "refine": {"exit": 1, "message": r"about 6\.92e\+07 faces .*--max-faces"}},
           args={"refine": ["-l", "4"], "convert": ["--max-memory", "512M"], "python": {"max_memory": "512M"}})
     c.add("grid_100.obj", grid(100), {}, kind="signal")
+    # The signal test's cage: it stops at a known stage (SUBD2NURBS_TEST_STOP), so a small one.
+    c.add("grid_10.obj", grid(10), {}, kind="signal")
     # A semi-sharp crease makes the patch builder refine until it has decayed (5 levels here),
     # but only the pieces next to it: the 10k-quad grid converts (it once refined the whole
     # cage to 10k x 4^5 faces and timed out).

@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -23,9 +25,23 @@
 #include "io/obj_writer.h"
 #include "io/patch_json.h"
 
+#include <unistd.h>
+
 namespace subd2nurbs::cli {
 
 namespace {
+
+/// Test hook of the signal test (tests/hostile/run_hostile.py --command signal): with
+/// SUBD2NURBS_TEST_STOP=STAGE in the environment, the run prints "subd2nurbs: test stop: STAGE"
+/// on stderr when it reaches STAGE and waits there (at most 60 s) for the test's signal, so that
+/// the signal arrives at a known stage whatever the machine's load. Stages: "output" (the main
+/// output staged, the report not yet), "commit" (every output staged, none renamed yet).
+void test_stop(const char* stage, std::ostream& err) {
+  const char* wanted = std::getenv("SUBD2NURBS_TEST_STOP");
+  if (!wanted || std::strcmp(wanted, stage) != 0) return;
+  err << "subd2nurbs: test stop: " << stage << std::endl;
+  for (int second = 0; second < 60; ++second) ::sleep(1);
+}
 
 using pipeline::ApproximateFan;
 using pipeline::ConversionResult;
@@ -308,8 +324,10 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     const occt::Format format = kind == OutputKind::Step   ? occt::Format::Step
                                 : kind == OutputKind::Iges ? occt::Format::Iges
                                                            : occt::Format::Brep;
+    pipeline::check_exchange_output(r, options.mesh, format != occt::Format::Brep);
     staged.push_back(occt::stage_shape(r.brep.shape, options.output, format, schema));
     r.ms.write = ms_since(t0);
+    test_stop("output", err);
   };
   ConversionResult c;
   try {
@@ -338,6 +356,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     staged.emplace_back(options.keep_cage);
     staged.back().write([&](std::ostream& out) { write_obj(out, c.cage, base); });
   }
+  test_stop("commit", err);
   for (StagedFile& file : staged) file.commit();
   if (!options.quiet) {
     if (c.mesh) err << pipeline::mesh_path_summary(*c.mesh);

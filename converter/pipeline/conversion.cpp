@@ -1,5 +1,6 @@
 #include "converter/pipeline/conversion.h"
 #include "converter/pipeline/settings.h"
+#include "io/input_error.h"
 
 #include "core/nurbs/nurbs_eval.h"
 #include "core/util/parallel.h"
@@ -91,6 +92,7 @@ const char* to_string(DiagnosticCode code) {
     case DiagnosticCode::PolesSeparated: return "poles_separated";
     case DiagnosticCode::TinyPart: return "tiny_part";
     case DiagnosticCode::FlatPart: return "flat_part";
+    case DiagnosticCode::ThinPart: return "thin_part";
   }
   return "?";
 }
@@ -267,6 +269,10 @@ std::vector<FanCost> fan_costs(const PatchBuild& build) {
   return costs;
 }
 
+/// The smallest cage converted (bounding-box diagonal): the 4th powers of lengths in the
+/// curvature measures stay normal doubles (1e-240), as the coordinate limit 1e15 keeps them finite.
+constexpr double kMinModelSize = 1e-60;
+
 /// A cage with a surface to convert: not every face a hole, and of a size double precision
 /// resolves at its distance from the origin. \throw InvalidMeshError
 void check_has_surface(const SubdivLevel& base, const std::vector<Point3>& positions) {
@@ -288,14 +294,22 @@ void check_has_surface(const SubdivLevel& base, const std::vector<Point3>& posit
       hi[k] = std::max(hi[k], p[k]);
       far = std::max(far, std::fabs(p[k]));
     }
-  const double diagonal = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                    (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  if (!(diagonal > 1e-12 * far) || diagonal == 0)
+  // hypot, as `info` measures it: the squares of a denormal cage's sides underflow to 0.
+  const double diagonal = std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  if (diagonal == 0)
     throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::None, -1, -1,
-                           "the cage has size " + short_number(diagonal) + " (bounding-box diagonal) " +
-                               (diagonal == 0 ? std::string("- all its vertices coincide")
-                                              : "at distance " + short_number(far) +
-                                                    " from the origin, below what double precision resolves") +
+                           "the cage has size 0 (bounding-box diagonal) - all its vertices coincide: there "
+                           "is no surface to convert");
+  if (diagonal < kMinModelSize)
+    throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::None, -1, -1,
+                           "the cage has size " + short_number(diagonal) +
+                               " (bounding-box diagonal), below the smallest size converted, " +
+                               short_number(kMinModelSize) +
+                               " (the squares and higher powers of its lengths would underflow): scale the model up");
+  if (!(diagonal > 1e-12 * far))
+    throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::None, -1, -1,
+                           "the cage has size " + short_number(diagonal) + " (bounding-box diagonal) at distance " +
+                               short_number(far) + " from the origin, below what double precision resolves" +
                                ": there is no surface to convert");
 }
 
@@ -503,8 +517,16 @@ void pole_notes(const Run& r) {
 /// - flat_part: in a closed model, a part whose cage encloses no volume (|volume| at most
 ///   kFlatVolume x its diagonal cubed, e.g. a cube flattened onto a plane): its solid has zero
 ///   volume.
+/// - thin_part: in a closed model, a part (not flat) thinner than kMinThicknessTolerances B-rep
+///   tolerances, its thickness taken as 2 |cage volume| / cage area (a thin box's smallest side,
+///   a third of a cube's side). Measured (STEP written, read back by STEPControl_Reader): boxes
+///   1 x h x 1 read back as valid solids of 0.54 x their volume for h <= 1e-7 (the tolerance),
+///   not at all for h = 2e-7, exactly for h >= 3e-7; cubes of size 1e-6 .. 5e-6 exactly.
+/// A tiny part, and a thin or flat one of non-zero thickness, set c.exchange_refusal: such a
+/// part is not written to STEP / IGES (check_exchange_output); BREP keeps it as it is.
 void part_warnings(const Run& r) {
   constexpr double kMinPartTolerances = 10;
+  constexpr double kMinThicknessTolerances = 4;
   constexpr double kFlatVolume = 1e-12;
   const PolyMesh& m = r.base.mesh;
   const std::vector<Point3>& x = r.c.cage;
@@ -520,6 +542,7 @@ void part_warnings(const Run& r) {
     int first_face = -1, faces = 0;
     Point3 lo, hi;
     double volume = 0;  ///< six times the signed volume of the cage's faces (fans of triangles)
+    double area = 0;    ///< twice the area of the cage's faces (fans of triangles)
   };
   std::vector<Part> part(m.num_vertices());
   for (int f = 0; f < m.num_faces(); ++f) {
@@ -539,6 +562,8 @@ void part_warnings(const Run& r) {
       const Point3 &b = x[fv[i]], &c = x[fv[i + 1]];
       p.volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
                   a[2] * (b[0] * c[1] - b[1] * c[0]);
+      const Point3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      p.area += std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]);
     }
   }
   const double tolerance = occt::brep_tolerance(r.c.build.set.model_size);
@@ -549,18 +574,46 @@ void part_warnings(const Run& r) {
     const double size = std::sqrt(d2);
     const std::string which =
         "the part of the cage with face " + std::to_string(p.first_face) + " (" + std::to_string(p.faces) + " faces)";
-    if (size < kMinPartTolerances * tolerance)
+    const double limit = kMinPartTolerances * tolerance, thin = kMinThicknessTolerances * tolerance;
+    const auto below = [&](double factor) {
+      return ", less than " + short_number(factor) + " x the B-rep tolerance " + short_number(tolerance);
+    };
+    // 2 V / A with V = volume / 6 and A = area / 2 (the fans' sums are 6 V and 2 A).
+    const double thickness = p.area > 0 ? 2 * (std::fabs(p.volume) / 6) / (p.area / 2) : 0;
+    const bool closed = r.c.build.set.closed;
+    if (size < limit) {
       r.warn(DiagnosticCode::TinyPart,
-             which + " is " + short_number(size) + " across, less than " + short_number(kMinPartTolerances) +
-                 " x the B-rep tolerance " + short_number(tolerance) +
-                 ": OCCT may lose it or report the shape invalid when the STEP / IGES file is read");
-    else if (r.c.build.set.closed && std::fabs(p.volume / 6) <= kFlatVolume * size * size * size)
+             which + " is " + short_number(size) + " across" + below(kMinPartTolerances) +
+                 ": OCCT's STEP / IGES readers lose it or report the shape invalid (STEP / IGES output is refused, BREP keeps it)");
+      if (r.c.exchange_refusal.empty())
+        r.c.exchange_refusal = which + " is " + short_number(size) + " across" + below(kMinPartTolerances);
+      continue;
+    }
+    const bool flat = closed && std::fabs(p.volume / 6) <= kFlatVolume * size * size * size;
+    if (flat)
       r.warn(DiagnosticCode::FlatPart, which + " encloses no volume (cage volume " + short_number(p.volume / 6) +
-                                           "): its solid is flat, of zero volume");
+                                           ", " + short_number(thickness) + " thick across " +
+                                           short_number(size) + "): its solid is flat, of zero volume");
+    else if (closed && thickness < thin)
+      r.warn(DiagnosticCode::ThinPart,
+             which + " is " + short_number(thickness) + " thick (2 x cage volume / area)" + below(kMinThicknessTolerances) +
+                 ": OCCT's STEP / IGES readers flatten it (STEP / IGES output is refused, BREP keeps it)");
+    if (closed && thickness > 0 && thickness < thin && r.c.exchange_refusal.empty())
+      r.c.exchange_refusal =
+          which + " is " + short_number(thickness) + " thick (2 x cage volume / area)" + below(kMinThicknessTolerances);
   }
 }
 
 }  // namespace
+
+void check_exchange_output(const ConversionResult& result, const std::string& input, bool step_or_iges) {
+  if (!step_or_iges || result.exchange_refusal.empty()) return;
+  throw InputError(input, 0,
+                   result.exchange_refusal +
+                       ": a STEP or IGES file cannot carry it (OCCT's readers merge or flatten what is within "
+                       "their precision; nothing was written); scale the model up, remove the part, or write "
+                       "a .brep file");
+}
 
 ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const ConversionSettings& settings, const ConversionProgress& progress,

@@ -112,7 +112,7 @@ const char* to_string(Severity severity);  ///< "note", "warning"
 
 /// What a diagnostic is about; to_string gives a stable name ("pole_not_polar").
 enum class DiagnosticCode { InterpolationSingular, ToleranceCapped, ToleranceNotMet, PacksRejected, PoleNotPolar,
-                            PolesSeparated, TinyPart, FlatPart };
+                            PolesSeparated, TinyPart, FlatPart, ThinPart };
 const char* to_string(DiagnosticCode code);
 
 /// Something the conversion reports besides its result, in its own words: no program name and
@@ -209,6 +209,11 @@ struct OutputInfo {
   std::string step_schema;  ///< "AP214" / "AP242" for STEP, else empty
 };
 
+struct ConversionResult;
+/// Throws InputError (exit 2) naming `input` when `result.exchange_refusal` is set and `format`
+/// is STEP or IGES (the B-rep would not survive the file); nothing for BREP / JSON.
+void check_exchange_output(const ConversionResult& result, const std::string& input, bool step_or_iges);
+
 struct ConversionResult {
   std::string input;  ///< the cage's name for the report (set by the caller)
   OutputInfo output;  ///< set by the caller
@@ -242,6 +247,11 @@ struct ConversionResult {
   std::optional<PreviewMesh> preview;    ///< ConversionSettings::preview given
   /// The input was a mesh (mesh_path.h): what made the cage from it; set by the caller.
   std::optional<MeshPathReport> mesh;
+  /// Why a STEP or IGES file cannot carry this result, or empty: a part of the cage smaller or
+  /// thinner than 10 B-rep tolerances (tiny_part, thin_part), which OCCT's STEP / IGES readers
+  /// merge or shrink (measured: invalid shapes, half the volume). A BREP file carries it.
+  /// Front ends refuse STEP / IGES output with check_exchange_output.
+  std::string exchange_refusal;
   PreviewSettings preview_settings;      ///< what `preview` was made with
   Timings ms;             ///< load and write are the caller's to fill
 };

@@ -1,6 +1,10 @@
 #include "core/mesh/poly_mesh.h"
 
 #include <algorithm>
+#include <numeric>
+#include <tuple>
+#include <utility>
+#include <vector>
 #include <string>
 
 namespace subd2nurbs {
@@ -35,6 +39,52 @@ std::string edge_name(int a, int b) {
 }
 
 }  // namespace
+
+bool faces_orientable(const std::vector<int>& face_sizes, const std::vector<int>& face_indices) {
+  // Every directed edge (lo, hi, direction, face), sorted so that an edge's faces are adjacent;
+  // then a union-find of faces with the parity "reversed relative to the root": two faces that
+  // traverse an edge the same way need opposite parities, else equal ones.
+  std::vector<std::tuple<int, int, int, int>> edges;
+  edges.reserve(face_indices.size());
+  for (int f = 0, b = 0; f < static_cast<int>(face_sizes.size()); b += face_sizes[f++])
+    for (int i = 0; i < face_sizes[f]; ++i) {
+      const int a = face_indices[b + i], c = face_indices[b + (i + 1) % face_sizes[f]];
+      edges.emplace_back(std::min(a, c), std::max(a, c), a < c ? 0 : 1, f);
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<int> parent(face_sizes.size()), parity(face_sizes.size(), 0), size(face_sizes.size(), 1);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int f) {  // root and f's parity relative to it (union by size: log depth)
+    int p = 0;
+    while (parent[f] != f) {
+      p ^= parity[f];
+      f = parent[f];
+    }
+    return std::make_pair(f, p);
+  };
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && std::get<0>(edges[j]) == std::get<0>(edges[i]) &&
+           std::get<1>(edges[j]) == std::get<1>(edges[i]))
+      ++j;
+    for (std::size_t k = i + 1; k < j; ++k) {
+      const int need = std::get<2>(edges[k]) == std::get<2>(edges[i]) ? 1 : 0;
+      const auto [ra, pa] = find(std::get<3>(edges[i]));
+      const auto [rb, pb] = find(std::get<3>(edges[k]));
+      if (ra == rb) {
+        if ((pa ^ pb) != need) return false;
+      } else {
+        const bool a_larger = size[ra] >= size[rb];
+        const int root = a_larger ? ra : rb, child = a_larger ? rb : ra;
+        parent[child] = root;
+        parity[child] = pa ^ pb ^ need;
+        size[root] += size[child];
+      }
+    }
+    i = j;
+  }
+  return true;
+}
 
 int PolyMesh::find_edge(int a, int b) const {
   if (a < 0 || b < 0 || a >= num_vertices_ || b >= num_vertices_) return -1;
@@ -132,8 +182,13 @@ PolyMesh PolyMesh::build(int num_vertices, const std::vector<int>& face_sizes,
       fail(MeshErrorCode::InconsistentOrientation, ElementKind::Face, m.corner_face_[h],
            m.corner_face_[other_same],
            "faces " + std::to_string(m.corner_face_[h]) + " and " +
-               std::to_string(m.corner_face_[other_same]) + " both traverse " +
-               edge_name(a, b) + " in the same direction (inconsistent orientation)");
+               std::to_string(m.corner_face_[other_same]) + " both traverse " + edge_name(a, b) +
+               " in the same direction" +
+               (faces_orientable(face_sizes, face_indices)
+                    ? std::string(" (inconsistent orientation)")
+                    : std::string(": the surface is not orientable (like a Moebius strip or a Klein bottle), so "
+                                  "no reversal of faces mends it; it cannot be converted to a closed oriented "
+                                  "body")));
     if (opposite == 1) m.twin_[h] = twin;
   }
 

@@ -11,6 +11,12 @@
 
 namespace subd2nurbs {
 
+/// Whether the faces can be oriented consistently: false for a Moebius strip or a Klein bottle
+/// (some cycle of faces meets itself reversed), true if reversing some faces would mend every
+/// edge that two faces traverse the same way. Faces given as for PolyMesh::build (sizes >= 3,
+/// indices in range); an edge on more than two faces counts each pair.
+bool faces_orientable(const std::vector<int>& face_sizes, const std::vector<int>& face_indices);
+
 class PolyMesh {
  public:
   PolyMesh() = default;

@@ -1,3 +1,4 @@
+#include "core/util/number_text.h"
 #include "core/mesh/validate.h"
 
 #include <cmath>
@@ -33,7 +34,7 @@ PolyMesh validate_and_build(const MeshInput& input, Diagnostics* diagnostics) {
       if (std::fabs(input.positions[v][k]) > kMaxCoordinate)
         throw InvalidMeshError(MeshErrorCode::CoordinateOutOfRange, ElementKind::Vertex, v, k,
                                "vertex " + std::to_string(v) + " has " + "xyz"[k] + " = " +
-                                   number_text(input.positions[v][k]) +
+                                   exact_number_text(input.positions[v][k]) +
                                    ", beyond the coordinate limit +-" + number_text(kMaxCoordinate));
   for (int f = 0; f < input.num_faces(); ++f)
     if (input.face_sizes[f] > kMaxFaceSize)

@@ -568,6 +568,7 @@ struct Conversion {
     } catch (const std::invalid_argument&) {
       throw pipeline::SettingsError("path", "must end in .step, .stp, .iges, .igs or .brep: '" + path + "'");
     }
+    pipeline::check_exchange_output(result, result.input, format != occt::Format::Brep);
     without_gil([&] { occt::write_shape(result.brep.shape, path, format, step); });
   }
 };

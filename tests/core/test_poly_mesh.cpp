@@ -2,7 +2,9 @@
 // with line numbers, live in tests/io).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <limits>
 
 #include "common/shapes.h"
@@ -191,5 +193,55 @@ TEST(Validation, ErrorNamesTheElement) {
     EXPECT_EQ(e.element(), ElementKind::Face);
     EXPECT_EQ(e.index(), 1);
     EXPECT_NE(std::string(e.what()).find("vertex 42"), std::string::npos) << e.what();
+  }
+}
+
+namespace {
+
+/// A band of n quads around a circle (2 n vertices); `twist`: the last quad joins the two rows
+/// crosswise (a Moebius strip), else straight (an annulus).
+void band(int n, bool twist, std::vector<int>& sizes, std::vector<int>& indices) {
+  for (int k = 0; k < n; ++k) {
+    const int a = 2 * k, b = 2 * k + 1;
+    int c = 2 * ((k + 1) % n), d = c + 1;
+    if (twist && k + 1 == n) std::swap(c, d);
+    sizes.push_back(4);
+    indices.insert(indices.end(), {a, c, d, b});
+  }
+}
+
+}  // namespace
+
+// #32 item 6: a non-orientable surface is told apart from a merely inconsistent orientation.
+// Oracle: topology (a Moebius strip has no orientation; an annulus or a cube with faces
+// reversed has one), independent of the face order.
+TEST(PolyMesh, FacesOrientable) {
+  std::vector<int> sizes, indices;
+  band(8, true, sizes, indices);
+  EXPECT_FALSE(faces_orientable(sizes, indices));
+  sizes.clear();
+  indices.clear();
+  band(8, false, sizes, indices);
+  EXPECT_TRUE(faces_orientable(sizes, indices));
+  // Reversing every other quad of the annulus leaves it orientable (reverse them back).
+  for (int f = 0; f < 8; f += 2) std::reverse(indices.begin() + 4 * f, indices.begin() + 4 * f + 4);
+  EXPECT_TRUE(faces_orientable(sizes, indices));
+  // The Moebius strip stays non-orientable whichever of its faces are reversed.
+  sizes.clear();
+  indices.clear();
+  band(8, true, sizes, indices);
+  for (int f = 1; f < 8; f += 3) std::reverse(indices.begin() + 4 * f, indices.begin() + 4 * f + 4);
+  EXPECT_FALSE(faces_orientable(sizes, indices));
+  // Its message says so; the annulus with a face reversed keeps the old one.
+  MeshInput strip;
+  for (int k = 0; k < 16; ++k) strip.positions.push_back({std::cos(k * 0.4), std::sin(k * 0.4), 0.1 * (k % 2)});
+  strip.face_sizes = sizes;
+  strip.face_indices = indices;
+  try {
+    validate_and_build(strip);
+    ADD_FAILURE() << "the Moebius strip was accepted";
+  } catch (const InvalidMeshError& e) {
+    EXPECT_EQ(e.code(), MeshErrorCode::InconsistentOrientation);
+    EXPECT_NE(std::string(e.what()).find("the surface is not orientable"), std::string::npos) << e.what();
   }
 }

@@ -306,49 +306,55 @@ class Runner:
     # --- SIGTERM / SIGINT during a run ---------------------------------------------------------
 
     def case_signal(self):
-        """A conversion with a report is stopped by SIGTERM (then SIGINT) while its main output
-        is staged (a hidden .tmp file exists): it must end by the signal and leave no file.
-        The staging lasts a few milliseconds; a run that finished before the signal arrived
-        (exit 0, every output complete) proves nothing either way and is repeated, up to 5 times."""
-        grid = os.path.join(self.corpus, "grid_100.obj")
-        for sig in (signal.SIGTERM, signal.SIGINT):
-            case = {"name": "signal_%s" % sig.name, "expect": {}}
-            for attempt in range(5):
-                outcome = self.signal_run(grid, sig)
-                if outcome != "too late":
-                    break
-            if outcome == "too late":
-                self.fail(case, "every run finished before the signal arrived")
-            elif outcome != "ok":
-                self.fail(case, outcome)
+        """A conversion with a report is stopped by SIGTERM, SIGINT and SIGHUP at two known stages
+        (the CLI's test hook SUBD2NURBS_TEST_STOP: "output", the main output staged and the report
+        not yet; "commit", every output staged and none renamed): it must end by the signal and
+        leave no file. The run says on stderr when it reaches the stage and waits there for the
+        signal, so the outcome does not depend on the machine's load. A control run with the
+        cleanup disabled (SUBD2NURBS_TEST_NO_SIGNAL_CLEANUP) must leave its temporary files: the
+        check can fail."""
+        grid = os.path.join(self.corpus, "grid_10.obj")
+        for stage in ("output", "commit"):
+            for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+                case = {"name": "signal_%s_at_%s" % (sig.name, stage), "expect": {}}
+                outcome = self.signal_run(grid, sig, stage, cleanup=True)
+                if outcome != "ok":
+                    self.fail(case, outcome)
+            case = {"name": "signal_control_without_cleanup_at_%s" % stage, "expect": {}}
+            outcome = self.signal_run(grid, signal.SIGTERM, stage, cleanup=False)
+            if not outcome.startswith("files left after the signal: ['.out.brep."):
+                self.fail(case, "the run without the cleanup should leave its temporary files, got: " + outcome)
 
-    def signal_run(self, grid, sig):
-        """One run of case_signal: "ok", "too late", or what went wrong."""
+    def signal_run(self, grid, sig, stage, cleanup):
+        """One run of case_signal: "ok", or what went wrong."""
         work = tempfile.mkdtemp(prefix="s2n_signal_")
         try:
             argv = [self.cli, "convert", grid, "-o", os.path.join(work, "out.brep"), "--report",
                     os.path.join(work, "r.json"), "--quiet"]
+            env = dict(os.environ, SUBD2NURBS_TEST_STOP=stage)
+            if not cleanup:
+                env["SUBD2NURBS_TEST_NO_SIGNAL_CLEANUP"] = "1"
             p = subprocess.Popen(argv, cwd=work, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                 preexec_fn=limit_memory(self.memory_mb))
-            deadline = time.monotonic() + self.timeout * 4
-            seen = False
-            while time.monotonic() < deadline and p.poll() is None:
-                if any(n.endswith(".tmp") for n in os.listdir(work)):
-                    seen = True
-                    p.send_signal(sig)
-                    break
-                time.sleep(0.005)
+                                 preexec_fn=limit_memory(self.memory_mb), env=env)
+            stopped = False
             try:
-                p.wait(timeout=self.timeout)
+                # The hook's line is the last the run prints before it waits (--quiet).
+                for line in iter(p.stderr.readline, b""):
+                    if line.startswith(b"subd2nurbs: test stop: " + stage.encode()):
+                        stopped = True
+                        break
+                if stopped:
+                    p.send_signal(sig)
+                p.stderr.read()
+                p.wait(timeout=self.timeout * 4)
             except subprocess.TimeoutExpired:
                 p.kill()
+                p.wait()
                 return "did not end after the signal"
             self.runs += 1
             left = sorted(os.listdir(work))
-            if p.returncode == 0 and left == ["out.brep", "r.json"]:
-                return "too late"
-            if not seen:
-                return "never saw the staged temporary file (exit %s)" % p.returncode
+            if not stopped:
+                return "never reached the stage %r (exit %s, files %s)" % (stage, p.returncode, left)
             if p.returncode != -sig:
                 return "ended with %s, not by the signal" % p.returncode
             if left:

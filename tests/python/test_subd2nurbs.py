@@ -535,33 +535,53 @@ class Writing(unittest.TestCase):
             self.assertIn("dir.step", str(cm.exception))
             self.assertEqual(sorted(os.listdir(d)), ["a.brep", "a.iges", "a.step", "a.stp", "cli.step"])
 
-    def test_tiny_parts_read_back_as_solids_or_are_named(self):
+    def test_tiny_parts_read_back_as_solids_or_are_refused(self):
         """#32 item 1: boxes at and below OCCT's precision (1e-7) written as STEP and read back by
-        OCCT's STEPControl_Reader are valid solids of positive volume, or the conversion warns
-        about the part (tiny_part) that is smaller than 10 B-rep tolerances."""
+        OCCT's STEPControl_Reader are valid solids of positive volume, or the STEP is refused
+        (CageError naming the part, no file) after a warning about the part (tiny_part: smaller
+        than 10 B-rep tolerances; thin_part / flat_part: thinner). The BREP is always written and
+        reads back valid with the volume of the affine image of the unit cube's limit (Catmull-Clark
+        is affine invariant: the volume scales by the product of the sides)."""
         v, f = cube_cage()
         f = np.array(f)
         scaled = lambda s: v * np.array(s)
         cages = {
-            "unit cube and a 1e-12 cube": (np.vstack([v, scaled(1e-12) + [3, 0, 0]]), np.vstack([f, f + 8])),
-            "1 x 1e-9 x 1 box": (scaled((1, 1e-9, 1)), f),
-            "1e8 x 1e-8 x 1 box": (scaled((1e8, 1e-8, 1)), f),
-            "cube of size 2e-6": (scaled(2e-6), f),
+            "unit cube and a 1e-12 cube": ((1, 1, 1), (np.vstack([v, scaled(1e-12) + [3, 0, 0]]), np.vstack([f, f + 8]))),
+            "1 x 1e-9 x 1 box": ((1, 1e-9, 1), (scaled((1, 1e-9, 1)), f)),
+            "1e8 x 1e-8 x 1 box": ((1e8, 1e-8, 1), (scaled((1e8, 1e-8, 1)), f)),
+            "cube of size 2e-6": ((2e-6, 2e-6, 2e-6), (scaled(2e-6), f)),
         }
-        tiny = {}
-        for name, (pv, pf) in cages.items():
+        unit = s2n.convert(s2n.Cage(v, f.tolist()))
+        with tempfile.TemporaryDirectory() as d:
+            unit.write(os.path.join(d, "u.brep"))
+            unit_volume = s2n.file_summary(os.path.join(d, "u.brep"))["volume"]
+        self.assertGreater(unit_volume, 0)
+        self.assertLess(unit_volume, 8)  # inside the cage's hull
+        warned, refused = {}, {}
+        for name, (sides, (pv, pf)) in cages.items():
             r = s2n.convert(s2n.Cage(pv, pf.tolist()))
-            tiny[name] = [d["message"] for d in r.diagnostics if d["code"] == "tiny_part"]
+            warned[name] = [d["code"] for d in r.diagnostics if d["code"] in ("tiny_part", "thin_part", "flat_part")]
             with tempfile.TemporaryDirectory() as d:
                 path = os.path.join(d, "t.step")
-                r.write(path)
-                m = s2n.file_summary(path)
-            if not (m["valid"] and m["volume"] > 0):
-                self.assertTrue(tiny[name], "%s: invalid STEP without a warning: %s" % (name, m["check_message"]))
-        self.assertEqual(len(tiny["unit cube and a 1e-12 cube"]), 1)
-        self.assertIn("face 6 (6 faces)", tiny["unit cube and a 1e-12 cube"][0])
-        for name in ("1 x 1e-9 x 1 box", "1e8 x 1e-8 x 1 box", "cube of size 2e-6"):
-            self.assertEqual(tiny[name], [], name)
+                try:
+                    r.write(path)
+                    m = s2n.file_summary(path)
+                    self.assertTrue(m["valid"] and m["volume"] > 0, "%s: %s" % (name, m["check_message"]))
+                    refused[name] = False
+                except s2n.CageError as e:
+                    self.assertIn("a STEP or IGES file cannot carry it", str(e))
+                    self.assertEqual(os.listdir(d), [])
+                    refused[name] = True
+                r.write(os.path.join(d, "t.brep"))
+                m = s2n.file_summary(os.path.join(d, "t.brep"))
+            self.assertTrue(m["valid"], name)
+            expected = unit_volume * sides[0] * sides[1] * sides[2] + (unit_volume * 1e-36 if "1e-12" in name else 0)
+            self.assertAlmostEqual(m["volume"] / expected, 1, delta=1e-3, msg=name)
+            self.assertEqual(refused[name], bool(warned[name]), name)
+        self.assertEqual(warned["unit cube and a 1e-12 cube"], ["tiny_part"])
+        self.assertEqual(warned["1 x 1e-9 x 1 box"], ["thin_part"])
+        self.assertEqual(warned["1e8 x 1e-8 x 1 box"], ["flat_part"])
+        self.assertEqual(warned["cube of size 2e-6"], [])
 
     def test_a_flat_closed_part_is_named(self):
         """#32: a cube flattened onto a plane converts to a closed B-rep of zero volume; the
