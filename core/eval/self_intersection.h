@@ -24,9 +24,12 @@ namespace subd2nurbs {
 struct SelfIntersectionOptions {
   /// The tessellation step, relative to the model size: grid lines at most about this far
   /// apart (a span longer than that is split, shorter spans are merged).
-  double step = 1.0 / 200;
+  double step = 1.0 / 40;
   /// Most pieces one knot span is split into.
   int max_split = 16;
+  /// Grid lines added towards an extraordinary corner of a face: at 2^-k of its domain, k = 1 ..
+  /// corner_grading.
+  int corner_grading = 7;
   /// Candidate triangle pairs tried on the exact surfaces per pair of faces.
   int candidates_per_pair = 4;
 };
