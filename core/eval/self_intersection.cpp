@@ -410,9 +410,19 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
     // grid is graded towards such corners.
     const NurbsPatch& p = ps.patches[f];
     bool ev[4] = {false, false, false, false};
+    // Not at high valences: there the graded cells of every face crowd into one tiny ball and
+    // the pairs to sort out grow with the square of the valence (catmark_pole360: 60 s).
     if (p.kind == PatchKind::Pccm)
-      for (int c = 0; c < 4; ++c) ev[c] = p.corners[c] >= 0 && corner_faces[p.corners[c]] != 4;
-    const int g = options.corner_grading;
+      for (int c = 0; c < 4; ++c)
+        ev[c] = p.corners[c] >= 0 && corner_faces[p.corners[c]] != 4 &&
+                corner_faces[p.corners[c]] <= options.max_graded_valence;
+    // Graded down to cells of about kFinest x the model size, not below.
+    constexpr double kFinest = 1e-4;
+    Box poles;
+    for (const Point3& q : p.poles) poles.add(q);
+    const double extent = norm(sub(poles.hi, poles.lo));
+    const int g = std::clamp(static_cast<int>(std::floor(std::log2(std::max(1.0, extent / (kFinest * size))))), 0,
+                             options.corner_grading);
     t.us = grid_lines(evals[f], true, h, options.max_split, ev[0] || ev[3] ? g : 0, ev[1] || ev[2] ? g : 0);
     t.vs = grid_lines(evals[f], false, h, options.max_split, ev[0] || ev[1] ? g : 0, ev[2] || ev[3] ? g : 0);
     t.pts.resize(t.us.size() * t.vs.size());

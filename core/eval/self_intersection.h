@@ -28,8 +28,10 @@ struct SelfIntersectionOptions {
   /// Most pieces one knot span is split into.
   int max_split = 16;
   /// Grid lines added towards an extraordinary corner of a face: at 2^-k of its domain, k = 1 ..
-  /// corner_grading.
+  /// corner_grading, fewer on a small face (its finest cells about 1e-4 of the model size).
   int corner_grading = 7;
+  /// Only at corners shared by at most this many faces.
+  int max_graded_valence = 8;
   /// Candidate triangle pairs tried on the exact surfaces per pair of faces.
   int candidates_per_pair = 4;
 };
