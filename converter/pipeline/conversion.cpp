@@ -93,6 +93,8 @@ const char* to_string(DiagnosticCode code) {
     case DiagnosticCode::TinyPart: return "tiny_part";
     case DiagnosticCode::FlatPart: return "flat_part";
     case DiagnosticCode::ThinPart: return "thin_part";
+    case DiagnosticCode::SelfIntersection: return "self_intersection";
+    case DiagnosticCode::PartsOverlap: return "parts_overlap";
   }
   return "?";
 }
@@ -604,6 +606,38 @@ void part_warnings(const Run& r) {
   }
 }
 
+/// Self-intersections and overlaps of the exported faces (issue 33): found, then one warning
+/// per kind with the first witness; the conversion goes on.
+void intersection_warnings(const Run& r) {
+  ConversionResult& c = r.c;
+  const auto t = Clock::now();
+  c.intersections = find_self_intersections(c.exported.set);
+  c.ms.intersections = ms_since(t);
+  const SelfIntersectionReport& x = c.intersections;
+  auto at = [](const Point3& p) {
+    return "(" + short_number(p[0]) + ", " + short_number(p[1]) + ", " + short_number(p[2]) + ")";
+  };
+  if (!x.self.empty()) {
+    const FaceCrossing& w = x.self.front();
+    r.warn(DiagnosticCode::SelfIntersection,
+           "the surface intersects itself: " + std::to_string(x.self.size()) + " pair(s) of faces cross, e.g. faces " +
+               std::to_string(w.face_a) + " and " + std::to_string(w.face_b) + " at " + at(w.point) +
+               "; offsets, shells and booleans of this body may fail");
+  }
+  if (!x.overlaps.empty()) {
+    const FaceCrossing& w = x.overlaps.front();
+    const std::string example =
+        w.inside ? "part " + std::to_string(w.component_a) + " (face " + std::to_string(w.face_a) + ") lies inside part " +
+                       std::to_string(w.component_b)
+                 : "parts " + std::to_string(w.component_a) + " and " + std::to_string(w.component_b) + " (faces " +
+                       std::to_string(w.face_a) + " and " + std::to_string(w.face_b) + ") cross at " + at(w.point);
+    r.warn(DiagnosticCode::PartsOverlap,
+           std::to_string(x.overlapping_components.size()) + " pair(s) of the " + std::to_string(x.components) +
+               " separate parts overlap, e.g. " + example +
+               "; their solids interpenetrate (fuse them in CAD if they are meant as one body)");
+  }
+}
+
 }  // namespace
 
 void check_exchange_output(const ConversionResult& result, const std::string& input, bool step_or_iges) {
@@ -683,6 +717,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   c.cap_options = settings.patch.cap;
   pole_notes(run);
   part_warnings(run);
+  intersection_warnings(run);
 
   if (settings.build_brep) {
     t = Clock::now();

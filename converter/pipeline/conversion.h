@@ -23,6 +23,7 @@
 #include "core/eval/deviation.h"
 #include "core/eval/preview_mesh.h"
 #include "core/eval/quality.h"
+#include "core/eval/self_intersection.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
 #include "core/patch/packing.h"
@@ -112,7 +113,7 @@ const char* to_string(Severity severity);  ///< "note", "warning"
 
 /// What a diagnostic is about; to_string gives a stable name ("pole_not_polar").
 enum class DiagnosticCode { InterpolationSingular, ToleranceCapped, ToleranceNotMet, PacksRejected, PoleNotPolar,
-                            PolesSeparated, TinyPart, FlatPart, ThinPart };
+                            PolesSeparated, TinyPart, FlatPart, ThinPart, SelfIntersection, PartsOverlap };
 const char* to_string(DiagnosticCode code);
 
 /// Something the conversion reports besides its result, in its own words: no program name and
@@ -156,6 +157,7 @@ struct ConversionProgress {
 
 struct Timings {
   double load = 0, fit = 0, patches = 0, packing = 0, continuity = 0, deviation = 0, brep = 0, write = 0;
+  double intersections = 0;  ///< self-intersections and overlaps (ConversionResult::intersections)
   double quality = 0, preview = 0;  ///< the optional stages (the report gives quality as "quality_ms")
   /// The quality stage runs beside the B-rep stage and ConversionProgress::after_brep: the wall
   /// time convert waited for it once those were done (what the stage added to the conversion).
@@ -226,6 +228,10 @@ struct ConversionResult {
   PackedSet exported;
   int extra_levels = 0;
   ContinuityReport continuity;  ///< over output.set's curves
+  /// Where the exported faces cross themselves or separate components overlap
+  /// (core/eval/self_intersection.h); each kind found also gives a warning
+  /// (self_intersection, parts_overlap).
+  SelfIntersectionReport intersections;
   DeviationReport deviation;
   bool tolerance_given = false, tolerance_absolute = false;
   ToleranceResult tolerance;

@@ -232,6 +232,46 @@ void write_curvature_radius(JsonWriter& w, const PatchSet& faces) {
   w.end_object();
 }
 
+/// "self_intersection" (docs/formats.md): where the exported faces cross themselves and where
+/// separate parts overlap (core/eval/self_intersection.h), the first kMaxListed of each listed
+/// with a witness point on both faces.
+void write_self_intersection(JsonWriter& w, const SelfIntersectionReport& x) {
+  constexpr size_t kMaxListed = 50;
+  auto point = [&](const Point3& p) {
+    w.key("point").begin_array();
+    for (double c : p) w.number(c);
+    w.end_array();
+  };
+  w.key("self_intersection").begin_object();
+  w.members("components", x.components, "triangles", x.triangles, "crossing_face_pairs",
+            static_cast<long long>(x.self.size()), "overlap_face_pairs", static_cast<long long>(x.overlaps.size()));
+  w.break_line(4).key("self").begin_array();
+  for (size_t k = 0; k < x.self.size() && k < kMaxListed; ++k) {
+    const FaceCrossing& c = x.self[k];
+    w.break_line(6).begin_object();
+    w.key("faces").begin_array().integer(c.face_a).integer(c.face_b).end_array();
+    w.members("component", c.component_a, "angle_deg", c.angle_deg);
+    point(c.point);
+    w.end_object();
+  }
+  w.end_array();
+  w.break_line(4).key("overlaps").begin_array();
+  for (size_t k = 0; k < x.overlaps.size() && k < kMaxListed; ++k) {
+    const FaceCrossing& c = x.overlaps[k];
+    w.break_line(6).begin_object();
+    w.key("components").begin_array().integer(c.component_a).integer(c.component_b).end_array();
+    w.key("faces").begin_array().integer(c.face_a).integer(c.face_b).end_array();
+    w.members("inside", c.inside, "angle_deg", c.angle_deg);
+    point(c.point);
+    w.end_object();
+  }
+  w.end_array();
+  w.break_line(4).key("overlapping_components").begin_array();
+  for (const auto& [a, b] : x.overlapping_components) w.begin_array().integer(a).integer(b).end_array();
+  w.end_array();
+  w.end_object();
+}
+
 }  // namespace
 
 std::string report_json(const ConversionResult& c) {
@@ -292,6 +332,7 @@ std::string report_json(const ConversionResult& c) {
   w.end_object();
   write_deviation(w, c, size);
   write_curvature_radius(w, c.exported.set);
+  write_self_intersection(w, c.intersections);
   if (c.mesh) write_mesh_path(w.key("mesh"), *c.mesh);
   w.key("estimate").begin_object();
   for (const auto& [key, e] : {std::pair{"before_work", &c.estimate_before}, std::pair{"before_brep", &c.estimate}}) {
@@ -304,7 +345,8 @@ std::string report_json(const ConversionResult& c) {
   const Timings& ms = c.ms;
   w.key("timings_ms").begin_object();
   w.members("load", ms.load, "fit", ms.fit, "patches", ms.patches, "continuity", ms.continuity,
-            "deviation", ms.deviation, "packing", ms.packing, "brep", ms.brep, "write", ms.write);
+            "deviation", ms.deviation, "packing", ms.packing, "intersections", ms.intersections, "brep", ms.brep,
+            "write", ms.write);
   w.end_object();
   if (c.quality) {  // the quality stage's section and its own time, beside timings_ms
     write_quality(w.key("quality"), *c.quality, size, 2);

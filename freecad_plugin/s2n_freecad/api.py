@@ -13,6 +13,7 @@ up, each factory runs inside a transaction, so one Undo removes what it added.
 """
 
 import FreeCAD as App
+import Part
 
 import subd2nurbs
 
@@ -157,11 +158,36 @@ def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **set
     return obj
 
 
+def _faces_at(shape, point, tolerance):
+    """The names ("FaceN") of the faces of `shape` passing through `point`."""
+    vertex = Part.Vertex(App.Vector(*point))
+    names = []
+    for i, face in enumerate(shape.Faces):
+        box = face.BoundBox
+        box.enlarge(tolerance)
+        if box.isInside(vertex.Point) and face.distToShape(vertex)[0] <= tolerance:
+            names.append("Face%d" % (i + 1))
+    return names
+
+
+def _radius(entry):
+    if not entry:
+        return None
+    return {"radius": entry["radius"], "point": tuple(entry["point"]), "u": entry["u"], "v": entry["v"]}
+
+
+def _point_text(p):
+    return "(%.4g, %.4g, %.4g)" % tuple(p)
+
+
 def check_quality(obj, count=5, highlight=True):
     """The surface quality of a NURBS object: max gap between patches, max normal jump across
-    smooth edges, max deviation from the limit surface, and the `count` worst edges (names
-    "EdgeN", normal angle in degrees, gap). Printed to the report view; with the GUI the worst
-    edges are drawn in red and selected."""
+    smooth edges, max deviation from the limit surface, the `count` worst edges (names
+    "EdgeN", normal angle in degrees, gap), the smallest radius of curvature each way (inward:
+    the thickest shell / inward offset the body takes; outward: the thickest outward offset) and
+    where, and the self-intersections and overlapping parts the conversion found, each with a
+    point on both faces and the faces there ("FaceN"). Printed to the report view; with the
+    GUI the worst edges are drawn in red and selected."""
     proxy = getattr(obj, "Proxy", None)
     if not isinstance(proxy, features.NurbsFeature):
         raise TypeError("check_quality: expected a NURBS object made by make_nurbs")
@@ -181,6 +207,19 @@ def check_quality(obj, count=5, highlight=True):
         "worst_edges": worst,
         "report": r,
     }
+    radius = r["curvature_radius"]
+    report["smallest_radius"] = {"inward": _radius(radius["inward"]), "outward": _radius(radius["outward"])}
+    x = r["self_intersection"]
+    tolerance = 1e-6 * max(r["model_size"], 1e-300)
+    witnesses = []
+    for kind, items in (("self", x["self"]), ("overlap", x["overlaps"])):
+        for w in items[:count]:
+            witnesses.append({"kind": "inside" if w.get("inside") else kind, "point": tuple(w["point"]),
+                              "faces": _faces_at(obj.Shape, w["point"], tolerance)})
+    report["self_intersections"] = x["crossing_face_pairs"]
+    report["overlaps"] = x["overlap_face_pairs"]
+    report["overlapping_parts"] = [tuple(p) for p in x["overlapping_components"]]
+    report["intersection_witnesses"] = witnesses
     lines = ["Subd2Nurbs quality of %s (%d faces, %s):" % (obj.Label, report["faces"],
                                                           "valid" if report["valid"] else "NOT valid"),
              "  max gap between patches   %.3g (%.3g of the model size)" % (report["max_gap"],
@@ -190,6 +229,22 @@ def check_quality(obj, count=5, highlight=True):
                                                                           report["deviation_relative"] or 0)]
     for name, angle, gap in worst:
         lines.append("  worst: %-8s normal jump %.3g deg, gap %.3g" % (name, angle, gap))
+    for side, use in (("inward", "shell / inward offset"), ("outward", "outward offset")):
+        at = report["smallest_radius"][side]
+        if at is None:
+            lines.append("  smallest radius %-8s none (no %s limit)" % (side, use))
+        else:
+            lines.append("  smallest radius %-8s %.4g at %s: keep a %s thinner" % (side, at["radius"],
+                                                                                 _point_text(at["point"]), use))
+    if report["self_intersections"]:
+        lines.append("  WARNING: the surface intersects itself: %d pair(s) of faces cross" % report["self_intersections"])
+    if report["overlaps"]:
+        lines.append("  WARNING: %d pair(s) of separate parts overlap (%d pair(s) of faces)"
+                     % (len(report["overlapping_parts"]), report["overlaps"]))
+    for w in witnesses:
+        lines.append("    %s: %s at %s" % (w["kind"], " and ".join(w["faces"]) or "?", _point_text(w["point"])))
+    if not witnesses:
+        lines.append("  no self-intersection or overlap found")
     App.Console.PrintMessage("\n".join(lines) + "\n")
     if highlight and App.GuiUp:
         features.highlight_edges(obj, [w[0] for w in worst])

@@ -105,8 +105,9 @@ class CheckQuality(_OnSelectedNurbs):
     def GetResources(self):
         return {"Pixmap": os.path.join(features.ICONS, "Subd2Nurbs_Check.svg"),
                 "MenuText": self.TITLE,
-                "ToolTip": "Report gaps, normal jumps and the deviation from the limit surface of the selected "
-                           "NURBS object in the report view, and highlight its worst edges"}
+                "ToolTip": "Report gaps, normal jumps, the deviation from the limit surface, the smallest radius "
+                           "of curvature (the thickest shell or offset) and self-intersecting or overlapping "
+                           "faces of the selected NURBS object in the report view, and highlight its worst edges"}
 
     def run(self, obj):
         api.check_quality(obj)

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -426,7 +427,9 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",
       "r['deviation']['worst_fan']['valence'] == 3 and r['deviation']['samples'] > 0",
       "r['deviation']['sample_levels'] == 2 and len(r['deviation']['fans']) == 8",
-      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'packing', 'continuity', 'deviation', 'brep', 'write'])",
+      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'packing', 'intersections', 'continuity', 'deviation', 'brep', 'write'])",
+      // One convex-ish closed part: nothing crosses (OCCT's checker agrees: tests/occt).
+      "(lambda x: x['components'] == 1 and x['crossing_face_pairs'] == 0 and x['overlap_face_pairs'] == 0 and x['self'] == [] and x['overlaps'] == [] and x['triangles'] > 0)(r['self_intersection'])",
       "r['faces'] == {'mode': 'packed', 'total': 24, 'packed': 0, 'packed_quads': 0, 'poles': r['patches']['poles'], 'removed_knot_lines': 0}",
       "r['sharpened_edges'] == 0 and r['sharpened_vertices'] == 0 and r['warnings'] == []",
   };
@@ -458,6 +461,35 @@ TEST(CliConvert, FacesPackedOrPerQuad) {
                               "sorted(c['base_face'] for c in r['patches'][0]['cells']) == list(range(32))"),
             0);
   EXPECT_EQ(run("convert " + torus + " --faces some -o " + quote(dir.file("x.step"))).exit_code, 1);
+}
+
+/// Two cube cages: 0.4 apart they interpenetrate (OCCT's BOPAlgo_ArgumentAnalyzer agrees:
+/// tests/occt/test_self_intersection.cpp), 1.2 apart their convex hulls are disjoint.
+TEST(CliConvert, OverlappingPartsAreAWarningNotAFailure) {
+  TempDir dir;
+  for (const double dx : {0.4, 1.2}) {
+    std::ofstream obj(dir.file("cubes.obj"));
+    for (const double c : {0.0, dx})
+      for (int k = 0; k < 8; ++k)
+        obj << "v " << (k & 1 ? 0.5 : -0.5) + c << " " << (k & 2 ? 0.5 : -0.5) + 0.1 * c << " "
+            << (k & 4 ? 0.5 : -0.5) + 0.2 * c << "\n";
+    for (const int base : {1, 9})
+      for (const auto& f : {std::array<int, 4>{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}})
+        obj << "f " << base + f[0] << " " << base + f[1] << " " << base + f[2] << " " << base + f[3] << "\n";
+    obj.close();
+    const Result r = run("convert " + quote(dir.file("cubes.obj")) + " -o " + quote(dir.file("c.brep")) + " --report " +
+                            quote(dir.file("c.json")));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const bool overlap = dx < 1;
+    EXPECT_EQ(r.err.find("separate parts overlap") != std::string::npos, overlap) << r.err;
+    EXPECT_EQ(python_json_check(dir.file("c.json"),
+                                overlap ? "(lambda x: x['components'] == 2 and x['crossing_face_pairs'] == 0 and "
+                                          "x['overlap_face_pairs'] > 0 and x['overlapping_components'] == [[0, 1]] and "
+                                          "all(o['components'] == [0, 1] and not o['inside'] for o in x['overlaps']))"
+                                          "(r['self_intersection']) and any('parts overlap' in w for w in r['warnings'])"
+                                        : "r['self_intersection']['overlap_face_pairs'] == 0 and r['warnings'] == []"),
+              0);
+  }
 }
 
 TEST(CliConvert, ReportIsDeterministicApartFromTimings) {

@@ -527,6 +527,64 @@ class Workbench(unittest.TestCase):
             self.assertGreaterEqual(angle, 0)
         self.assertLess(report["max_gap"], 1e-9 * 10)
 
+    def test_check_quality_gives_the_smallest_radius_as_occt_measures_it(self):
+        # Oracle: OCCT's own principal curvatures of the face at the point reported (the torus's
+        # tube inside, its saddle at the hole outside).
+        nurbs = s2n.make_nurbs(s2n.make_cage(corpus("catmark_torus"), doc=self.doc), progress=False)
+        report = s2n.check_quality(nurbs, highlight=False)
+        for side in ("inward", "outward"):
+            at = report["smallest_radius"][side]
+            self.assertIsNotNone(at, side)
+            point = App.Vector(*at["point"])
+            faces = [f for f in nurbs.Shape.Faces if f.distToShape(Part.Vertex(point))[0] < 1e-7]
+            self.assertTrue(faces, side)
+            face = faces[0]
+            u, v = face.Surface.parameter(point)
+            k = [face.Surface.curvature(u, v, which) for which in ("Max", "Min")]
+            # One of OCCT's two principal radii there (inward: the convex one, outward: the
+            # concave one; at the torus's saddle the two have opposite signs).
+            self.assertAlmostEqual(min(abs(at["radius"] - 1 / abs(c)) for c in k), 0, delta=1e-6 * at["radius"])
+        self.assertEqual(report["self_intersections"], 0)
+        self.assertEqual(report["overlaps"], 0)
+        self.assertEqual(report["intersection_witnesses"], [])
+
+    def test_check_quality_names_overlapping_parts_as_occt_finds_them(self):
+        # Two cube cages 0.4 apart interpenetrate: OCCT's own checker (Shape.check(True),
+        # BOPAlgo_ArgumentAnalyzer) refuses the shape, and check_quality names faces of both cubes
+        # through a point they share. 1.2 apart: both clean.
+        def cubes(dx):
+            lines = []
+            for c in (0, dx):
+                for k in range(8):
+                    lines.append("v %g %g %g" % ((0.5 if k & 1 else -0.5) + c, (0.5 if k & 2 else -0.5) + 0.1 * c,
+                                                 (0.5 if k & 4 else -0.5) + 0.2 * c))
+            for base in (1, 9):
+                for f in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
+                    lines.append("f " + " ".join(str(base + i) for i in f))
+            path = os.path.join(self.tmp, "cubes_%g.obj" % dx)
+            with open(path, "w") as out:
+                out.write("\n".join(lines) + "\n")
+            return s2n.make_nurbs(s2n.make_cage(path, doc=self.doc), progress=False)
+        apart = s2n.check_quality(cubes(1.2), highlight=False)
+        self.assertEqual((apart["self_intersections"], apart["overlaps"]), (0, 0))
+        self.assertEqual(apart["intersection_witnesses"], [])
+        cubes(1.2).Shape.check(True)  # raises if OCCT finds anything
+        nurbs = cubes(0.4)
+        report = s2n.check_quality(nurbs, highlight=False)
+        self.assertEqual(report["self_intersections"], 0)
+        self.assertGreater(report["overlaps"], 0)
+        self.assertEqual(report["overlapping_parts"], [(0, 1)])
+        with self.assertRaises(Exception):
+            nurbs.Shape.check(True)
+        solids = nurbs.Shape.Solids
+        self.assertEqual(len(solids), 2)
+        for w in report["intersection_witnesses"]:
+            self.assertEqual(w["kind"], "overlap")
+            self.assertEqual(len(w["faces"]), 2)
+            point = Part.Vertex(App.Vector(*w["point"]))
+            for solid in solids:  # on the surface of each cube
+                self.assertLess(solid.distToShape(point)[0], 1e-6)
+
     def test_color_map_has_the_previews_colours(self):
         # The same per-vertex colours as the module's (and so the CLI's --preview) tessellation.
         path = corpus("catmark_cube_creases0")

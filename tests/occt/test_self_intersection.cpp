@@ -1,0 +1,199 @@
+// find_self_intersections (core/eval/self_intersection.h) against OCCT's own checker,
+// BOPAlgo_ArgumentAnalyzer in its self-interference mode (what FreeCAD's Shape.check(True)
+// runs), on the B-rep of the same PatchSet: two interpenetrating cube cages and a torus cage
+// whose tube is pushed through the opposite side of the ring (its limit surface passes through
+// itself) are
+// flagged by both, the same cubes apart and corpus shapes OCCT finds clean are flagged by
+// neither. The faces we name must be among the faces OCCT names.
+#include <gtest/gtest.h>
+
+#include <BOPAlgo_ArgumentAnalyzer.hxx>
+#include <BOPAlgo_CheckResult.hxx>
+#include <TopExp.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "converter/occt/brep_builder.h"
+#include "core/eval/self_intersection.h"
+#include "core/nurbs/nurbs_eval.h"
+#include "core/patch/packing.h"
+#include "core/patch/patch_builder.h"
+#include "io/obj_reader.h"
+
+namespace subd2nurbs {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+PatchSet packed_set(const MeshInput& input) {
+  return pack_patches(build_patches(SubdivLevel::from_input(input), input.positions)).set;
+}
+
+void add_cube(MeshInput& m, double dx, double dy, double dz) {
+  const int base = m.num_vertices();
+  for (int k = 0; k < 8; ++k)
+    m.positions.push_back({(k & 1 ? 0.5 : -0.5) + dx, (k & 2 ? 0.5 : -0.5) + dy, (k & 4 ? 0.5 : -0.5) + dz});
+  // Outward faces of the cube with vertex k = x + 2y + 4z.
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    m.face_sizes.push_back(4);
+    for (int v : f) m.face_indices.push_back(base + v);
+  }
+}
+
+MeshInput two_cubes(double dx) {
+  MeshInput m;
+  add_cube(m, 0, 0, 0);
+  add_cube(m, dx, 0.1 * dx, 0.2 * dx);
+  return m;
+}
+
+/// A torus cage: `ring` quads around the axis, `tube` around the tube, radii R (axis to the
+/// tube's centre) and r (tube); the rings of the cage at angles 0 and +-1 step around the axis
+/// are moved by `push` along x (and a little in z, against symmetric contacts): pushed far
+/// enough, that part of the tube passes through the opposite side of the torus.
+MeshInput torus_cage(int ring, int tube, double R, double r, double push = 0) {
+  MeshInput m;
+  for (int i = 0; i < ring; ++i)
+    for (int j = 0; j < tube; ++j) {
+      const double t = 2 * kPi * i / ring, p = 2 * kPi * j / tube;
+      const bool pushed = i == 0 || i == 1 || i == ring - 1;
+      m.positions.push_back({(R + r * std::cos(p)) * std::cos(t) + (pushed ? push : 0),
+                             (R + r * std::cos(p)) * std::sin(t), r * std::sin(p) + (pushed ? 0.05 * std::fabs(push) : 0)});
+    }
+  for (int i = 0; i < ring; ++i)
+    for (int j = 0; j < tube; ++j) {
+      const int i1 = (i + 1) % ring, j1 = (j + 1) % tube;
+      m.face_sizes.push_back(4);
+      for (int v : {i * tube + j, i * tube + j1, i1 * tube + j1, i1 * tube + j}) m.face_indices.push_back(v);
+    }
+  return m;
+}
+
+/// OCCT's verdict: the faces (indices in TopExp::MapShapes order, which is the patch order for
+/// a connected PatchSet) that BOPAlgo_ArgumentAnalyzer's self-interference test names, and
+/// whether it found anything at all.
+struct OcctVerdict {
+  bool faulty = false;
+  std::set<int> faces;
+};
+
+OcctVerdict occt_self_interference(const PatchSet& ps) {
+  const occt::BrepResult b = occt::build_brep(ps);
+  EXPECT_TRUE(b.valid) << b.check_message;
+  TopTools_IndexedMapOfShape faces;
+  TopExp::MapShapes(b.shape, TopAbs_FACE, faces);
+  BOPAlgo_ArgumentAnalyzer a;
+  a.SetShape1(b.shape);
+  a.ArgumentTypeMode() = false;
+  a.SelfInterMode() = true;
+  a.Perform();
+  OcctVerdict v;
+  v.faulty = a.HasFaulty();
+  for (const BOPAlgo_CheckResult& r : a.GetCheckResult())
+    for (const TopoDS_Shape& s : r.GetFaultyShapes1())
+      if (s.ShapeType() == TopAbs_FACE) v.faces.insert(faces.FindIndex(s) - 1);
+  return v;
+}
+
+double distance(const Point3& a, const Point3& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/// The witness lies on both faces at the parameters given.
+void expect_witness_on_faces(const PatchSet& ps, const FaceCrossing& w) {
+  const Point3 a = evaluate(ps.patches[w.face_a], w.ua, w.va).p, b = evaluate(ps.patches[w.face_b], w.ub, w.vb).p;
+  EXPECT_LT(distance(a, w.point), 1e-9 * ps.model_size);
+  EXPECT_LT(distance(b, w.point), 1e-9 * ps.model_size);
+  EXPECT_GT(w.angle_deg, 0.05);
+}
+
+TEST(SelfIntersection, InterpenetratingCubesAreFlaggedLikeOcct) {
+  const PatchSet ps = packed_set(two_cubes(0.4));
+  const SelfIntersectionReport r = find_self_intersections(ps);
+  EXPECT_EQ(r.components, 2);
+  EXPECT_TRUE(r.self.empty());
+  ASSERT_FALSE(r.overlaps.empty());
+  ASSERT_EQ(r.overlapping_components.size(), 1u);
+  EXPECT_EQ(r.overlapping_components[0], std::make_pair(0, 1));
+  for (const FaceCrossing& w : r.overlaps) {
+    EXPECT_FALSE(w.inside);
+    EXPECT_NE(w.component_a, w.component_b);
+    expect_witness_on_faces(ps, w);
+  }
+  EXPECT_TRUE(occt_self_interference(ps).faulty);
+}
+
+TEST(SelfIntersection, CubesApartAreCleanLikeOcct) {
+  // 1.2 apart along x: the cages' convex hulls (which hold their limit surfaces) are disjoint.
+  const PatchSet ps = packed_set(two_cubes(1.2));
+  const SelfIntersectionReport r = find_self_intersections(ps);
+  EXPECT_EQ(r.components, 2);
+  EXPECT_TRUE(r.empty());
+  EXPECT_FALSE(occt_self_interference(ps).faulty);
+}
+
+TEST(SelfIntersection, CubeInsideCubeIsAnOverlap) {
+  // A small cube cage wholly inside a big one: no crossing, but the solids overlap. OCCT's
+  // self-interference test says so too (solid / solid).
+  MeshInput m;
+  add_cube(m, 0, 0, 0);
+  for (auto& p : m.positions)
+    for (double& x : p) x *= 4;
+  add_cube(m, 0.1, 0.05, 0);
+  const PatchSet ps = packed_set(m);
+  const SelfIntersectionReport r = find_self_intersections(ps);
+  ASSERT_EQ(r.overlaps.size(), 1u);
+  EXPECT_TRUE(r.overlaps[0].inside);
+  EXPECT_EQ(r.overlaps[0].component_a, 1);
+  EXPECT_EQ(r.overlaps[0].component_b, 0);
+  EXPECT_TRUE(r.self.empty());
+  EXPECT_TRUE(occt_self_interference(ps).faulty);
+}
+
+TEST(SelfIntersection, DentedTorusIsFlaggedOnFacesOcctNames) {
+  for (const bool packed : {true, false}) {
+    SCOPED_TRACE(packed ? "packed" : "per quad");
+    const MeshInput cage = torus_cage(8, 6, 2.0, 0.7, -3.3);
+    const PatchBuild b = build_patches(SubdivLevel::from_input(cage), cage.positions);
+    const PatchSet ps = packed ? pack_patches(b).set : b.set;
+    const SelfIntersectionReport r = find_self_intersections(ps);
+    EXPECT_EQ(r.components, 1);
+    EXPECT_TRUE(r.overlaps.empty());
+    ASSERT_FALSE(r.self.empty());
+    const OcctVerdict occt = occt_self_interference(ps);
+    EXPECT_TRUE(occt.faulty);
+    for (const FaceCrossing& w : r.self) {
+      expect_witness_on_faces(ps, w);
+      EXPECT_TRUE(occt.faces.count(w.face_a)) << w.face_a;
+      EXPECT_TRUE(occt.faces.count(w.face_b)) << w.face_b;
+    }
+  }
+}
+
+TEST(SelfIntersection, OrdinaryTorusIsClean) {
+  const PatchSet ps = packed_set(torus_cage(8, 6, 2.0, 0.8));
+  EXPECT_TRUE(find_self_intersections(ps).empty());
+  EXPECT_FALSE(occt_self_interference(ps).faulty);
+}
+
+TEST(SelfIntersection, CorpusShapesOcctFindsCleanAreClean) {
+  for (const char* name : {"catmark_cube", "catmark_torus", "catmark_pyramid_creases1", "catmark_cube_creases2",
+                           "catmark_helmet", "catmark_tent_creases1", "catmark_cubes_infsharp"}) {
+    SCOPED_TRACE(name);
+    const LoadedCage cage = read_obj(std::string(SUBD2NURBS_CORPUS_DIR) + "/" + name + ".obj");
+    for (const bool packed : {true, false}) {
+      const PatchBuild b = build_patches(SubdivLevel::from_input(cage.input), cage.input.positions);
+      const PatchSet ps = packed ? pack_patches(b).set : b.set;
+      EXPECT_FALSE(occt_self_interference(ps).faulty);
+      const SelfIntersectionReport r = find_self_intersections(ps);
+      EXPECT_TRUE(r.empty()) << (r.self.empty() ? r.overlaps.front().face_a : r.self.front().face_a);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace subd2nurbs
