@@ -54,10 +54,17 @@ struct ShapeFitOptions {
   /// Ignored (0) for a point cloud without normals.
   int plane_iterations = 50;
   double plane_switch = 0.01;
-  double target_weight = 1.0;   ///< weight of the target -> surface term (surface -> target: 1)
+  /// Weight of the target -> surface term (surface -> target: 1). The target's points are exact
+  /// (a triangle mesh's vertices lie on the shape), its triangles are chords that sag between
+  /// them, so the target -> surface term leads (docs/fitting.md "Recovery").
+  double target_weight = 30.0;
   /// Relative weight of the proximal term |P - P_prev|^2 (times the mean diagonal of the data
   /// normal matrix); keeps each solve regular where the data leave a direction free.
   double proximal = 1e-8;
+  /// Weight of the surface -> target term in the point-to-point phase, relative to the first
+  /// phase: the chords' sag would hold a fit that slid along the surface; the term keeps only
+  /// the surface from floating where the target has no points. In (0, 1].
+  double final_surface_weight = 1e-3;
 };
 
 enum class ShapeFitStop : unsigned char {
