@@ -10,12 +10,14 @@
 #include <optional>
 #include <stdexcept>
 
+#include "core/features/features.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
 #include "core/fit/limit_rows.h"
 #include "core/fit/sparse_util.h"
 #include "core/limit/limit_evaluator.h"
 #include "core/refine/quad_grid.h"
+#include "core/util/error.h"
 #include "core/util/bicubic.h"
 #include "core/util/parallel.h"
 
@@ -609,7 +611,9 @@ struct Border {
   std::vector<int> vertices;                    ///< level-k vertices on the border
 };
 
-Border surface_border(const SubdivLevel& L) {
+/// The surface's border (creases false), or its crease curves (creases true: the interior
+/// level-k edges still sharp at level k, between two non-hole faces; each edge once).
+Border surface_border(const SubdivLevel& L, bool creases = false) {
   const PolyMesh& m = L.mesh;
   Border b;
   b.at.resize(m.num_vertices());
@@ -617,7 +621,8 @@ Border surface_border(const SubdivLevel& L) {
     if (L.face_hole[f] || m.face_size(f) != 4) continue;
     for (int k = 0; k < 4; ++k) {
       const int h = m.face_begin(f) + k, tw = m.twin(h);
-      if (tw >= 0 && !L.face_hole[m.corner_face(tw)]) continue;
+      const bool open = tw < 0 || L.face_hole[m.corner_face(tw)];
+      if (creases ? open || tw < h || !(L.edge_sharpness[m.corner_edge(h)] > 0) : !open) continue;
       const int e = static_cast<int>(b.edges.size());
       b.edges.push_back({f, k});
       for (int v : {m.face_vertices(f)[k], m.face_vertices(f)[(k + 1) % 4]}) {
@@ -640,6 +645,35 @@ std::vector<int> target_border(const ShapeTarget& target) {
   std::vector<char> on(target.points().size(), 0);
   for (const auto& [e, c] : count)
     if (c == 1) on[e.first] = on[e.second] = 1;
+  std::vector<int> out;
+  for (size_t v = 0; v < on.size(); ++v)
+    if (on[v]) out.push_back(static_cast<int>(v));
+  return out;
+}
+
+/// The target's feature vertices: ends of its sharp interior edges (detect_features, dihedral
+/// angle; boundary edges left out: the border term holds them). None for a non-manifold target.
+std::vector<int> target_creases(const ShapeTarget& target, double angle_degrees) {
+  MeshInput mi;
+  mi.positions = target.points();
+  for (const auto& t : target.triangles()) {
+    mi.face_sizes.push_back(3);
+    for (int v : t) mi.face_indices.push_back(v);
+  }
+  FeatureOptions fo;
+  fo.angle_degrees = angle_degrees;
+  FeatureSet fs;
+  try {
+    fs = detect_features(mi, fo);
+  } catch (const Error&) {
+    return {};
+  }
+  std::map<std::pair<int, int>, int> count;
+  for (const auto& t : target.triangles())
+    for (int k = 0; k < 3; ++k) ++count[{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}];
+  std::vector<char> on(target.points().size(), 0);
+  for (const auto& e : fs.edges)
+    if (count[{e[0], e[1]}] == 2) on[e[0]] = on[e[1]] = 1;
   std::vector<int> out;
   for (size_t v = 0; v < on.size(); ++v)
     if (on[v]) out.push_back(static_cast<int>(v));
@@ -738,10 +772,20 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   std::vector<ShapeTarget::Closest> closest(ns);
   // The border: the target's boundary vertices against the surface's border curve (exact).
   const Border B = surface_border(S.level);
-  const std::vector<int> tborder =
+  std::vector<int> tborder =
       exact && target.has_triangles() && !B.edges.empty() ? target_border(target) : std::vector<int>{};
+  // Crease curves: the target's feature vertices against the surface's sharp curves (exact),
+  // where one is near (within crease_reach level-k crease edges).
+  const Border C = surface_border(S.level, true);
+  std::vector<int> tcrease;
+  if (target.has_triangles() && !C.edges.empty() && options.crease_angle > 0)
+    tcrease = target_creases(target, options.crease_angle);
+  for (int v : tcrease) tborder.push_back(v);
+  const int nborder = static_cast<int>(tborder.size()) - static_cast<int>(tcrease.size());
   const int nbd = static_cast<int>(tborder.size());
-  const double wbd = options.target_weight / std::max(nbd, 1);
+  const double wbd_border = options.target_weight / std::max(nborder, 1);
+  const double wcr = options.target_weight / std::max(nbd - nborder, 1);
+  std::vector<char> paired(nbd, 1);
   std::vector<Foot> foot(nb + nbd);
   // Per row of A (surface -> target) and of B (target -> surface): the symmetric 3 x 3 weight
   // (xx, yy, zz, xy, xz, yz) and W c.
@@ -774,13 +818,30 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       const Vec3 t = vec(data[j]);
       foot[j] = foot_point(S, Y, X, normal, E ? &*E : nullptr, t, S.vertex[sample_tree.closest(data[j]).element]);
     });
-    if (nbd > 0) {
+    if (nborder > 0) {
       std::vector<Point3> bx;
       for (int v : B.vertices) bx.push_back(X[v]);
       const ClosestPointTree border_tree(bx, {});
-      parallel_for(nbd, [&](int j) {
+      parallel_for(nborder, [&](int j) {
         const Point3& t = target.points()[tborder[j]];
         foot[nb + j] = border_foot(S, B, *E, X, vec(t), B.vertices[border_tree.closest(t).element]);
+      });
+    }
+    if (nbd > nborder) {
+      std::vector<Point3> cx;
+      double h = 0;
+      for (int v : C.vertices) cx.push_back(X[v]);
+      for (const auto& [f, k] : C.edges) {
+        const int* fv = S.level.mesh.face_vertices(f);
+        h += (vec(X[fv[k]]) - vec(X[fv[(k + 1) % 4]])).norm();
+      }
+      h /= static_cast<double>(C.edges.size());
+      const ClosestPointTree crease_tree(cx, {});
+      parallel_for(nbd - nborder, [&](int i) {
+        const int j = nborder + i;
+        const Point3& t = target.points()[tborder[j]];
+        foot[nb + j] = border_foot(S, C, *E, X, vec(t), C.vertices[crease_tree.closest(t).element]);
+        paired[j] = std::sqrt(foot[nb + j].distance2) <= options.crease_reach * h;
       });
     }
 
@@ -815,7 +876,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       // distance, so that the surface reaches t.
       // With the border term (a triangle target with a boundary) the surface's border is held
       // by it, and every foot is measured along the normal.
-      const bool to_plane = nbd > 0 || d2 - along * along <= 0.0625 * d2;
+      const bool to_plane = nborder > 0 || B.edges.empty() || d2 - along * along <= 0.0625 * d2;
       const double r2 = to_plane ? along * along : d2;
       sb += r2;
       h.target_max = std::max(h.target_max, std::sqrt(r2));
@@ -825,6 +886,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     }
     for (int j = 0; j < nbd; ++j) {
       const Foot& f = foot[nb + j];
+      const double wbd = j < nborder ? wbd_border : paired[j] ? wcr : 0.0;
       const Vec3 t = vec(target.points()[tborder[j]]), d = f.point - t, tau = f.normal;
       const Vec3 perp = d - d.dot(tau) * tau;
       // Across the curve where the foot is inside it; the whole distance beyond its end.

@@ -65,6 +65,12 @@ struct ShapeFitOptions {
   /// phase: the chords' sag would hold a fit that slid along the surface; the term keeps only
   /// the surface from floating where the target has no points. In (0, 1].
   double final_surface_weight = 1e-3;
+  /// Crease curves follow the target's sharp edges: the target's feature vertices (interior
+  /// edges whose faces' normals differ by more than crease_angle degrees; 0: off) are fitted to
+  /// the nearest crease curve of the surface (level-k edges still sharp at level k) when it is
+  /// within crease_reach x the mean length of the level-k crease edges.
+  double crease_angle = 30.0;
+  double crease_reach = 4.0;
 };
 
 enum class ShapeFitStop : unsigned char {

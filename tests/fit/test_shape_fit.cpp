@@ -169,6 +169,7 @@ TEST(ShapeFit, RecoversTrueCageFromTriangleTarget) {
       {"catmark_cube", corpus_cage("catmark_cube")},
       {"catmark_cube_creases1", corpus_cage("catmark_cube_creases1")},
       {"torus, crease ring sharpness 3", creased_torus(3)},
+      {"torus, crease ring sharpness 10", creased_torus(10)},
       {"open tube", open_tube()},
       {"catmark_edgecorner", corpus_cage("catmark_edgecorner")}};
   for (const auto& [name, in] : shapes) {
