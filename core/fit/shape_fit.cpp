@@ -362,18 +362,25 @@ Foot foot_point(const Samples& S, const std::vector<Point3>& Y, const std::vecto
         continue;
       }
       const int* fv = m.face_vertices(f);
+      if (E && m.face_size(f) == 4) {  // exact: Newton from the nearer triangle's closest point
+        static const double cs[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        double s0 = 0, t0 = 0, near2 = std::numeric_limits<double>::infinity();
+        for (int a = 1; a <= 2; ++a) {
+          const Point3 q = closest_point_on_triangle({t[0], t[1], t[2]}, X[fv[0]], X[fv[a]], X[fv[a + 1]]);
+          const double d2 = (vec(q) - t).squaredNorm();
+          if (d2 >= near2) continue;
+          near2 = d2;
+          const std::array<double, 3> w = barycentric(q, X[fv[0]], X[fv[a]], X[fv[a + 1]]);
+          s0 = w[0] * cs[0][0] + w[1] * cs[a][0] + w[2] * cs[a + 1][0];
+          t0 = w[0] * cs[0][1] + w[1] * cs[a][1] + w[2] * cs[a + 1][1];
+        }
+        project_exact(S, *E, f, t, s0, t0, best);
+        continue;
+      }
       for (int a = 1; a + 1 < m.face_size(f); ++a) {
         const std::array<int, 3> tri = {fv[0], fv[a], fv[a + 1]};
         const Point3 q = closest_point_on_triangle({t[0], t[1], t[2]}, X[tri[0]], X[tri[1]], X[tri[2]]);
         const double d2 = (vec(q) - t).squaredNorm();
-        if (E && m.face_size(f) == 4) {  // exact: Newton from the triangle's closest point
-          static const double cs[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-          const std::array<double, 3> w = barycentric(q, X[tri[0]], X[tri[1]], X[tri[2]]);
-          const double s0 = w[0] * cs[0][0] + w[1] * cs[a][0] + w[2] * cs[a + 1][0];
-          const double t0 = w[0] * cs[0][1] + w[1] * cs[a][1] + w[2] * cs[a + 1][1];
-          project_exact(S, *E, f, t, s0, t0, best);
-          continue;
-        }
         if (d2 >= best.distance2) continue;
         best.distance2 = d2;
         best.point = vec(q);
