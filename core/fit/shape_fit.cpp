@@ -1,5 +1,6 @@
 #include "core/fit/shape_fit.h"
 
+#include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cstdint>
@@ -985,6 +986,92 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   result.target_max = last.target_max;
   result.positions = std::move(P);
   return result;
+}
+
+Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations) {
+  if (points.empty()) throw std::invalid_argument("register_to_target: no points");
+  const double diag = target.diagonal();
+  auto box = [](const std::vector<Point3>& p, Vec3& centre) {
+    Vec3 lo = vec(p[0]), hi = lo;
+    for (const Point3& q : p) {
+      lo = lo.cwiseMin(vec(q));
+      hi = hi.cwiseMax(vec(q));
+    }
+    centre = (lo + hi) / 2;
+    return (hi - lo).norm();
+  };
+  Vec3 cp, ct;
+  const double dp = box(points, cp), dt = box(target.points(), ct);
+  if (!(dp > 0)) throw std::invalid_argument("register_to_target: the points have no extent");
+  const int n = static_cast<int>(points.size());
+  std::vector<Point3> mapped(n);
+  std::vector<ShapeTarget::Closest> closest(n);
+  auto rms_of = [&](const Eigen::Matrix3d& R, double s, const Vec3& t) {
+    for (int i = 0; i < n; ++i) {
+      const Vec3 q = s * R * vec(points[i]) + t;
+      mapped[i] = {q[0], q[1], q[2]};
+    }
+    parallel_for(n, [&](int i) { closest[i] = target.closest(mapped[i]); });
+    double sum = 0;
+    for (const auto& c : closest) sum += c.distance * c.distance;
+    return std::sqrt(sum / n);
+  };
+  // The 24 rotations that map axes to axes.
+  Eigen::Matrix3d bestR = Eigen::Matrix3d::Identity();
+  double best = std::numeric_limits<double>::infinity(), s = dt / dp;
+  Vec3 t = ct - s * cp;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& pm : perms)
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d R = Eigen::Matrix3d::Zero();
+      for (int i = 0; i < 3; ++i) R(i, pm[i]) = (signs >> i) & 1 ? -1.0 : 1.0;
+      if (R.determinant() < 0) continue;
+      const Vec3 tr = ct - s * R * cp;
+      const double r = rms_of(R, s, tr);
+      if (r < best) {
+        best = r;
+        bestR = R;
+        t = tr;
+      }
+    }
+  // Closest-point iterations with Umeyama's similarity.
+  Eigen::Matrix3d R = bestR;
+  double prev = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < iterations; ++it) {
+    const double r = rms_of(R, s, t);
+    if (!(r < prev * (1 - 1e-9))) break;
+    prev = r;
+    Vec3 mx = Vec3::Zero(), my = Vec3::Zero();
+    for (int i = 0; i < n; ++i) {
+      mx += vec(points[i]);
+      my += vec(closest[i].point);
+    }
+    mx /= n;
+    my /= n;
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    double vx = 0;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 a = vec(points[i]) - mx, b = vec(closest[i].point) - my;
+      C += b * a.transpose();
+      vx += a.squaredNorm();
+    }
+    C /= n;
+    vx /= n;
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) D(2, 2) = -1;
+    R = svd.matrixU() * D * svd.matrixV().transpose();
+    s = (svd.singularValues().asDiagonal() * D).trace() / vx;
+    t = my - s * R * mx;
+  }
+  Similarity out;
+  out.scale = s;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.R[i][j] = R(i, j);
+    out.t[i] = t[i];
+  }
+  out.rms = rms_of(R, s, t) / diag;
+  return out;
 }
 
 }  // namespace subd2nurbs

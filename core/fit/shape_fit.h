@@ -111,6 +111,26 @@ using ShapeFitProgress = std::function<bool(int iteration, double objective)>;
 /// level-k vertex order). Row r applied to the cage positions is a point of the limit surface.
 StencilTable shape_fit_sample_rows(const SubdivLevel& cage, int levels);
 
+/// A similarity x -> scale R x + t (R a rotation).
+struct Similarity {
+  double scale = 1;
+  double R[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Point3 t{0, 0, 0};
+  double rms = 0;  ///< RMS distance of the mapped points to the target, relative to its diagonal
+  Point3 apply(const Point3& p) const {
+    Point3 q;
+    for (int i = 0; i < 3; ++i) q[i] = scale * (R[i][0] * p[0] + R[i][1] * p[1] + R[i][2] * p[2]) + t[i];
+    return q;
+  }
+};
+
+/// The similarity that best maps `points` (e.g. a cage's limit points) onto `target`: the 24
+/// axis-aligned rotations with the bounding boxes' centres and diagonals matched are tried, the
+/// one with the smallest RMS closest-point distance refined by closest-point iterations with
+/// Umeyama's closed-form similarity (`iterations` at most). For a shape given in another frame,
+/// scale or orientation (rotated by multiples of 90 degrees about the axes, or near them).
+Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations = 200);
+
 /// Fits the limit surface of `cage` (topology and tags; positions ignored) starting from the
 /// positions `start` to `target`. \throw std::invalid_argument (sizes, options), FitError
 /// (interpolate.h: a system could not be factorised)

@@ -370,6 +370,43 @@ TEST(ShapeFit, CreasesLandOnABoxsEdges) {
   EXPECT_LT(d.target_to_limit.max, 1e-6);
 }
 
+// Registration: the exact limit of a cage (a torus cage perturbed: no symmetry), mapped by a known similarity (scale 2.6, 180 degrees
+// about y plus 10 degrees about z, a translation), is the target; the cage's own limit points
+// registered onto it recover the similarity (the mapped cage against the truth).
+TEST(ShapeFit, RegistrationRecoversAKnownSimilarity) {
+  const MeshInput in = torus_cage(8, 6, 3, 1);
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  const std::vector<Point3> pos = perturbed(positions_of(in), 0.03, 7);  // no symmetry left
+  const LimitTarget lt = limit_target(LimitEvaluator(cage, pos), 8);
+  const double a = 10 * M_PI / 180, c = std::cos(a), sn = std::sin(a);
+  // Rz(10 deg) * Ry(180 deg)
+  const double R[3][3] = {{-c, -sn, 0}, {-sn, c, 0}, {0, 0, -1}};
+  auto map = [&](const Point3& p) {
+    Point3 q;
+    for (int i = 0; i < 3; ++i) q[i] = 2.6 * (R[i][0] * p[0] + R[i][1] * p[1] + R[i][2] * p[2]) + (i == 1 ? 15.0 : -1.25);
+    return q;
+  };
+  std::vector<Point3> moved;
+  for (const Point3& p : lt.points) moved.push_back(map(p));
+  const ShapeTarget target(moved, lt.triangles);
+  std::vector<Point3> limit_points;
+  shape_fit_sample_rows(cage, 2).apply(pos, limit_points);
+  const Similarity sim = register_to_target(limit_points, target);
+  double worst = 0;
+  for (const Point3& p : pos) worst = std::max(worst, dist(sim.apply(p), map(p)) / target.diagonal());
+  std::printf("registration: scale %.12f, worst cage vertex %.2e, rms %.2e\n", sim.scale, worst, sim.rms);
+  EXPECT_NEAR(sim.scale, 2.6, 1e-3);
+  EXPECT_LT(worst, 1e-3);
+  // The fit from the registered cage (a stand-in for a cage drawn in another frame) comes back.
+  std::vector<Point3> start;
+  for (const Point3& p : perturbed(pos, 0.01, 3)) start.push_back(sim.apply(p));
+  const ShapeFitResult r = fit_to_shape(cage, start, target, exact_options());
+  double after = 0;
+  for (size_t v = 0; v < pos.size(); ++v) after = std::max(after, dist(r.positions[v], map(pos[v])) / target.diagonal());
+  std::printf("registered, then fitted: worst cage vertex %.2e (%d iterations, %s)\n", after, r.iterations, to_string(r.stop));
+  EXPECT_LT(after, 1e-5);
+}
+
 // Gaussian noise of sigma (relative to the diagonal) on the target points: the fitted limit's
 // RMS distance to the true limit grows like sigma and stays below sigma / 2 (many points per
 // cage vertex average the noise out).
