@@ -57,19 +57,20 @@ struct ShapeFitOptions {
   /// Weight of the target -> surface term (surface -> target: 1). The target's points are exact
   /// (a triangle mesh's vertices lie on the shape), its triangles are chords that sag between
   /// them, so the target -> surface term leads (docs/fitting.md "Recovery").
-  double target_weight = 30.0;
+  double target_weight = 1.0;
   /// Relative weight of the proximal term |P - P_prev|^2 (times the mean diagonal of the data
   /// normal matrix); keeps each solve regular where the data leave a direction free.
   double proximal = 1e-8;
   /// Weight of the surface -> target term in the point-to-point phase, relative to the first
   /// phase: the chords' sag would hold a fit that slid along the surface; the term keeps only
-  /// the surface from floating where the target has no points. In (0, 1].
-  double final_surface_weight = 1e-3;
+  /// the surface from floating where the target has no points. In (0, 1]. An exact target
+  /// wants 1e-3 (docs/fitting.md); 1 keeps the surface on a target it cannot reach.
+  double final_surface_weight = 1.0;
   /// Crease curves follow the target's sharp edges: the target's feature vertices (interior
   /// edges whose faces' normals differ by more than crease_angle degrees; 0: off) are fitted to
   /// the nearest crease curve of the surface (level-k edges still sharp at level k) when it is
   /// within crease_reach x the mean length of the level-k crease edges.
-  double crease_angle = 30.0;
+  double crease_angle = 0.0;
   double crease_reach = 4.0;
 };
 

@@ -82,10 +82,16 @@ void print(const char* what, const Recovery& r) {
               r.parameter, r.fit.iterations, to_string(r.fit.stop), r.fit.samples, r.seconds);
 }
 
-/// The defaults with smoothing 0 (an exact target: nothing to smooth) and a tolerance below the
-/// claim. The weights are the defaults: one setting for every shape.
+/// The options for an exact target: smoothing 0 (nothing to smooth), a tolerance below the
+/// claim, and one setting of the weights for every shape (target -> surface 30, surface ->
+/// target 1e-3 in the last phase, the crease term on). The library's defaults keep the old
+/// weights (1, 1, crease term off): the mesh path's fits of rounded cages to sharp parts need
+/// them (docs/fitting.md).
 ShapeFitOptions exact_options(int levels = 3) {
   ShapeFitOptions o;
+  o.target_weight = 30;
+  o.final_surface_weight = 1e-3;
+  o.crease_angle = 30;
   o.levels = levels;
   o.smoothing = 0;
   o.max_iterations = 100;
