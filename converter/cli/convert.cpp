@@ -219,9 +219,9 @@ pipeline::Settings conversion_settings(const ConvertOptions& options, bool build
 
 /// `--fit-to`: the cage's positions fitted to the target shape with the default options (the
 /// same fit as `subd2nurbs fit`), the distances before and after on stderr.
-std::vector<Point3> fit_to_target(const ConvertOptions& options, const pipeline::Settings& settings,
-                                  const SubdivLevel& base, const std::vector<Point3>& positions, Progress& progress,
-                                  std::ostream& err) {
+pipeline::ShapeFitRun fit_to_target(const ConvertOptions& options, const pipeline::Settings& settings,
+                                    const SubdivLevel& base, const std::vector<Point3>& positions, Progress& progress,
+                                    std::ostream& err) {
   if (settings.conversion.fit.mode != pipeline::FitMode::Approximate)
     throw UsageError("--fit-to and --fit interpolate exclude each other: the fit to a target already decides the cage");
   const ShapeTarget target = pipeline::make_target(read_target(options.fit_to), options.fit_to);
@@ -232,7 +232,7 @@ std::vector<Point3> fit_to_target(const ConvertOptions& options, const pipeline:
     print_target_distance(err, "subd2nurbs: before", run.before);
     print_target_distance(err, "subd2nurbs: after", run.after);
   }
-  return run.fit.positions;
+  return run;
 }
 
 }  // namespace
@@ -282,7 +282,12 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     for (const std::string& w : loaded.warnings) warn(w);
   std::vector<Point3> positions = made ? made->positions : loaded.positions();
   const double load_ms = ms_since(t);
-  if (!options.fit_to.empty()) positions = fit_to_target(options, all, base, positions, progress, err);
+  std::optional<pipeline::FitReport::ToTarget> to_target;
+  if (!options.fit_to.empty()) {
+    pipeline::ShapeFitRun run = fit_to_target(options, all, base, positions, progress, err);
+    positions = std::move(run.fit.positions);
+    to_target = pipeline::FitReport::ToTarget{options.fit_to, run.fit.iterations, to_string(run.fit.stop), run.before, run.after};
+  }
   if (cage.recovery.applied && !options.quiet)
     err << "subd2nurbs: recovered " << cage.recovery.quads << " quads from " << cage.recovery.source_triangles
         << " triangles (" << cage.recovery.triangles_kept << " triangles kept, " << cage.recovery.fan_vertices
@@ -344,6 +349,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   if (kind == OutputKind::Step) c.output.step_schema = occt::to_string(schema);
   c.ms.load = load_ms;
   if (made) c.mesh = std::move(made->report);
+  c.fit.to_target = std::move(to_target);
 
   if (!options.report.empty()) {
     if (!options.quiet) print_quality_summary(err, *c.quality, c.build.set.model_size);

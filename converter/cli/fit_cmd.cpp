@@ -31,6 +31,9 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   c->add_option("--tolerance", o.tolerance,
                 "Stop when both RMS distances are at most T x the target's diagonal (> 0, default 1e-7)");
   c->add_option("--report", o.report, "Also write a JSON report (iterations, distances before and after)");
+  c->add_flag("--register", o.register_first,
+              "First move, scale and rotate the cage onto the target (a similarity: for a target in another frame or "
+              "scale)");
   c->add_flag("-q,--quiet", o.quiet, "No progress or summary on stderr (warnings are still printed)");
   return c;
 }
@@ -61,7 +64,21 @@ void run_fit(const FitCommandOptions& o, std::ostream& err) {
       err << "subd2nurbs: iteration " << iteration + 1 << ": objective " << pipeline::short_number(objective) << "\n";
       return true;
     };
-  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(loaded.level, loaded.positions(), target, fo, progress);
+  std::vector<Point3> start = loaded.positions();
+  if (o.register_first) {
+    // The cage's limit points (level 2) registered onto the target; the similarity moves the
+    // cage, whose limit it moves alike (Catmull-Clark commutes with similarities).
+    std::vector<Point3> limit_points;
+    shape_fit_sample_rows(loaded.level, 2).apply(start, limit_points);
+    const Similarity sim = register_to_target(limit_points, target);
+    for (Point3& p : start) p = sim.apply(p);
+    if (!o.quiet)
+      err << "subd2nurbs: registered: scale " << pipeline::short_number(sim.scale) << ", translation ("
+          << pipeline::short_number(sim.t[0]) << ", " << pipeline::short_number(sim.t[1]) << ", "
+          << pipeline::short_number(sim.t[2]) << "), rms distance " << pipeline::short_number(sim.rms)
+          << " of the target's diagonal\n";
+  }
+  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(loaded.level, start, target, fo, progress);
 
   // Both outputs staged, then renamed into place together.
   StagedFile obj(o.output);

@@ -25,6 +25,7 @@ struct FitCommandOptions {
   double tolerance = 1e-7;        ///< > 0, relative to the target's diagonal
   std::string report;             ///< JSON path, empty for none
   bool quiet = false;
+  bool register_first = false;    ///< --register: a similarity pre-registration onto the target
 };
 
 CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& options);

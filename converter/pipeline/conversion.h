@@ -21,6 +21,7 @@
 #include "converter/pipeline/text.h"
 #include "core/eval/continuity.h"
 #include "core/eval/deviation.h"
+#include "core/eval/target_distance.h"
 #include "core/eval/preview_mesh.h"
 #include "core/eval/quality.h"
 #include "core/eval/self_intersection.h"
@@ -176,6 +177,14 @@ struct FitReport {
   int polar_vertices = 0;    ///< vertices interpolated with BP's limit
   int no_surface = 0;        ///< vertices without limit surface (left in place)
   double energy_before = -1, energy_after = -1;  ///< fairing energy of the input / fitted cage (fair fit)
+  /// `convert --fit-to TARGET`: the fit to the target shape (core/fit/shape_fit.h), set by the caller.
+  struct ToTarget {
+    std::string target;                ///< the target's path
+    int iterations = 0;
+    std::string stop;                  ///< to_string(ShapeFitStop)
+    TargetDistance before, after;      ///< the input and the fitted cage's limit to the target, two-sided
+  };
+  std::optional<ToTarget> to_target;
 };
 
 struct ToleranceResult {

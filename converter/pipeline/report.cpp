@@ -147,6 +147,16 @@ void write_fit(JsonWriter& w, const FitReport& f, double size) {
   w.members("polar_vertices", f.polar_vertices, "no_surface", f.no_surface);
   optional_number(w.break_line(4).key("energy_before"), f.energy_before >= 0, f.energy_before);
   optional_number(w.key("energy_after"), f.energy_after >= 0, f.energy_after);
+  w.break_line(4).key("to_target");
+  if (f.to_target) {
+    w.begin_object(6, 2);
+    w.members("target", f.to_target->target, "iterations", f.to_target->iterations, "stop", f.to_target->stop);
+    write_target_distance(w.key("before"), f.to_target->before);
+    write_target_distance(w.key("after"), f.to_target->after);
+    w.end_object();
+  } else {
+    w.null();
+  }
   w.end_object();
 }
 

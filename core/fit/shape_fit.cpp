@@ -1,17 +1,24 @@
 #include "core/fit/shape_fit.h"
 
+#include <Eigen/SVD>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 
+#include "core/features/features.h"
 #include "core/fit/fairing.h"
 #include "core/fit/interpolate.h"
 #include "core/fit/limit_rows.h"
 #include "core/fit/sparse_util.h"
+#include "core/limit/limit_evaluator.h"
 #include "core/refine/quad_grid.h"
+#include "core/util/error.h"
 #include "core/util/bicubic.h"
 #include "core/util/parallel.h"
 
@@ -46,7 +53,51 @@ struct Samples {
   /// level-k vertices (all four corners smooth, interior, valence 4, no tag on their edges), or -1.
   std::vector<int> grid_of;
   std::vector<std::array<int, 16>> grids;  ///< net index 4 i + j (i along u), -1..2 -> 0..3
+  /// Per level-k face: where it lies in the cage's ptex parameters, (u, v) = o + s a + t b for
+  /// its own (s, t) in [0, 1]^2 (refiner.h's child layout: child h at corner h, (0, 0) at the
+  /// corner, s towards the midpoint of the corner's outgoing edge).
+  struct PtexMap {
+    int face = 0, sub = 0;
+    double o[2] = {0, 0}, a[2] = {1, 0}, b[2] = {0, 1};
+    void apply(double s, double t, double& u, double& v) const {
+      u = o[0] + s * a[0] + t * b[0];
+      v = o[1] + s * a[1] + t * b[1];
+    }
+  };
+  std::vector<PtexMap> ptex;
 };
+
+/// The ptex maps of the faces of every level of `ref` down to `levels` (level-k faces).
+std::vector<Samples::PtexMap> ptex_maps(const SubdivLevel& cage, const Refinement& ref, int levels) {
+  std::vector<Samples::PtexMap> cur(cage.mesh.num_faces());
+  for (int f = 0; f < cage.mesh.num_faces(); ++f) cur[f].face = f;
+  for (int l = 0; l < levels; ++l) {
+    const PolyMesh& parent = l == 0 ? cage.mesh : ref.levels[l].mesh;
+    std::vector<Samples::PtexMap> next(ref.levels[l + 1].mesh.num_faces());
+    for (int h = 0; h < static_cast<int>(next.size()); ++h) {
+      const int F = parent.corner_face(h), i = h - parent.face_begin(F);
+      const Samples::PtexMap& P = cur[F];
+      Samples::PtexMap& c = next[h];
+      c.face = P.face;
+      c.sub = P.sub;
+      if (parent.face_size(F) != 4) {  // an n-gon of the cage: child i is ptex sub-face i itself
+        c.sub = i;
+        continue;
+      }
+      // The child's (s, t) in the parent's (s, t): o + s a + t b.
+      static const double co[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+      static const double ca[4][2] = {{0.5, 0}, {0, 0.5}, {-0.5, 0}, {0, -0.5}};
+      static const double cb[4][2] = {{0, 0.5}, {-0.5, 0}, {0, -0.5}, {0.5, 0}};
+      for (int d = 0; d < 2; ++d) {
+        c.o[d] = P.o[d] + co[i][0] * P.a[d] + co[i][1] * P.b[d];
+        c.a[d] = ca[i][0] * P.a[d] + ca[i][1] * P.b[d];
+        c.b[d] = cb[i][0] * P.a[d] + cb[i][1] * P.b[d];
+      }
+    }
+    cur = std::move(next);
+  }
+  return cur;
+}
 
 bool smooth_regular_corner(const SubdivLevel& L, int v) {
   const PolyMesh& m = L.mesh;
@@ -62,6 +113,7 @@ Samples make_samples(const SubdivLevel& cage, int levels) {
   Samples s;
   Refinement ref = refine_uniform(cage, levels);
   s.to_level = ref.stencils_from_base(levels);
+  s.ptex = ptex_maps(cage, ref, levels);
   s.level = std::move(ref.levels[levels]);
   const LimitRows lr = limit_rows(s.level);
   s.all_rows = lr.rows.compose(s.to_level);
@@ -124,11 +176,129 @@ void bspline(double t, double b[4], double d[4]) {
 struct Foot {
   double distance2 = std::numeric_limits<double>::infinity();
   Vec3 point = Vec3::Zero(), normal = Vec3::Zero();
-  int grid = -1;                 ///< B-spline patch (index into Samples::grids), or -1: triangle
-  double u = 0, v = 0;           ///< B-spline parameters
+  /// B-spline patch (index into Samples::grids), kExact: the exact limit on level-k face `face`
+  /// at (u, v) of that face (LimitEvaluator, rows from ExactRows), or -1: triangle
+  int grid = -1;
+  int face = -1;
+  double u = 0, v = 0;           ///< B-spline / level-k face parameters
   std::array<int, 3> tri{};      ///< triangle: level-k vertices
   std::array<double, 3> bary{};  ///< and barycentric weights
 };
+
+constexpr int kExact = -2;
+
+/// Exact rows of limit points anywhere on the surface, also where the limit is not one bicubic
+/// patch (extraordinary vertices, creases, boundaries): the limit is linear in the cage, so the
+/// weight of cage vertex i at a point is the limit of the cage whose positions are the unit
+/// vector e_i. The cage's vertices are coloured so that no two vertices of one face's 1-ring
+/// (the support of its limit patch) share a colour; one evaluator per three colours carries the
+/// indicator of one colour in each coordinate, and reads every support vertex's weight at once.
+struct ExactRows {
+  std::vector<int> colour;                    ///< per cage vertex
+  std::vector<std::vector<int>> support;      ///< per cage face: its 1-ring's vertices
+  std::vector<LimitEvaluator> basis;          ///< basis[c / 3], coordinate c % 3
+
+  explicit ExactRows(const SubdivLevel& cage) {
+    const PolyMesh& m = cage.mesh;
+    const int n = m.num_vertices(), nf = m.num_faces();
+    support.resize(nf);
+    std::vector<int> mark(n, -1);
+    for (int f = 0; f < nf; ++f) {
+      const int* fv = m.face_vertices(f);
+      for (int k = 0; k < m.face_size(f); ++k) {
+        const int* c = m.vertex_corners(fv[k]);
+        for (int i = 0, nc = m.vertex_face_count(fv[k]); i < nc; ++i) {
+          const int g = m.corner_face(c[i]);
+          const int* gv = m.face_vertices(g);
+          for (int j = 0; j < m.face_size(g); ++j)
+            if (mark[gv[j]] != f) {
+              mark[gv[j]] = f;
+              support[f].push_back(gv[j]);
+            }
+        }
+      }
+    }
+    // Greedy colouring: a vertex takes the smallest colour unused in every support it is in.
+    std::vector<std::vector<int>> faces_of(n);
+    for (int f = 0; f < nf; ++f)
+      for (int v : support[f]) faces_of[v].push_back(f);
+    colour.assign(n, -1);
+    int colours = 0;
+    std::vector<int> used;
+    for (int v = 0; v < n; ++v) {
+      used.clear();
+      for (int f : faces_of[v])
+        for (int w : support[f])
+          if (colour[w] >= 0) used.push_back(colour[w]);
+      std::sort(used.begin(), used.end());
+      int c = 0;
+      for (int u : used)
+        if (u == c) ++c;
+        else if (u > c) break;
+      colour[v] = c;
+      colours = std::max(colours, c + 1);
+    }
+    for (int e = 0; e < (colours + 2) / 3; ++e) {
+      std::vector<Point3> pos(n, Point3{0, 0, 0});
+      for (int v = 0; v < n; ++v)
+        if (colour[v] / 3 == e) pos[v][colour[v] % 3] = 1.0;
+      basis.emplace_back(cage, std::move(pos));
+    }
+  }
+  /// The row (cage vertices, weights) of the limit point at (u, v) of ptex sub-face `sub` of `face`.
+  void row(int face, int sub, double u, double v, std::vector<int>& idx, std::vector<double>& w) const {
+    idx.clear();
+    w.clear();
+    std::vector<LimitPoint> value(basis.size());
+    for (size_t e = 0; e < basis.size(); ++e) value[e] = basis[e].evaluate_point(face, sub, u, v);
+    for (int vtx : support[face]) {
+      const double x = value[colour[vtx] / 3].p[colour[vtx] % 3];
+      if (x == 0) continue;
+      idx.push_back(vtx);
+      w.push_back(x);
+    }
+  }
+};
+
+/// Gauss-Newton projection of t onto the exact limit on level-k face f (its own (s, t),
+/// evaluated by E in the cage's ptex parameters), started at (s, t), clamped to the face.
+void project_exact(const Samples& S, const LimitEvaluator& E, int f, const Vec3& t, double s0, double t0, Foot& best) {
+  const Samples::PtexMap& M = S.ptex[f];
+  double s = s0, r = t0;
+  LimitPoint q;
+  Vec3 ds, dr;
+  auto eval = [&]() {
+    double u, v;
+    M.apply(s, r, u, v);
+    q = E.evaluate_point(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0));
+    ds = M.a[0] * vec(q.du) + M.a[1] * vec(q.dv);
+    dr = M.b[0] * vec(q.du) + M.b[1] * vec(q.dv);
+  };
+  eval();
+  for (int iter = 0; iter < 10; ++iter) {
+    const Vec3 res = vec(q.p) - t;
+    Eigen::Matrix2d JtJ;
+    JtJ << ds.dot(ds), ds.dot(dr), ds.dot(dr), dr.dot(dr);
+    const Eigen::Vector2d step = JtJ.ldlt().solve(-Eigen::Vector2d(ds.dot(res), dr.dot(res)));
+    if (!step.allFinite()) break;
+    const double ns = std::clamp(s + step[0], 0.0, 1.0), nr = std::clamp(r + step[1], 0.0, 1.0);
+    const bool done = std::abs(ns - s) + std::abs(nr - r) < 1e-15;
+    s = ns;
+    r = nr;
+    eval();
+    if (done) break;
+  }
+  const double d2 = (vec(q.p) - t).squaredNorm();
+  if (d2 >= best.distance2) return;
+  best.distance2 = d2;
+  best.point = vec(q.p);
+  const Vec3 nrm = ds.cross(dr);
+  if (nrm.norm() > 0) best.normal = nrm.normalized();
+  best.grid = kExact;
+  best.face = f;
+  best.u = s;
+  best.v = r;
+}
 
 /// Gauss-Newton projection of t onto regular level-k patch `grid` (net from level-k positions Y),
 /// started at (u, v), clamped to the patch.
@@ -175,7 +345,7 @@ void project_to_patch(const Samples& S, int grid, const std::vector<Point3>& Y, 
 /// each face corner at `near` or its neighbour), else on the two triangles of limit points of
 /// each face.
 Foot foot_point(const Samples& S, const std::vector<Point3>& Y, const std::vector<Point3>& X,
-                const std::vector<Vec3>& normal, const Vec3& t, int near) {
+                const std::vector<Vec3>& normal, const LimitEvaluator* E, const Vec3& t, int near) {
   static const double corner_uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   const PolyMesh& m = S.level.mesh;
   Foot best;
@@ -193,6 +363,21 @@ Foot foot_point(const Samples& S, const std::vector<Point3>& Y, const std::vecto
         continue;
       }
       const int* fv = m.face_vertices(f);
+      if (E && m.face_size(f) == 4) {  // exact: Newton from the nearer triangle's closest point
+        static const double cs[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        double s0 = 0, t0 = 0, near2 = std::numeric_limits<double>::infinity();
+        for (int a = 1; a <= 2; ++a) {
+          const Point3 q = closest_point_on_triangle({t[0], t[1], t[2]}, X[fv[0]], X[fv[a]], X[fv[a + 1]]);
+          const double d2 = (vec(q) - t).squaredNorm();
+          if (d2 >= near2) continue;
+          near2 = d2;
+          const std::array<double, 3> w = barycentric(q, X[fv[0]], X[fv[a]], X[fv[a + 1]]);
+          s0 = w[0] * cs[0][0] + w[1] * cs[a][0] + w[2] * cs[a + 1][0];
+          t0 = w[0] * cs[0][1] + w[1] * cs[a][1] + w[2] * cs[a + 1][1];
+        }
+        project_exact(S, *E, f, t, s0, t0, best);
+        continue;
+      }
       for (int a = 1; a + 1 < m.face_size(f); ++a) {
         const std::array<int, 3> tri = {fv[0], fv[a], fv[a + 1]};
         const Point3 q = closest_point_on_triangle({t[0], t[1], t[2]}, X[tri[0]], X[tri[1]], X[tri[2]]);
@@ -209,8 +394,8 @@ Foot foot_point(const Samples& S, const std::vector<Point3>& Y, const std::vecto
     }
   };
   visit(near);
-  const bool inside = best.grid >= 0 ? best.u > 0 && best.u < 1 && best.v > 0 && best.v < 1
-                                     : best.bary[0] > 0 && best.bary[1] > 0 && best.bary[2] > 0;
+  const bool inside = best.grid != -1 ? best.u > 0 && best.u < 1 && best.v > 0 && best.v < 1
+                                      : best.bary[0] > 0 && best.bary[1] > 0 && best.bary[2] > 0;
   if (!inside) for_each_vertex_edge(m, near, [&](int, int w) { visit(w); });
   return best;
 }
@@ -335,6 +520,13 @@ struct RowSum {
       if (acc[t.indices[k]] == 0) acc[t.indices[k]] = 1e-300;  // stays listed
     }
   }
+  void add(const std::vector<int>& i, const std::vector<double>& x) {
+    for (size_t k = 0; k < i.size(); ++k) {
+      if (acc[i[k]] == 0) idx.push_back(i[k]);
+      acc[i[k]] += x[k];
+      if (acc[i[k]] == 0) acc[i[k]] = 1e-300;
+    }
+  }
   void finish() {
     w.resize(idx.size());
     for (size_t k = 0; k < idx.size(); ++k) {
@@ -367,7 +559,7 @@ namespace {
 /// One solve of a fit iteration: the cage positions minimising the weighted pairings (rows of A:
 /// samples -> targets, weights Ma, W c Ga; rows of B: data points -> their feet, Mb, Gb) plus the
 /// regulariser lambda K and the proximal term mu |P - P_prev|^2. \throw FitError
-void solve_step(const Samples& S, const std::vector<Foot>& foot, const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga,
+void solve_step(const Samples& S, const ExactRows* exact, const std::vector<Foot>& foot, const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga,
                 const Eigen::MatrixXd& Mb, const Eigen::MatrixXd& Gb, const SparseMatrix& K, double lambda,
                 double proximal, std::vector<Point3>& P) {
   const int n = static_cast<int>(P.size()), ns = static_cast<int>(S.vertex.size()), nb = static_cast<int>(foot.size());
@@ -384,10 +576,18 @@ void solve_step(const Samples& S, const std::vector<Foot>& foot, const Eigen::Ma
     eq.add(&S.all_rows.indices[o], &S.all_rows.weights[o], S.all_rows.row_size(v), weight(Ma, i), Ga.row(i).transpose());
   }
   RowSum row(n);
+  std::vector<int> ei;
+  std::vector<double> ew;
   for (int j = 0; j < nb; ++j) {
     const Foot& f = foot[j];
     row.clear();
-    if (f.grid >= 0) {
+    if (f.grid == kExact) {
+      const Samples::PtexMap& M = S.ptex[f.face];
+      double u, v;
+      M.apply(f.u, f.v, u, v);
+      exact->row(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0), ei, ew);
+      row.add(ei, ew);
+    } else if (f.grid >= 0) {
       double bu[4], dbu[4], bv[4], dbv[4];
       bspline(f.u, bu, dbu);
       bspline(f.v, bv, dbv);
@@ -411,6 +611,138 @@ void solve_step(const Samples& S, const std::vector<Foot>& foot, const Eigen::Ma
   for (int v = 0; v < n; ++v) P[v] = {x[v], x[n + v], x[2 * n + v]};
 }
 
+
+/// The surface's border: level-k halfedges of non-hole faces with no twin or a hole across.
+struct Border {
+  std::vector<std::pair<int, int>> edges;       ///< (face, corner index in the face 0..3)
+  std::vector<std::vector<int>> at;             ///< level-k vertex -> indices into edges
+  std::vector<int> vertices;                    ///< level-k vertices on the border
+};
+
+/// The surface's border (creases false), or its crease curves (creases true: the interior
+/// level-k edges still sharp at level k, between two non-hole faces; each edge once).
+Border surface_border(const SubdivLevel& L, bool creases = false) {
+  const PolyMesh& m = L.mesh;
+  Border b;
+  b.at.resize(m.num_vertices());
+  for (int f = 0; f < m.num_faces(); ++f) {
+    if (L.face_hole[f] || m.face_size(f) != 4) continue;
+    for (int k = 0; k < 4; ++k) {
+      const int h = m.face_begin(f) + k, tw = m.twin(h);
+      const bool open = tw < 0 || L.face_hole[m.corner_face(tw)];
+      if (creases ? open || tw < h || !(L.edge_sharpness[m.corner_edge(h)] > 0) : !open) continue;
+      const int e = static_cast<int>(b.edges.size());
+      b.edges.push_back({f, k});
+      for (int v : {m.face_vertices(f)[k], m.face_vertices(f)[(k + 1) % 4]}) {
+        if (b.at[v].empty()) b.vertices.push_back(v);
+        b.at[v].push_back(e);
+      }
+    }
+  }
+  return b;
+}
+
+/// The target's boundary vertices (on an edge of one triangle).
+std::vector<int> target_border(const ShapeTarget& target) {
+  std::map<std::pair<int, int>, int> count;
+  for (const auto& t : target.triangles())
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      ++count[{std::min(a, b), std::max(a, b)}];
+    }
+  std::vector<char> on(target.points().size(), 0);
+  for (const auto& [e, c] : count)
+    if (c == 1) on[e.first] = on[e.second] = 1;
+  std::vector<int> out;
+  for (size_t v = 0; v < on.size(); ++v)
+    if (on[v]) out.push_back(static_cast<int>(v));
+  return out;
+}
+
+/// The target's feature vertices: ends of its sharp interior edges (detect_features, dihedral
+/// angle; boundary edges left out: the border term holds them). None for a non-manifold target.
+std::vector<int> target_creases(const ShapeTarget& target, double angle_degrees) {
+  MeshInput mi;
+  mi.positions = target.points();
+  for (const auto& t : target.triangles()) {
+    mi.face_sizes.push_back(3);
+    for (int v : t) mi.face_indices.push_back(v);
+  }
+  FeatureOptions fo;
+  fo.angle_degrees = angle_degrees;
+  FeatureSet fs;
+  try {
+    fs = detect_features(mi, fo);
+  } catch (const Error&) {
+    return {};
+  }
+  std::map<std::pair<int, int>, int> count;
+  for (const auto& t : target.triangles())
+    for (int k = 0; k < 3; ++k) ++count[{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}];
+  std::vector<char> on(target.points().size(), 0);
+  for (const auto& e : fs.edges)
+    if (count[{e[0], e[1]}] == 2) on[e[0]] = on[e[1]] = 1;
+  std::vector<int> out;
+  for (size_t v = 0; v < on.size(); ++v)
+    if (on[v]) out.push_back(static_cast<int>(v));
+  return out;
+}
+
+/// The closest point to t on the surface's border curve near border vertex `near` (the border
+/// edges at it and at their other ends), exact: 1-D Newton along each level-k border edge on the
+/// exact limit. normal = the curve's unit tangent there.
+Foot border_foot(const Samples& S, const Border& B, const LimitEvaluator& E, const std::vector<Point3>& X, const Vec3& t,
+                 int near) {
+  static const double co[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  Foot best;
+  std::vector<int> edges = B.at[near];
+  for (int e : B.at[near]) {
+    const auto [f, k] = B.edges[e];
+    for (int v : {S.level.mesh.face_vertices(f)[k], S.level.mesh.face_vertices(f)[(k + 1) % 4]})
+      for (int e2 : B.at[v])
+        if (std::find(edges.begin(), edges.end(), e2) == edges.end()) edges.push_back(e2);
+  }
+  for (int e : edges) {
+    const auto [f, k] = B.edges[e];
+    const Samples::PtexMap& M = S.ptex[f];
+    const double* p0 = co[k];
+    const double* p1 = co[(k + 1) % 4];
+    const int* fv = S.level.mesh.face_vertices(f);
+    const Vec3 a = vec(X[fv[k]]), b = vec(X[fv[(k + 1) % 4]]);
+    double x = std::clamp((t - a).dot(b - a) / std::max((b - a).squaredNorm(), 1e-300), 0.0, 1.0);
+    LimitPoint q;
+    Vec3 dx;
+    auto eval = [&]() {
+      const double s = p0[0] + x * (p1[0] - p0[0]), r = p0[1] + x * (p1[1] - p0[1]);
+      double u, v;
+      M.apply(s, r, u, v);
+      q = E.evaluate_point(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0));
+      const double ds = p1[0] - p0[0], dr = p1[1] - p0[1];
+      dx = (ds * M.a[0] + dr * M.b[0]) * vec(q.du) + (ds * M.a[1] + dr * M.b[1]) * vec(q.dv);
+    };
+    eval();
+    for (int iter = 0; iter < 10; ++iter) {
+      const double g = dx.dot(vec(q.p) - t), hh = dx.squaredNorm();
+      if (!(hh > 0)) break;
+      const double nx = std::clamp(x - g / hh, 0.0, 1.0);
+      const bool done = std::abs(nx - x) < 1e-15;
+      x = nx;
+      eval();
+      if (done) break;
+    }
+    const double d2 = (vec(q.p) - t).squaredNorm();
+    if (d2 >= best.distance2) continue;
+    best.distance2 = d2;
+    best.point = vec(q.p);
+    best.normal = dx.norm() > 0 ? Vec3(dx.normalized()) : Vec3::Zero();
+    best.grid = kExact;
+    best.face = f;
+    best.u = p0[0] + x * (p1[0] - p0[0]);
+    best.v = p0[1] + x * (p1[1] - p0[1]);
+  }
+  return best;
+}
+
 }  // namespace
 
 ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target,
@@ -418,7 +750,8 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   const int n = cage.mesh.num_vertices();
   if (static_cast<int>(start.size()) != n) throw std::invalid_argument("fit_to_shape: one start position per cage vertex");
   if (options.levels < 1 || options.levels > 5) throw std::invalid_argument("fit_to_shape: levels must be 1..5");
-  if (options.max_iterations < 0 || options.smoothing < 0 || options.target_weight < 0 || options.proximal < 0)
+  if (options.max_iterations < 0 || options.smoothing < 0 || options.target_weight < 0 || options.proximal < 0 ||
+      !(options.final_surface_weight > 0))
     throw std::invalid_argument("fit_to_shape: negative option");
   const double diag = target.diagonal();
   if (!(diag > 0)) throw std::invalid_argument("fit_to_shape: the target has no extent");
@@ -430,9 +763,13 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   const double lambda = options.smoothing / ptex_faces(cage);
   if (lambda > 0) K = energy_matrix(cage, EnergyOptions{1.0, 0.0, 2});
 
+  std::unique_ptr<ExactRows> exact;
+  std::optional<LimitEvaluator> E;
+  exact = std::make_unique<ExactRows>(cage);
   const std::vector<Point3>& data = target.data_points();
   const int nb = static_cast<int>(data.size());
-  const double wa = 1.0 / ns, wb = options.target_weight / nb;
+  const double wa1 = 1.0 / ns, wb = options.target_weight / nb;
+  const double final_surface = options.final_surface_weight;
   const bool can_plane = target.has_normals() && options.plane_iterations > 0;
 
   ShapeFitResult result;
@@ -441,13 +778,36 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   std::vector<Point3> X, Y, xs(ns);
   std::vector<Vec3> normal;
   std::vector<ShapeTarget::Closest> closest(ns);
-  std::vector<Foot> foot(nb);
+  // The border: the target's boundary vertices against the surface's border curve (exact).
+  const Border B = surface_border(S.level);
+  std::vector<int> tborder =
+      exact && target.has_triangles() && !B.edges.empty() ? target_border(target) : std::vector<int>{};
+  // Crease curves: the target's feature vertices against the surface's sharp curves (exact),
+  // where one is near (within crease_reach level-k crease edges).
+  const Border C = surface_border(S.level, true);
+  std::vector<int> tcrease;
+  if (target.has_triangles() && !C.edges.empty() && options.crease_angle > 0)
+    tcrease = target_creases(target, options.crease_angle);
+  for (int v : tcrease) tborder.push_back(v);
+  const int nborder = static_cast<int>(tborder.size()) - static_cast<int>(tcrease.size());
+  const int nbd = static_cast<int>(tborder.size());
+  const double wbd_border = options.target_weight / std::max(nborder, 1);
+  const double wcr = options.target_weight / std::max(nbd - nborder, 1);
+  std::vector<char> paired(nbd, 1);
+  std::vector<Foot> foot(nb + nbd);
   // Per row of A (surface -> target) and of B (target -> surface): the symmetric 3 x 3 weight
   // (xx, yy, zz, xy, xz, yz) and W c.
-  Eigen::MatrixXd Ma(ns, 6), Ga(ns, 3), Mb(nb, 6), Gb(nb, 3);
+  Eigen::MatrixXd Ma(ns, 6), Ga(ns, 3), Mb(nb + nbd, 6), Gb(nb + nbd, 3);
   bool plane = can_plane, last_plane = can_plane;
   int plane_count = 0;
   double prev_objective = std::numeric_limits<double>::infinity();
+  double damping = 0;
+  struct {
+    std::vector<Point3> P;
+    std::vector<Foot> foot;
+    Eigen::MatrixXd Ma, Ga, Mb, Gb;
+    ShapeFitIteration h;
+  } accepted;
   auto put = [](Eigen::MatrixXd& M, Eigen::MatrixXd& G, int i, const Eigen::Matrix3d& W, const Vec3& c) {
     M.row(i) << W(0, 0), W(1, 1), W(2, 2), W(0, 1), W(0, 2), W(1, 2);
     G.row(i) = (W * c).transpose();
@@ -459,17 +819,45 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     S.limit.apply(Y, X);
     for (int i = 0; i < ns; ++i) xs[i] = X[S.vertex[i]];
     sample_normals(S.level, X, normal);
+    if (exact) E.emplace(cage, P);
     parallel_for(ns, [&](int i) { closest[i] = target.closest(xs[i]); });
     const ClosestPointTree sample_tree(xs, {});
     parallel_for(nb, [&](int j) {
       const Vec3 t = vec(data[j]);
-      foot[j] = foot_point(S, Y, X, normal, t, S.vertex[sample_tree.closest(data[j]).element]);
+      foot[j] = foot_point(S, Y, X, normal, E ? &*E : nullptr, t, S.vertex[sample_tree.closest(data[j]).element]);
     });
+    if (nborder > 0) {
+      std::vector<Point3> bx;
+      for (int v : B.vertices) bx.push_back(X[v]);
+      const ClosestPointTree border_tree(bx, {});
+      parallel_for(nborder, [&](int j) {
+        const Point3& t = target.points()[tborder[j]];
+        foot[nb + j] = border_foot(S, B, *E, X, vec(t), B.vertices[border_tree.closest(t).element]);
+      });
+    }
+    if (nbd > nborder) {
+      std::vector<Point3> cx;
+      double h = 0;
+      for (int v : C.vertices) cx.push_back(X[v]);
+      for (const auto& [f, k] : C.edges) {
+        const int* fv = S.level.mesh.face_vertices(f);
+        h += (vec(X[fv[k]]) - vec(X[fv[(k + 1) % 4]])).norm();
+      }
+      h /= static_cast<double>(C.edges.size());
+      const ClosestPointTree crease_tree(cx, {});
+      parallel_for(nbd - nborder, [&](int i) {
+        const int j = nborder + i;
+        const Point3& t = target.points()[tborder[j]];
+        foot[nb + j] = border_foot(S, C, *E, X, vec(t), C.vertices[crease_tree.closest(t).element]);
+        paired[j] = std::sqrt(foot[nb + j].distance2) <= options.crease_reach * h;
+      });
+    }
 
     // Weights and the objective.
     ShapeFitIteration h;
     h.point_to_plane = plane;
     double data_sum = 0, sa = 0, sb = 0;
+    const double wa = plane ? wa1 : wa1 * final_surface;
     for (int i = 0; i < ns; ++i) {
       const Vec3 x = vec(xs[i]), c = vec(closest[i].point), d = x - c;
       sa += d.squaredNorm();
@@ -494,13 +882,28 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       // At a foot inside the surface d is along the normal: measured to the tangent plane. Where
       // the foot is on the surface's border (t beyond a boundary) d is tangential: the whole
       // distance, so that the surface reaches t.
-      const bool to_plane = d2 - along * along <= 0.0625 * d2;
+      // With the border term (a triangle target with a boundary) the surface's border is held
+      // by it, and every foot is measured along the normal.
+      const bool to_plane = nborder > 0 || B.edges.empty() || d2 - along * along <= 0.0625 * d2;
       const double r2 = to_plane ? along * along : d2;
       sb += r2;
       h.target_max = std::max(h.target_max, std::sqrt(r2));
       data_sum += wb * r2;
       put(Mb, Gb, j, to_plane ? Eigen::Matrix3d(wb * f.normal * f.normal.transpose())
                               : Eigen::Matrix3d(wb * Eigen::Matrix3d::Identity()), t);
+    }
+    for (int j = 0; j < nbd; ++j) {
+      const Foot& f = foot[nb + j];
+      const double wbd = j < nborder ? wbd_border : paired[j] ? wcr : 0.0;
+      const Vec3 t = vec(target.points()[tborder[j]]), d = f.point - t, tau = f.normal;
+      const Vec3 perp = d - d.dot(tau) * tau;
+      // Across the curve where the foot is inside it; the whole distance beyond its end.
+      const bool across = perp.squaredNorm() >= 0.9375 * d.squaredNorm();
+      data_sum += wbd * (across ? perp.squaredNorm() : d.squaredNorm());
+      put(Mb, Gb, nb + j,
+          across ? Eigen::Matrix3d(wbd * (Eigen::Matrix3d::Identity() - tau * tau.transpose()))
+                 : Eigen::Matrix3d(wbd * Eigen::Matrix3d::Identity()),
+          t);
     }
     double reg = 0;
     if (lambda > 0)
@@ -516,9 +919,30 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     h.target_max /= diag;
     result.history.push_back(h);
 
-    // Stop rules.
-    const double improvement = (prev_objective - h.objective) / std::max(prev_objective, 1e-300);
+    // Step control (Levenberg-Marquardt): a solve that made the objective of the same phase
+    // worse is undone, and solved again from the last accepted pairing with a larger damping.
+    double improvement = (prev_objective - h.objective) / std::max(prev_objective, 1e-300);
     const bool same_phase = it > 0 && plane == last_plane;
+    if (same_phase && improvement < 0 && !(h.surface_rms <= options.tolerance && h.target_rms <= options.tolerance)) {
+      damping = damping > 0 ? 10 * damping : 1e-6;
+      if (damping > 1e3 || it >= options.max_iterations) {  // no descent left: the accepted state is the result
+        P = accepted.P;
+        result.history.back() = accepted.h;
+        result.stop = damping > 1e3 ? ShapeFitStop::Converged : ShapeFitStop::IterationLimit;
+        break;
+      }
+      P = accepted.P;
+      foot = accepted.foot;
+      Ma = accepted.Ma;
+      Ga = accepted.Ga;
+      Mb = accepted.Mb;
+      Gb = accepted.Gb;
+      result.history.back() = accepted.h;
+      solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, P);
+      result.iterations = it + 1;
+      continue;
+    }
+    if (same_phase) damping = damping > 1e-9 ? damping / 10 : 0;
     if (h.surface_rms <= options.tolerance && h.target_rms <= options.tolerance) {
       result.stop = ShapeFitStop::Tolerance;
       break;
@@ -545,7 +969,14 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       }
     }
 
-    solve_step(S, foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal, P);
+    accepted.P = P;
+    accepted.foot = foot;
+    accepted.Ma = Ma;
+    accepted.Ga = Ga;
+    accepted.Mb = Mb;
+    accepted.Gb = Gb;
+    accepted.h = h;
+    solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, P);
     result.iterations = it + 1;
   }
   const ShapeFitIteration& last = result.history.back();
@@ -555,6 +986,92 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   result.target_max = last.target_max;
   result.positions = std::move(P);
   return result;
+}
+
+Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations) {
+  if (points.empty()) throw std::invalid_argument("register_to_target: no points");
+  const double diag = target.diagonal();
+  auto box = [](const std::vector<Point3>& p, Vec3& centre) {
+    Vec3 lo = vec(p[0]), hi = lo;
+    for (const Point3& q : p) {
+      lo = lo.cwiseMin(vec(q));
+      hi = hi.cwiseMax(vec(q));
+    }
+    centre = (lo + hi) / 2;
+    return (hi - lo).norm();
+  };
+  Vec3 cp, ct;
+  const double dp = box(points, cp), dt = box(target.points(), ct);
+  if (!(dp > 0)) throw std::invalid_argument("register_to_target: the points have no extent");
+  const int n = static_cast<int>(points.size());
+  std::vector<Point3> mapped(n);
+  std::vector<ShapeTarget::Closest> closest(n);
+  auto rms_of = [&](const Eigen::Matrix3d& R, double s, const Vec3& t) {
+    for (int i = 0; i < n; ++i) {
+      const Vec3 q = s * R * vec(points[i]) + t;
+      mapped[i] = {q[0], q[1], q[2]};
+    }
+    parallel_for(n, [&](int i) { closest[i] = target.closest(mapped[i]); });
+    double sum = 0;
+    for (const auto& c : closest) sum += c.distance * c.distance;
+    return std::sqrt(sum / n);
+  };
+  // The 24 rotations that map axes to axes.
+  Eigen::Matrix3d bestR = Eigen::Matrix3d::Identity();
+  double best = std::numeric_limits<double>::infinity(), s = dt / dp;
+  Vec3 t = ct - s * cp;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& pm : perms)
+    for (int signs = 0; signs < 8; ++signs) {
+      Eigen::Matrix3d R = Eigen::Matrix3d::Zero();
+      for (int i = 0; i < 3; ++i) R(i, pm[i]) = (signs >> i) & 1 ? -1.0 : 1.0;
+      if (R.determinant() < 0) continue;
+      const Vec3 tr = ct - s * R * cp;
+      const double r = rms_of(R, s, tr);
+      if (r < best) {
+        best = r;
+        bestR = R;
+        t = tr;
+      }
+    }
+  // Closest-point iterations with Umeyama's similarity.
+  Eigen::Matrix3d R = bestR;
+  double prev = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < iterations; ++it) {
+    const double r = rms_of(R, s, t);
+    if (!(r < prev * (1 - 1e-9))) break;
+    prev = r;
+    Vec3 mx = Vec3::Zero(), my = Vec3::Zero();
+    for (int i = 0; i < n; ++i) {
+      mx += vec(points[i]);
+      my += vec(closest[i].point);
+    }
+    mx /= n;
+    my /= n;
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    double vx = 0;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 a = vec(points[i]) - mx, b = vec(closest[i].point) - my;
+      C += b * a.transpose();
+      vx += a.squaredNorm();
+    }
+    C /= n;
+    vx /= n;
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) D(2, 2) = -1;
+    R = svd.matrixU() * D * svd.matrixV().transpose();
+    s = (svd.singularValues().asDiagonal() * D).trace() / vx;
+    t = my - s * R * mx;
+  }
+  Similarity out;
+  out.scale = s;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.R[i][j] = R(i, j);
+    out.t[i] = t[i];
+  }
+  out.rms = rms_of(R, s, t) / diag;
+  return out;
 }
 
 }  // namespace subd2nurbs

@@ -54,10 +54,24 @@ struct ShapeFitOptions {
   /// Ignored (0) for a point cloud without normals.
   int plane_iterations = 50;
   double plane_switch = 0.01;
-  double target_weight = 1.0;   ///< weight of the target -> surface term (surface -> target: 1)
+  /// Weight of the target -> surface term (surface -> target: 1). The target's points are exact
+  /// (a triangle mesh's vertices lie on the shape), its triangles are chords that sag between
+  /// them, so the target -> surface term leads (docs/fitting.md "Recovery").
+  double target_weight = 1.0;
   /// Relative weight of the proximal term |P - P_prev|^2 (times the mean diagonal of the data
   /// normal matrix); keeps each solve regular where the data leave a direction free.
   double proximal = 1e-8;
+  /// Weight of the surface -> target term in the point-to-point phase, relative to the first
+  /// phase: the chords' sag would hold a fit that slid along the surface; the term keeps only
+  /// the surface from floating where the target has no points. In (0, 1]. An exact target
+  /// wants 1e-3 (docs/fitting.md); 1 keeps the surface on a target it cannot reach.
+  double final_surface_weight = 1.0;
+  /// Crease curves follow the target's sharp edges: the target's feature vertices (interior
+  /// edges whose faces' normals differ by more than crease_angle degrees; 0: off) are fitted to
+  /// the nearest crease curve of the surface (level-k edges still sharp at level k) when it is
+  /// within crease_reach x the mean length of the level-k crease edges.
+  double crease_angle = 0.0;
+  double crease_reach = 4.0;
 };
 
 enum class ShapeFitStop : unsigned char {
@@ -97,6 +111,26 @@ using ShapeFitProgress = std::function<bool(int iteration, double objective)>;
 /// points of the vertices of the cage refined `levels` times (those with a limit surface, in
 /// level-k vertex order). Row r applied to the cage positions is a point of the limit surface.
 StencilTable shape_fit_sample_rows(const SubdivLevel& cage, int levels);
+
+/// A similarity x -> scale R x + t (R a rotation).
+struct Similarity {
+  double scale = 1;
+  double R[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Point3 t{0, 0, 0};
+  double rms = 0;  ///< RMS distance of the mapped points to the target, relative to its diagonal
+  Point3 apply(const Point3& p) const {
+    Point3 q;
+    for (int i = 0; i < 3; ++i) q[i] = scale * (R[i][0] * p[0] + R[i][1] * p[1] + R[i][2] * p[2]) + t[i];
+    return q;
+  }
+};
+
+/// The similarity that best maps `points` (e.g. a cage's limit points) onto `target`: the 24
+/// axis-aligned rotations with the bounding boxes' centres and diagonals matched are tried, the
+/// one with the smallest RMS closest-point distance refined by closest-point iterations with
+/// Umeyama's closed-form similarity (`iterations` at most). For a shape given in another frame,
+/// scale or orientation (rotated by multiples of 90 degrees about the axes, or near them).
+Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations = 200);
 
 /// Fits the limit surface of `cage` (topology and tags; positions ignored) starting from the
 /// positions `start` to `target`. \throw std::invalid_argument (sizes, options), FitError

@@ -291,9 +291,13 @@ class FittedCageFeature(CageFeature):
             raise ValueError("%s: a Source cage and a Target are needed" % obj.Label)
         source = cage_of(obj.Source)
         points, triangles = self.target_arrays(obj.Target)
-        with settings_named_by_property():
-            fitted, info = subd2nurbs.fit(source, points, triangles=triangles, smoothing=obj.Smoothing,
-                                          max_iterations=obj.MaxIterations)
+        indicator = _FitProgress("Fitting %s to %s" % (obj.Source.Label, obj.Target.Label), obj.MaxIterations)
+        try:
+            with settings_named_by_property():
+                fitted, info = subd2nurbs.fit(source, points, triangles=triangles, smoothing=obj.Smoothing,
+                                              max_iterations=obj.MaxIterations, progress=indicator)
+        finally:
+            indicator.stop()
         CageFeature.store(obj, fitted, getattr(obj.Source, "SourceFile", ""))
         obj.Iterations = int(info["iterations"])
         obj.Stop = str(info["stop"])
@@ -381,6 +385,39 @@ class _Progress:
 
     def stop(self):
         self.indicator.stop()
+
+
+class _FitProgress:
+    """FreeCAD's progress indicator for a fit: one step per closest-point iteration (of at most
+    `steps`), with a cancel button in the GUI; a cancel stops the fit after its current solve
+    (subd2nurbs.fit's progress returns False: stop "cancelled", the last solved cage is kept).
+    `cancel_after` (tests) cancels by itself after that many iterations."""
+
+    cancel_after = None
+
+    def __init__(self, title, steps):
+        self.indicator = App.Base.ProgressIndicator()
+        self.indicator.start(title, max(int(steps), 1))
+        self.calls = 0
+
+    def __call__(self, iteration, max_iterations, objective):
+        self.calls += 1
+        if self.cancel_after is not None and self.calls > self.cancel_after:
+            return False
+        try:
+            self.indicator.next(True)  # raises once the user has pressed cancel
+        except Exception:
+            return False
+        if App.GuiUp:
+            import FreeCADGui
+            FreeCADGui.updateGui()
+        return True
+
+    def stop(self):
+        try:
+            self.indicator.stop()
+        except Exception:
+            pass
 
 
 #: The property of each converter setting (subd2nurbs.SettingsError.setting) on a NURBS object

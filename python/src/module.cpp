@@ -682,7 +682,7 @@ py::dict fit_cage(const DoubleArray& positions, const IntArray& face_sizes, cons
                   const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                   const py::dict& options, const DoubleArray& target_points, const IntArray& target_sizes,
                   const IntArray& target_indices, const std::string& target_name, double smoothing, int levels,
-                  int max_iterations, double tolerance) {
+                  int max_iterations, double tolerance, const py::object& progress) {
   ShapeFitOptions fo;
   fo.smoothing = smoothing;
   fo.levels = levels;
@@ -705,7 +705,16 @@ py::dict fit_cage(const DoubleArray& positions, const IntArray& face_sizes, cons
   shape.triangles = fan_triangles(sizes, indices);
   const ShapeTarget target = pipeline::make_target(std::move(shape), target_name);
   const std::vector<Point3> start(in.positions.begin(), in.positions.end());
-  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(level, start, target, fo);
+  // The fit runs without the GIL; progress(iteration, max_iterations, objective) takes it back
+  // for each call and cancels the fit when it returns False (stop "cancelled": the last solved cage).
+  ShapeFitProgress report;
+  if (!progress.is_none())
+    report = [&](int iteration, double objective) {
+      py::gil_scoped_acquire locked;
+      const py::object go = progress(iteration, max_iterations, objective);
+      return go.is_none() || go.cast<bool>();
+    };
+  const pipeline::ShapeFitRun run = without_gil([&] { return pipeline::run_shape_fit(level, start, target, fo, report); });
   py::dict d;
   set_items(d, "vertices", points_array(run.fit.positions), "report",
             pipeline::shape_fit_report_json(run, fo, "cage", target_name, ""));

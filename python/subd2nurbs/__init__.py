@@ -619,7 +619,7 @@ def _target(target, triangles):
     return name, points, np.full(tris.shape[0], 3, dtype=np.int32), tris.reshape(-1)
 
 
-def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-7, triangles=None):
+def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-7, triangles=None, progress=None):
     """Fits a cage to a target shape (as `subd2nurbs fit`): moves its vertices so that the exact
     limit surface fits the target, from the cage's own positions (docs/fitting.md).
 
@@ -629,14 +629,21 @@ def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-
     Returns (Cage with the same faces and tags, info dict: iterations, stop, samples, before and
     after (the two-sided distance of the input and the fitted limit surface to the target:
     diagonal, limit_to_target and target_to_limit, each max / rms / p95 relative to the target's
-    diagonal), history, fit_ms, measure_ms)."""
+    diagonal), history, fit_ms, measure_ms).
+    progress: None, or a callable progress(iteration, max_iterations, objective) called after each
+    closest-point pairing; returning False cancels the fit (stop "cancelled", the cage of the last
+    solve is returned)."""
+    if progress is not None and not callable(progress):
+        raise SettingsError("progress must be callable or None, not %r" % (progress,), setting="progress",
+                            rule="must be callable or None")
     cage = _cage(cage)
     smoothing = _checked("smoothing", smoothing, _is_number, "a number", float)
     levels = _checked("levels", levels, _is_int, "an integer", int)
     max_iterations = _checked("max_iterations", max_iterations, _is_int, "an integer", int)
     tolerance = _checked("tolerance", tolerance, _is_number, "a number", float)
     name, points, sizes, indices = _target(target, triangles)
-    d = _subd2nurbs.fit(*cage._args(), points, sizes, indices, name, smoothing, levels, max_iterations, tolerance)
+    d = _subd2nurbs.fit(*cage._args(), points, sizes, indices, name, smoothing, levels, max_iterations, tolerance,
+                        progress)
     info = json.loads(d["report"])
     for key in ("format", "version", "input", "output"):
         info.pop(key, None)

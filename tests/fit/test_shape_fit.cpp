@@ -10,6 +10,9 @@
 #include <cstdlib>
 #include <map>
 #include <random>
+#include <set>
+#include <limits>
+#include <algorithm>
 #include <tuple>
 
 #include "core/eval/target_distance.h"
@@ -79,18 +82,41 @@ void print(const char* what, const Recovery& r) {
               r.parameter, r.fit.iterations, to_string(r.fit.stop), r.fit.samples, r.seconds);
 }
 
+/// The options for an exact target: smoothing 0 (nothing to smooth), a tolerance below the
+/// claim, and one setting of the weights for every shape (target -> surface 30, surface ->
+/// target 1e-3 in the last phase, the crease term on). The library's defaults keep the old
+/// weights (1, 1, crease term off): the mesh path's fits of rounded cages to sharp parts need
+/// them (docs/fitting.md).
 ShapeFitOptions exact_options(int levels = 3) {
   ShapeFitOptions o;
+  o.target_weight = 30;
+  o.final_surface_weight = 1e-3;
+  o.crease_angle = 30;
   o.levels = levels;
   o.smoothing = 0;
-  o.max_iterations = 200;
+  o.max_iterations = 100;
   o.tolerance = 1e-8;
-  // The target's vertices are exact limit points, its triangles chords: target -> surface is
-  // exact, surface -> target carries the chords' sag wherever the samples slide off the target's
-  // vertices (docs/fitting.md).
-  o.target_weight = 1e3;
-
   return o;
+}
+
+/// An open tube: the torus without one ring of faces (two boundary loops).
+MeshInput open_tube() {
+  const MeshInput t = torus_cage(8, 6, 3, 1);
+  MeshInput in;
+  in.positions = t.positions;
+  for (size_t f = 0; f < t.face_sizes.size(); ++f) {
+    if (f / 6 == 7) continue;  // ring i = 7 removed
+    in.face_sizes.push_back(4);
+    for (int k = 0; k < 4; ++k) in.face_indices.push_back(t.face_indices[4 * f + k]);
+  }
+  return in;
+}
+
+/// The torus with a ring of crease edges of sharpness s around its tube.
+MeshInput creased_torus(float s) {
+  MeshInput in = torus_cage(8, 6, 3, 1);
+  for (int i = 0; i < 8; ++i) in.creases.push_back({i * 6, ((i + 1) % 8) * 6, s});
+  return in;
 }
 
 // Every sample row applied to the cage is a point of the exact limit: it coincides with a
@@ -141,29 +167,27 @@ TEST(ShapeFit, TargetPointsMatchOpenSubdiv) {
   }
 }
 
-// The perturbed cage (3 % of the diagonal) comes back: a regular torus, a cube (valence-3
-// vertices), semi-sharp creases. The weight of the target -> surface term is the one setting
-// each converges with in the iterations given (measured: docs/fitting.md "Convergence"); open
-// shapes do not come back yet (same document).
+// The perturbed cage (3 % of the diagonal) comes back within 1e-6 x diagonal, two-sided, with
+// the default weights on every shape: a regular torus, a cube (valence-3 vertices), semi-sharp
+// creases, a ring of sharpness-3 creases, an open tube (two boundary loops) and an open planar
+// sheet with corners (catmark_edgecorner). The oracle is the true cage's exact limit, measured
+// both ways by Newton projection onto each surface (not the solver's rows or pairings).
 TEST(ShapeFit, RecoversTrueCageFromTriangleTarget) {
-  struct Case {
-    std::string name;
-    MeshInput in;
-    double target_weight;
-  };
-  const std::vector<Case> shapes = {{"torus", torus_cage(8, 6, 3, 1), 30},
-                                    {"catmark_cube", corpus_cage("catmark_cube"), 1},
-                                    {"catmark_cube_creases1", corpus_cage("catmark_cube_creases1"), 1}};
-  for (const Case& c : shapes) {
-    ShapeFitOptions o = exact_options();
-    o.target_weight = c.target_weight;
-    o.max_iterations = 100;
-    const Recovery r = recover(c.in, true, 0.03, o);
-    print(c.name.c_str(), r);
-    EXPECT_EQ(r.fit.stop, ShapeFitStop::Tolerance) << c.name;
-    EXPECT_LT(r.shape, 1e-6) << c.name;
-    EXPECT_LT(r.fit.surface_rms, 1e-6) << c.name;
-    EXPECT_LT(r.fit.target_rms, 1e-6) << c.name;
+  const std::vector<std::pair<std::string, MeshInput>> shapes = {
+      {"torus", torus_cage(8, 6, 3, 1)},
+      {"catmark_cube", corpus_cage("catmark_cube")},
+      {"catmark_cube_creases1", corpus_cage("catmark_cube_creases1")},
+      {"torus, crease ring sharpness 3", creased_torus(3)},
+      {"torus, crease ring sharpness 10", creased_torus(10)},
+      {"open tube", open_tube()},
+      {"catmark_edgecorner", corpus_cage("catmark_edgecorner")}};
+  for (const auto& [name, in] : shapes) {
+    const Recovery r = recover(in, true, 0.03, exact_options());
+    print(name.c_str(), r);
+    EXPECT_EQ(r.fit.stop, ShapeFitStop::Tolerance) << name;
+    EXPECT_LT(r.shape, 1e-6) << name;
+    EXPECT_LT(r.fit.surface_rms, 1e-6) << name;
+    EXPECT_LT(r.fit.target_rms, 1e-6) << name;
   }
 }
 
@@ -175,6 +199,219 @@ TEST(ShapeFit, RecoversTrueCageFromPointCloud) {
   }
 }
 
+
+/// Points along the limit image of every tagged crease edge of `in` (per edge, `per_edge` + 1
+/// points: the edge's ptex border in a face that has it).
+std::vector<Point3> crease_curve_points(const MeshInput& in, const LimitEvaluator& limit, int per_edge) {
+  static const double co[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::vector<Point3> out;
+  for (const CreaseTag& c : in.creases) {
+    int off = 0;
+    for (size_t f = 0; f < in.face_sizes.size(); off += in.face_sizes[f], ++f) {
+      if (in.face_sizes[f] != 4) continue;
+      int k = -1;
+      for (int i = 0; i < 4; ++i)
+        if (in.face_indices[off + i] == c.v0 && in.face_indices[off + (i + 1) % 4] == c.v1) k = i;
+      if (k < 0) continue;
+      for (int i = 0; i <= per_edge; ++i) {
+        const double x = static_cast<double>(i) / per_edge;
+        const double u = co[k][0] + x * (co[(k + 1) % 4][0] - co[k][0]), v = co[k][1] + x * (co[(k + 1) % 4][1] - co[k][1]);
+        out.push_back(limit.evaluate(static_cast<int>(f), 0, u, v).p);
+      }
+      break;
+    }
+  }
+  return out;
+}
+
+/// Largest distance from the points a to the polyline through b (consecutive points; the
+/// polyline restarts every `stride` points), relative to diag.
+double to_polyline(const std::vector<Point3>& a, const std::vector<Point3>& b, int stride, double diag) {
+  std::vector<std::array<int, 3>> segs;  // degenerate triangles: segments
+  for (size_t i = 0; i + 1 < b.size(); ++i)
+    if ((i + 1) % stride != 0) segs.push_back({static_cast<int>(i), static_cast<int>(i + 1), static_cast<int>(i + 1)});
+  const ClosestPointTree tree(b, segs);
+  double worst = 0;
+  for (const Point3& p : a) worst = std::max(worst, std::sqrt(tree.closest(p).distance2) / diag);
+  return worst;
+}
+
+// Crease curves follow the target's sharp edges: a torus with a ring of infinitely sharp crease
+// edges, perturbed, fitted to its triangulated exact limit. The fitted crease curve (the limit
+// along the crease edges) against the true one (dense polyline of the true limit along the same
+// edges, 1024 points per edge: chord error < 1e-8), both ways. Without the crease term
+// (crease_angle 0) the fit does not come back in the same iterations.
+TEST(ShapeFit, CreaseCurvesFollowTheTargetsSharpEdges) {
+  const MeshInput in = creased_torus(10);
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  const std::vector<Point3> truth = positions_of(in);
+  const LimitEvaluator true_limit(cage, truth);
+  const LimitTarget lt = limit_target(true_limit, 8);
+  const ShapeTarget target(lt.points, lt.triangles);
+  const double diag = target.diagonal();
+  const std::vector<Point3> true_curve = crease_curve_points(in, true_limit, 1024);
+  const std::vector<Point3> start = perturbed(truth, 0.03, 7);
+  auto crease_distance = [&](const std::vector<Point3>& P) {
+    const LimitEvaluator l(cage, P);
+    const std::vector<Point3> fitted = crease_curve_points(in, l, 1024);
+    return std::max(to_polyline(crease_curve_points(in, l, 16), true_curve, 1025, diag),
+                    to_polyline(crease_curve_points(in, true_limit, 16), fitted, 1025, diag));
+  };
+  ShapeFitOptions o = exact_options();
+  o.max_iterations = 40;
+  const ShapeFitResult with = fit_to_shape(cage, start, target, o);
+  o.crease_angle = 0;
+  const ShapeFitResult without = fit_to_shape(cage, start, target, o);
+  const double before = crease_distance(start), after = crease_distance(with.positions),
+               off = crease_distance(without.positions);
+  std::printf("crease curve to the true one: start %.2e, fitted %.2e (%d iterations, %s), without the crease term %.2e (%s)\n",
+              before, after, with.iterations, to_string(with.stop), off, to_string(without.stop));
+  EXPECT_GT(before, 1e-3);
+  EXPECT_LT(after, 1e-6);
+  EXPECT_GT(off, 10 * after);
+}
+
+/// A box cage: n x n quads per side of [-1, 1]^3 scaled by `size`, its 12 edges tagged
+/// infinitely sharp (creases = true): its limit is the box itself (flat sides, straight sharp
+/// edges, corners at the box's corners).
+MeshInput box_cage(int n, const Point3& size, bool creases) {
+  MeshInput in;
+  std::map<std::tuple<int, int, int>, int> id;
+  auto vertex = [&](int x, int y, int z) {  // lattice coordinates 0..n
+    const auto key = std::make_tuple(x, y, z);
+    const auto it = id.find(key);
+    if (it != id.end()) return it->second;
+    in.positions.push_back({size[0] * (-1 + 2.0 * x / n), size[1] * (-1 + 2.0 * y / n), size[2] * (-1 + 2.0 * z / n)});
+    return id[key] = static_cast<int>(in.positions.size()) - 1;
+  };
+  for (int a = 0; a < 3; ++a)
+    for (int side : {0, n}) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          int q[4];
+          const int ij[4][2] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
+          for (int k = 0; k < 4; ++k) {
+            int l[3];
+            l[a] = side;
+            l[b] = ij[k][0];
+            l[c] = ij[k][1];
+            q[k] = vertex(l[0], l[1], l[2]);
+          }
+          in.face_sizes.push_back(4);
+          if (side == n)
+            for (int k = 0; k < 4; ++k) in.face_indices.push_back(q[k]);
+          else
+            for (int k = 3; k >= 0; --k) in.face_indices.push_back(q[k]);
+        }
+    }
+  if (creases) {
+    std::set<std::pair<int, int>> seen;
+    for (size_t f = 0; f < in.face_sizes.size(); ++f)
+      for (int k = 0; k < 4; ++k) {
+        const int v0 = in.face_indices[4 * f + k], v1 = in.face_indices[4 * f + (k + 1) % 4];
+        int shared = 0;
+        for (int d = 0; d < 3; ++d)
+          shared += std::abs(std::abs(in.positions[v0][d]) - size[d]) < 1e-12 && in.positions[v0][d] == in.positions[v1][d];
+        if (shared >= 2 && seen.insert({std::min(v0, v1), std::max(v0, v1)}).second) in.creases.push_back({v0, v1, 10.0});
+      }
+  }
+  return in;
+}
+
+/// Distance from p to the nearest of the 12 edges of the box [-size, size].
+double to_box_edges(const Point3& p, const Point3& size) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)  // edges along axis a
+    for (double sb : {-1.0, 1.0})
+      for (double sc : {-1.0, 1.0}) {
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const double along = std::clamp(p[a], -size[a], size[a]);
+        const double dx = p[a] - along, dy = p[b] - sb * size[b], dz = p[c] - sc * size[c];
+        best = std::min(best, std::sqrt(dx * dx + dy * dy + dz * dz));
+      }
+  return best;
+}
+
+// An analytic CAD-like target: a 2 x 1 x 0.5 box (its sides triangulated on a 16 x 16 grid,
+// exact: flat sides), a box cage of 3 x 3 quads per side with its 12 edges sharp, started 5 %
+// too small and perturbed by 1 % (from 10 % and 2 % the fit stalls near 5e-4: docs/fitting.md). The fitted crease curves land on the box's edges and the
+// surface on the box (two-sided, independent measure).
+TEST(ShapeFit, CreasesLandOnABoxsEdges) {
+  const Point3 size = {1.0, 0.5, 0.25};
+  const MeshInput in = box_cage(3, size, true);
+  const MeshInput box = box_cage(16, size, false);
+  std::vector<std::array<int, 3>> tris;
+  for (size_t f = 0; f < box.face_sizes.size(); ++f) {
+    const int* q = &box.face_indices[4 * f];
+    tris.push_back({q[0], q[1], q[2]});
+    tris.push_back({q[0], q[2], q[3]});
+  }
+  const ShapeTarget target(box.positions, tris);
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  std::vector<Point3> start = perturbed(positions_of(in), 0.01, 5);
+  for (Point3& p : start)
+    for (double& c : p) c *= 0.95;
+  const ShapeFitResult r = fit_to_shape(cage, start, target, exact_options());
+  if (std::getenv("SHAPE_FIT_DEBUG"))
+    for (const ShapeFitIteration& h : r.history)
+      std::printf("  obj %.3e surf %.3e/%.3e target %.3e/%.3e plane %d\n", h.objective, h.surface_rms, h.surface_max,
+                  h.target_rms, h.target_max, h.point_to_plane);
+  const double diag = target.diagonal();
+  auto worst_edge = [&](const std::vector<Point3>& P) {
+    double worst = 0;
+    for (const Point3& p : crease_curve_points(in, LimitEvaluator(cage, P), 16)) worst = std::max(worst, to_box_edges(p, size) / diag);
+    return worst;
+  };
+  // The sides are flat: the fit may slide the parametrisation within them, so the measure's
+  // start grid is fine (32 x 32 per face; 8 x 8 misses feet in stretched faces).
+  const TargetDistance d = measure_target_distance(LimitEvaluator(cage, r.positions), target, 32);
+  std::printf("box: crease curves to the box's edges %.2e at the start, %.2e fitted (%d iterations, %s); "
+              "surface two-sided %.2e / %.2e\n",
+              worst_edge(start), worst_edge(r.positions), r.iterations, to_string(r.stop), d.limit_to_target.max,
+              d.target_to_limit.max);
+  EXPECT_GT(worst_edge(start), 1e-2);
+  EXPECT_LT(worst_edge(r.positions), 1e-6);
+  EXPECT_LT(d.limit_to_target.max, 1e-6);
+  EXPECT_LT(d.target_to_limit.max, 1e-6);
+}
+
+// Registration: the exact limit of a cage (a torus cage perturbed: no symmetry), mapped by a known similarity (scale 2.6, 180 degrees
+// about y plus 10 degrees about z, a translation), is the target; the cage's own limit points
+// registered onto it recover the similarity (the mapped cage against the truth).
+TEST(ShapeFit, RegistrationRecoversAKnownSimilarity) {
+  const MeshInput in = torus_cage(8, 6, 3, 1);
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  const std::vector<Point3> pos = perturbed(positions_of(in), 0.03, 7);  // no symmetry left
+  const LimitTarget lt = limit_target(LimitEvaluator(cage, pos), 8);
+  const double a = 10 * M_PI / 180, c = std::cos(a), sn = std::sin(a);
+  // Rz(10 deg) * Ry(180 deg)
+  const double R[3][3] = {{-c, -sn, 0}, {-sn, c, 0}, {0, 0, -1}};
+  auto map = [&](const Point3& p) {
+    Point3 q;
+    for (int i = 0; i < 3; ++i) q[i] = 2.6 * (R[i][0] * p[0] + R[i][1] * p[1] + R[i][2] * p[2]) + (i == 1 ? 15.0 : -1.25);
+    return q;
+  };
+  std::vector<Point3> moved;
+  for (const Point3& p : lt.points) moved.push_back(map(p));
+  const ShapeTarget target(moved, lt.triangles);
+  std::vector<Point3> limit_points;
+  shape_fit_sample_rows(cage, 2).apply(pos, limit_points);
+  const Similarity sim = register_to_target(limit_points, target);
+  double worst = 0;
+  for (const Point3& p : pos) worst = std::max(worst, dist(sim.apply(p), map(p)) / target.diagonal());
+  std::printf("registration: scale %.12f, worst cage vertex %.2e, rms %.2e\n", sim.scale, worst, sim.rms);
+  EXPECT_NEAR(sim.scale, 2.6, 1e-3);
+  EXPECT_LT(worst, 1e-3);
+  // The fit from the registered cage (a stand-in for a cage drawn in another frame) comes back.
+  std::vector<Point3> start;
+  for (const Point3& p : perturbed(pos, 0.01, 3)) start.push_back(sim.apply(p));
+  const ShapeFitResult r = fit_to_shape(cage, start, target, exact_options());
+  double after = 0;
+  for (size_t v = 0; v < pos.size(); ++v) after = std::max(after, dist(r.positions[v], map(pos[v])) / target.diagonal());
+  std::printf("registered, then fitted: worst cage vertex %.2e (%d iterations, %s)\n", after, r.iterations, to_string(r.stop));
+  EXPECT_LT(after, 1e-5);
+}
 
 // Gaussian noise of sigma (relative to the diagonal) on the target points: the fitted limit's
 // RMS distance to the true limit grows like sigma and stays below sigma / 2 (many points per

@@ -375,6 +375,18 @@ class Workbench(unittest.TestCase):
         probe = [App.Vector(*fine.vertices[i]) for i in range(0, len(fine.vertices), 37)]
         far = lambda shape: max(shape.distToShape(Part.Vertex(p))[0] for p in probe)
         self.assertLess(far(nurbs.Shape), 0.5 * far(plain.Shape))
+        # Cancelled (the progress indicator's cancel, simulated after one iteration): the fit
+        # stops after its first solve, says so, and keeps that solve's cage.
+        features._FitProgress.cancel_after = 1
+        try:
+            stopped = s2n.make_fitted_cage(cage, mesh_obj, max_iterations=10)
+        finally:
+            features._FitProgress.cancel_after = None
+        self.assertEqual(stopped.Stop, "cancelled")
+        self.assertEqual(stopped.Iterations, 1)
+        points, triangles = features.FittedCageFeature.target_arrays(mesh_obj)
+        one, _ = subd2nurbs.fit(features.cage_of(cage), points, triangles=triangles, max_iterations=1)
+        np.testing.assert_allclose(np.array(stopped.Coordinates), one.vertices.reshape(-1), rtol=1e-12, atol=0)
         # The target moves: the fitted cage follows (refit on recompute).
         before = list(fitted.Coordinates)
         mesh_obj.Placement = App.Placement(App.Vector(0.01 * diag, 0, 0), App.Rotation())

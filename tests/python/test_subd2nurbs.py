@@ -964,6 +964,29 @@ class ShapeFitTest(unittest.TestCase):
             with self.assertRaises(s2n.CageError):
                 s2n.fit(start, os.path.join(d, "missing.ply"))
 
+    def test_fit_progress_and_cancel(self):
+        truth = torus_cage()
+        fine = s2n.refine(truth, 3)
+        rng = np.random.default_rng(5)
+        diag = np.linalg.norm(truth.vertices.max(0) - truth.vertices.min(0))
+        start = s2n.Cage(truth.vertices + rng.uniform(-0.01, 0.01, truth.vertices.shape) * diag, truth.faces,
+                         truth.creases)
+        calls = []
+        _, full = s2n.fit(start, fine, max_iterations=6, progress=lambda i, n, obj: calls.append((i, n, obj)))
+        # one call per pairing that a solve follows, in order, with the cap and the objective
+        self.assertEqual([c[0] for c in calls], list(range(full["iterations"])))
+        self.assertTrue(all(c[1] == 6 for c in calls))
+        self.assertEqual([c[2] for c in calls], [h["objective"] for h in full["history"][:len(calls)]])
+        # returning False after the second pairing: two solves, stop "cancelled", the second solve's cage
+        cancelled, info = s2n.fit(start, fine, max_iterations=6, progress=lambda i, n, obj: i < 1)
+        self.assertEqual(info["stop"], "cancelled")
+        self.assertEqual(info["iterations"], 1)
+        two, _ = s2n.fit(start, fine, max_iterations=1)
+        np.testing.assert_array_equal(cancelled.vertices, two.vertices)
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n.fit(start, fine, progress=3)
+        self.assertEqual(e.exception.setting, "progress")
+
     def test_fit_argument_errors(self):
         cage = torus_cage()
         points = cage.vertices
