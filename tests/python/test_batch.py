@@ -114,6 +114,22 @@ def journal_lines(outdir):
         return 0
 
 
+def interrupt_after(test, args, out, files, timeout):
+    """Runs the batch `args`, sends SIGINT once `files` files are in the journal of `out`, checks
+    it ends with exit code 130 and an interrupted summary, and returns the outputs it left."""
+    run = subprocess.Popen(args, env=env(), stderr=subprocess.DEVNULL)
+    wait_for(lambda: journal_lines(out) >= files or run.poll() is not None, "%d files converted" % files)
+    test.assertIsNone(run.poll(), "the batch ended before it was interrupted")
+    run.send_signal(signal.SIGINT)
+    test.assertEqual(run.wait(timeout=timeout), 130)
+    with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+        part = json.load(f)
+    test.assertTrue(part["run"]["interrupted"])
+    left = [r["output"] for r in part["files"] if r["status"] == "interrupted"]
+    test.assertTrue(left)
+    return left
+
+
 def write_cube_gltf(path, bin_rel):
     """A unit cube as 12 triangles in a .gltf whose buffer is the external file `bin_rel`
     (relative to the .gltf, may go up: "../buffers/cube.bin")."""
@@ -558,16 +574,7 @@ class Dask(BatchTestCase):
         out = os.path.join(self.tmp, "dask-interrupted")
         args = batch_command(light_tree(os.path.join(self.tmp, "light")), "-o", out, "--scheduler", self.address,
                              "--send-inputs", "always", "--level", "0")
-        first = subprocess.Popen(args, env=env(), stderr=subprocess.DEVNULL)
-        wait_for(lambda: journal_lines(out) >= 10 or first.poll() is not None, "10 files converted")
-        self.assertIsNone(first.poll(), "the batch ended before it was interrupted")
-        first.send_signal(signal.SIGINT)
-        self.assertEqual(first.wait(timeout=300), 130)
-        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
-            part = json.load(f)
-        self.assertTrue(part["run"]["interrupted"])
-        left = [r["output"] for r in part["files"] if r["status"] == "interrupted"]
-        self.assertTrue(left)
+        left = interrupt_after(self, args, out, 10, timeout=300)
         second = subprocess.run(args, env=env(), stderr=subprocess.DEVNULL, timeout=600)
         self.assertEqual(second.returncode, 2)  # some inputs fail, as in the reference
         with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
@@ -597,16 +604,7 @@ class Interrupt(BatchTestCase):
         out = os.path.join(self.tmp, "interrupted")
         light = light_tree(os.path.join(self.tmp, "light"))
         args = batch_command(light, "-o", out, "--workers", "2", "--level", "0")
-        first = subprocess.Popen(args, env=env(), stderr=subprocess.DEVNULL)
-        wait_for(lambda: journal_lines(out) >= 20 or first.poll() is not None, "20 files converted")
-        self.assertIsNone(first.poll(), "the batch ended before it was interrupted")
-        first.send_signal(signal.SIGINT)
-        self.assertEqual(first.wait(timeout=120), 130)
-        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
-            part = json.load(f)
-        self.assertTrue(part["run"]["interrupted"])
-        left = [r["output"] for r in part["files"] if r["status"] == "interrupted"]
-        self.assertTrue(left)
+        left = interrupt_after(self, args, out, 20, timeout=120)
         # No temporary file of a killed converter is left behind.
         leftovers = [n for _, _, files in os.walk(out) for n in files if n.endswith(".tmp")]
         self.assertEqual(leftovers, [])
