@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Throughput of subd2nurbs-batch (issue #30): files per minute on a folder of models with the
-local pool of 1 and 2 workers and a Dask cluster of 2 workers (dask-scheduler + 2 dask-workers on
+local pool of 1 worker (on every core, and with --threads 1) and 2 workers (one thread each, the
+batch's default: cores / workers) and a Dask cluster of 2 workers (dask-scheduler + 2 dask-workers on
 127.0.0.1, one thread each, started here) reading the inputs from their path and with the inputs
 sent as bytes, against a plain loop of `subd2nurbs convert IN -o OUT.step --report OUT.json -q`
 over the same files (the same work, one process at a time).
@@ -113,6 +114,7 @@ def cpu_seconds(procs):
 
 LOOP_NAME = "plain `convert` loop"
 ONE = "local pool, 1 worker"
+ONE_T1 = "local pool, 1 worker, --threads 1"
 
 
 def main():
@@ -131,6 +133,7 @@ def main():
     address, procs, log = dask_cluster(tmp, tuned=not a.dask_defaults)
     configs = [(LOOP_NAME, LOOP, {"extra": extra}),
                (ONE, DRIVER, {"workers": 1, "settings": settings}),
+               (ONE_T1, DRIVER, {"workers": 1, "settings": dict(settings, threads=1)}),
                ("local pool, 2 workers", DRIVER, {"workers": 2, "settings": settings}),
                ("Dask cluster, 2 workers", DRIVER, {"scheduler": address, "settings": settings, "send": "never"}),
                ("Dask cluster, 2 workers, inputs sent", DRIVER, {"scheduler": address, "settings": settings,
@@ -166,16 +169,17 @@ def main():
     med = statistics.median
     wall = {name: med(r["wall"] for r in rs) for name, rs in results.items()}
     loop_cpu = med(r["converter_cpu"] for r in results[LOOP_NAME])
-    print("| run (%d files, %d ok) | wall (s) | files / min | speed-up vs 1 worker | wall vs the loop | "
-          "converters' CPU, sum (s) | CPU vs the loop | own time per file | Dask processes' CPU (s) | "
-          "largest converter (MB) | driver (MB) |" % (files, results[ONE][0]["ok"]))
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| run (%d files, %d ok) | wall (s) | files / min | speed-up vs 1 worker | vs 1 worker, --threads 1 | "
+          "wall vs the loop | converters' CPU, sum (s) | CPU vs the loop | own time per file | "
+          "Dask processes' CPU (s) | largest converter (MB) | driver (MB) |" % (files, results[ONE][0]["ok"]))
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, _, _ in configs:
         rs = results[name]
-        serial = name in (LOOP_NAME, ONE)
+        serial = name in (LOOP_NAME, ONE, ONE_T1)
         # Ratios within each round (the runs of one round are minutes apart, the rounds more),
         # then their median.
         speed = med(o["wall"] / r["wall"] for o, r in zip(results[ONE], rs))
+        speed_t1 = med(o["wall"] / r["wall"] for o, r in zip(results[ONE_T1], rs))
         vs_loop = med(r["wall"] / l["wall"] - 1 for l, r in zip(results[LOOP_NAME], rs))
         cpu = med(r["converter_cpu"] for r in rs)
         cpu_vs = med(r["converter_cpu"] / l["converter_cpu"] - 1 for l, r in zip(results[LOOP_NAME], rs))
@@ -183,8 +187,9 @@ def main():
         # converters' walls, one at a time), so the machine's load between runs cancels out.
         own = med((r["wall"] - r["converter_s"]) / files for r in rs)
         busy = med(r["converter_s"] for r in rs)
-        print("| %s | %.1f | %.1f | %s | %+.1f %% | %.1f | %+.1f %% | %s | %s | %.0f | %s |" % (
+        print("| %s | %.1f | %.1f | %s | %s | %+.1f %% | %.1f | %+.1f %% | %s | %s | %.0f | %s |" % (
             name, wall[name], 60 * files / wall[name], "-" if name == LOOP_NAME else "%.2fx" % speed,
+            "-" if name == LOOP_NAME else "%.2fx" % speed_t1,
             100 * vs_loop, cpu, 100 * cpu_vs,
             "%.1f ms (%.1f %%)" % (1000 * own, 100 * own * files / busy) if serial else "-",
             "%.1f" % med(r["dask_cpu"] for r in rs) if name.startswith("Dask") else "-",

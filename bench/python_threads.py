@@ -1,15 +1,23 @@
 #!/usr/bin/python3
 """Throughput of subd2nurbs.convert from Python: 1 thread against N threads (#32 item 5).
 
-Converts a list of corpus cages JOBS times each, once in one thread and once spread over N
-threads, and prints the wall time (median of REPEATS runs) and the speed-up. Not a unit test:
-the numbers depend on the machine and its load. "cores busy" is the process's CPU time over
-the wall time: a one-thread run that already keeps every core busy leaves threads nothing to add.
+Converts a list of corpus cages JOBS times each in three ways and prints the wall time (median
+of REPEATS runs, the three interleaved so that a change of the machine's load hits all alike):
+
+* one Python thread, each conversion on every core (`threads` not given: the default);
+* one Python thread, each conversion on one core (`threads=1`);
+* N Python threads, each conversion on one core (`threads=1`): what threads add once the
+  interpreter lock is released.
+
+"cores busy" is the process's CPU time over the wall time. The results of the N-thread run are
+checked against the sequential run's (the same faces and poles, the same deviation to the bit).
+Not a unit test: the numbers depend on the machine and its load.
 
     PYTHONPATH=build/python /usr/bin/python3 bench/python_threads.py [--threads 4] [--repeats 3]
 """
 
 import argparse
+import hashlib
 import os
 import statistics
 import sys
@@ -29,20 +37,32 @@ def cpu_seconds():
     return t.user + t.system
 
 
-def run(cages, threads, cpu=None):
-    """Wall time of converting `cages` on `threads` threads; appends the CPU time / wall (the
-    cores the run kept busy) to `cpu` when given."""
+def fingerprint(result):
+    """What must not depend on the threads: every patch's knots, poles and weights, to the bit,
+    and the report's deviation."""
+    h = hashlib.sha256()
+    for p in result.patches:
+        for key in ("knots_u", "mults_u", "knots_v", "mults_v", "poles", "weights"):
+            if p[key] is not None:
+                h.update(p[key].tobytes())
+    return h.hexdigest(), repr(result.report.get("deviation"))
+
+
+def run(cages, python_threads, converter_threads, cpu):
+    """Wall time of converting `cages` on `python_threads` threads, each conversion with
+    `converter_threads` (None: the default); appends CPU time / wall to `cpu`. Returns the wall
+    time and the results' fingerprints in the cages' order."""
+    kwargs = {} if converter_threads is None else {"threads": converter_threads}
+    convert = lambda c: fingerprint(s2n.convert(c, **kwargs))
     start, start_cpu = time.perf_counter(), cpu_seconds()
-    if threads == 1:
-        for c in cages:
-            s2n.convert(c)
+    if python_threads == 1:
+        prints = [convert(c) for c in cages]
     else:
-        with ThreadPoolExecutor(threads) as pool:
-            list(pool.map(s2n.convert, cages))
+        with ThreadPoolExecutor(python_threads) as pool:
+            prints = list(pool.map(convert, cages))
     wall = time.perf_counter() - start
-    if cpu is not None:
-        cpu.append((cpu_seconds() - start_cpu) / wall)
-    return wall
+    cpu.append((cpu_seconds() - start_cpu) / wall)
+    return wall, prints
 
 
 def main():
@@ -53,19 +73,32 @@ def main():
     a = ap.parse_args()
     cages = [s2n.read_obj(os.path.join(CORPUS, n + ".obj")) for n in NAMES] * a.jobs
     s2n.convert(cages[0])  # warm up (OCCT's first-use initialisation)
-    # Interleaved (1, N, 1, N, ...) so that a change of the machine's load hits both alike.
-    ones, manys, cpu_one, cpu_many = [], [], [], []
+    configs = [("1 thread, each conversion on every core", 1, None),
+               ("1 thread, threads=1", 1, 1),
+               ("%d threads, threads=1" % a.threads, a.threads, 1)]
+    walls = [[] for _ in configs]
+    busy = [[] for _ in configs]
+    reference = None
     for _ in range(a.repeats):
-        ones.append(run(cages, 1, cpu_one))
-        manys.append(run(cages, a.threads, cpu_many))
-    one, many = statistics.median(ones), statistics.median(manys)
+        for k, (_, python_threads, converter_threads) in enumerate(configs):
+            wall, prints = run(cages, python_threads, converter_threads, busy[k])
+            walls[k].append(wall)
+            if reference is None:
+                reference = prints
+            elif prints != reference:
+                print("results differ from the sequential run's: %s" % configs[k][0], file=sys.stderr)
+                return 1
     load = os.getloadavg()[0]
-    print("| conversions | CPUs | load average | 1 thread (s) | cores busy | %d threads (s) | cores busy | speed-up |"
-          % a.threads)
-    print("|---|---|---|---|---|---|---|---|")
-    print("| %d | %d | %.1f | %.3f | %.2f | %.3f | %.2f | %.2fx |" % (
-        len(cages), os.cpu_count(), load, one, statistics.median(cpu_one), many, statistics.median(cpu_many),
-        one / many))
+    medians = [statistics.median(w) for w in walls]
+    print("%d conversions, %d CPUs, load average %.1f at the end; results identical in every run"
+          % (len(cages), os.cpu_count(), load))
+    print()
+    print("| run | wall, median (s) | cores busy | throughput against 1 thread, threads=1 |"
+          " against 1 thread, every core |")
+    print("|---|---|---|---|---|")
+    for k, (name, _, _) in enumerate(configs):
+        print("| %s | %.3f | %.2f | %.2fx | %.2fx |" % (name, medians[k], statistics.median(busy[k]),
+                                                    medians[1] / medians[k], medians[0] / medians[k]))
     return 0
 
 

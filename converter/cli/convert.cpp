@@ -19,6 +19,7 @@
 #include "converter/pipeline/conversion.h"
 #include "converter/pipeline/report.h"
 #include "converter/pipeline/shape_fit_report.h"
+#include "core/util/parallel.h"
 #include "io/atomic_file.h"
 #include "io/input_error.h"
 #include "io/obj_reader.h"
@@ -244,6 +245,8 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
   const pipeline::Settings all = conversion_settings(options, kind != OutputKind::Json);
   const occt::StepSchema schema = all.write.schema;
   const pipeline::ConversionSettings settings = pipeline::conversion_settings(all);
+  // --threads for everything below: the mesh path, the fit to a target and the conversion.
+  const ThreadLimit threads(settings.limits.threads.value_or(0));
   check_outputs(options.mesh, {{"-o", options.output}, {"--report", options.report}, {"--preview", options.preview},
                                {"--keep-cage", options.keep_cage}});
   if (!options.fit_to.empty())

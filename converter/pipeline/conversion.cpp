@@ -653,7 +653,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                          const ConversionSettings& settings, const ConversionProgress& progress,
                          std::vector<std::string> warnings) {
   validate(settings);
+  const ThreadLimit thread_scope(settings.limits.threads.value_or(0));
   ConversionResult c;
+  c.ms.threads = loop_threads();
   const Run run{base, settings, progress, c};
   c.warnings = std::move(warnings);
   // A level pins the levels; else a tolerance (the user's or the default) chooses them.
@@ -692,8 +694,12 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   std::optional<ThreadReservation> main_core;
   if (settings.quality_samples) {
     run.stage(Stage::Quality, "measuring against the exact limit surface (beside the next stages)");
-    quality = std::async(std::launch::async,
-                         [&base, &c, samples = *settings.quality_samples, ready = surfaces_ready.get_future()]() mutable {
+    // Under a ThreadLimit of 1 the measure runs on this thread when its result is asked for.
+    const bool beside = loop_threads() > 1;
+    quality = std::async(beside ? std::launch::async : std::launch::deferred,
+                         [&base, &c, samples = *settings.quality_samples, ready = surfaces_ready.get_future(),
+                          caller_limit = thread_limit()]() mutable {
+                           const ThreadLimit threads(caller_limit);
                            const auto t0 = Clock::now();
                            const LimitEvaluator limit(base, c.cage);
                            const VertexCurvatureComparison quadric = compare_vertex_curvature(limit);
@@ -701,7 +707,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                            QualityReport q = measure_quality(c.build, limit, c.continuity, samples, &c.exported, quadric);
                            return std::make_pair(std::move(q), ms_since(t0));
                          });
-    main_core.emplace();
+    if (beside) main_core.emplace();
   }
 
   faces_stage(run);

@@ -163,6 +163,9 @@ struct Timings {
   /// The quality stage runs beside the B-rep stage and ConversionProgress::after_brep: the wall
   /// time convert waited for it once those were done (what the stage added to the conversion).
   double quality_wait = 0;
+  /// The threads the conversion's parallel loops used at most (the `threads` setting or the
+  /// hardware threads); a run's property like the times.
+  int threads = 1;
 };
 
 /// What the fit did (FitMode::Interpolate), in model units.

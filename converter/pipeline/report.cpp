@@ -357,6 +357,7 @@ std::string report_json(const ConversionResult& c) {
   w.members("load", ms.load, "fit", ms.fit, "patches", ms.patches, "continuity", ms.continuity,
             "deviation", ms.deviation, "packing", ms.packing, "intersections", ms.intersections, "brep", ms.brep,
             "write", ms.write);
+  w.members("threads", ms.threads);
   w.end_object();
   if (c.quality) {  // the quality stage's section and its own time, beside timings_ms
     write_quality(w.key("quality"), *c.quality, size, 2);

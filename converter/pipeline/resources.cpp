@@ -256,6 +256,8 @@ ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels) {
 void validate(const ResourceLimits& limits) {
   for (const auto& [setting, value] : {std::pair{"max_faces", limits.max_faces}, std::pair{"max_memory", limits.max_memory}})
     if (value && !(*value > 0 && std::isfinite(*value))) throw SettingsError(setting, "must be a positive number");
+  if (limits.threads && (*limits.threads < 1 || *limits.threads > kMaxThreads))
+    throw SettingsError("threads", "must be 1 .. " + std::to_string(kMaxThreads));
 }
 
 void check_refine_levels(int levels) {

@@ -62,7 +62,13 @@ constexpr int kMaxRefineLevels = 20;
 struct ResourceLimits {
   std::optional<double> max_faces;   ///< > 0; default kDefaultMaxConvertFaces or kDefaultMaxRefineFaces
   std::optional<double> max_memory;  ///< bytes, > 0; default default_max_memory()
+  /// The threads one conversion's parallel loops use, 1 .. kMaxThreads; default: the machine's
+  /// hardware threads (core/util/parallel.h ThreadLimit).
+  std::optional<int> threads;
 };
+
+/// The most threads the `threads` setting takes.
+constexpr int kMaxThreads = 1024;
 
 /// The rules of the limits (max_faces, max_memory: positive numbers) and of a refinement's
 /// levels (0 .. kMaxRefineLevels). \throw SettingsError

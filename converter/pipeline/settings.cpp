@@ -234,7 +234,7 @@ void add_output_rows(std::vector<SettingRow>& t) {
   }
 }
 
-/// The resource limits: max_faces, max_memory.
+/// The resource limits: max_faces, max_memory, threads.
 void add_limit_rows(std::vector<SettingRow>& t) {
   {
     SettingRow& r = add_row(t, "max_faces", SettingType::Number, {});
@@ -261,6 +261,18 @@ void add_limit_rows(std::vector<SettingRow>& t) {
                   {}, true, 1024.0 * 1024.0};
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.limits.max_memory = size(v); };
     r.get = [](const Settings& s) { return optional_value(s.conversion.limits.max_memory); };
+  }
+  {
+    SettingRow& r = add_row(t, "threads", SettingType::Integer, {});
+    r.default_text = "one per hardware thread";
+    r.help = "Threads one conversion uses, 1 .. 1024 (at most the machine's). Converting several models at once "
+             "(a batch, Python threads), 1 per conversion is fastest";
+    r.cli = "--threads";
+    r.commands = kBothCommands;
+    r.property = {"Threads", "Limits", "Threads the conversion uses (0: one per hardware thread; as --threads)", {},
+                  true};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.limits.threads = integer(v); };
+    r.get = [](const Settings& s) { return optional_value(s.conversion.limits.threads); };
   }
 }
 

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/mesh/validate.h"
+#include "core/util/parallel.h"
 
 namespace subd2nurbs {
 
@@ -336,7 +337,8 @@ RefinementStep refine_once(const SubdivLevel& parent) {
   // ---- child topology and stencils --------------------------------------------------
   // The two are independent given the child sharpness; on big meshes the topology is built
   // on a second thread while this one writes the stencils.
-  const bool concurrent = H >= kConcurrentCorners;
+  // (Not under a ThreadLimit of 1: then this thread does both.)
+  const bool concurrent = H >= kConcurrentCorners && loop_threads() > 1;
   std::thread topology;
   std::exception_ptr topology_error;
   struct JoinOnExit {  // never leave the thread running if the stencils throw

@@ -17,6 +17,38 @@ inline int hardware_threads() {
   return threads;
 }
 
+/// The most threads the parallel loops started from the calling thread may use; 0: as many as
+/// the machine has. Set for a scope with ThreadLimit; each thread has its own.
+inline int& thread_limit() {
+  thread_local int limit = 0;
+  return limit;
+}
+
+/// Limits the parallel loops the calling thread starts while it lives to `threads` threads (the
+/// `threads` setting: several conversions running side by side, each on one core, outrun one
+/// conversion on all of them). threads <= 0 keeps the limit in force. A thread that works
+/// beside the caller for the same job takes the caller's limit (`ThreadLimit scope(limit)` with
+/// the value read from thread_limit() before it started).
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads) : previous_(thread_limit()) {
+    if (threads > 0) thread_limit() = threads;
+  }
+  ~ThreadLimit() { thread_limit() = previous_; }
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+ private:
+  int previous_;
+};
+
+/// The threads a parallel loop started on the calling thread uses at most: the hardware threads,
+/// or fewer under a ThreadLimit.
+inline int loop_threads() {
+  const int limit = thread_limit();
+  return limit > 0 ? std::min(limit, hardware_threads()) : hardware_threads();
+}
+
 /// The threads that single-threaded work running beside parallel loops has taken
 /// (ThreadReservation).
 inline std::atomic<int>& reserved_threads() {
@@ -39,7 +71,7 @@ class ThreadReservation {
 /// least 1.
 inline int available_threads() { return std::max(1, hardware_threads() - reserved_threads().load()); }
 
-/// Calls fn(i) for i in [0, n) on up to hardware_threads() threads, items handed out in runs of
+/// Calls fn(i) for i in [0, n) on up to loop_threads() threads, items handed out in runs of
 /// consecutive indices (about 16 runs per thread, at most 64 items each): one atomic step per run, and
 /// neighbouring slots written by one thread. fn must only write to its own item's slot. The
 /// first exception thrown is rethrown once every thread has stopped. Results are independent of
@@ -47,10 +79,11 @@ inline int available_threads() { return std::max(1, hardware_threads() - reserve
 ///
 /// Only available_threads() of them take runs at any time: while other work holds a
 /// ThreadReservation, the helper threads beyond that wait (waking every millisecond), and they
-/// join in as soon as the reservation ends. The calling thread always works.
+/// join in as soon as the reservation ends. The calling thread always works. Loops that fn
+/// starts run on the thread that calls fn alone (the helpers have a limit of 1).
 template <class Fn>
 void parallel_for(int n, Fn&& fn) {
-  const int threads = std::min(hardware_threads(), std::max(1, n / 16));
+  const int threads = std::min(loop_threads(), std::max(1, n / 16));
   if (threads <= 1) {
     for (int i = 0; i < n; ++i) fn(i);
     return;
@@ -60,6 +93,7 @@ void parallel_for(int n, Fn&& fn) {
   std::exception_ptr error;
   std::mutex error_mutex;
   auto work = [&](int thread) {
+    const ThreadLimit nested(thread == 0 ? 0 : 1);  // a helper's nested loops stay on it
     for (;;) {
       if (thread >= available_threads()) {  // this helper's core is reserved meanwhile
         if (next.load() >= n) return;

@@ -40,6 +40,7 @@
 #include "core/limit/limit_evaluator.h"
 #include "core/mesh/errors.h"
 #include "core/refine/refiner.h"
+#include "core/util/parallel.h"
 #include "core/mesh/quad_recovery.h"
 #include "io/cage_reader.h"
 #include "io/input_error.h"
@@ -608,6 +609,8 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
   pipeline::ConversionResult& c = conversion->result;
   std::optional<pipeline::MeshPathReport> made;
   without_gil([&] {
+    // threads= for the mesh path too (pipeline::convert sets it for itself)
+    const ThreadLimit threads(settings.settings.conversion.limits.threads.value_or(0));
     if (route.mesh) {
       pipeline::MeshPathProgress mesh_progress;
       if (progress)

@@ -427,7 +427,8 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",
       "r['deviation']['worst_fan']['valence'] == 3 and r['deviation']['samples'] > 0",
       "r['deviation']['sample_levels'] == 2 and len(r['deviation']['fans']) == 8",
-      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'packing', 'intersections', 'continuity', 'deviation', 'brep', 'write'])",
+      "sorted(r['timings_ms']) == sorted(['load', 'fit', 'patches', 'packing', 'intersections', 'continuity', 'deviation', 'brep', 'write', 'threads'])",
+      "r['timings_ms']['threads'] == __import__('os').cpu_count()",  // one per hardware thread by default
       // One convex-ish closed part: nothing crosses (OCCT's checker agrees: tests/occt).
       "(lambda x: x['components'] == 1 and x['crossing_face_pairs'] == 0 and x['overlap_face_pairs'] == 0 and x['self'] == [] and x['overlaps'] == [] and x['triangles'] > 0)(r['self_intersection'])",
       "r['faces'] == {'mode': 'packed', 'total': 24, 'packed': 0, 'packed_quads': 0, 'poles': r['patches']['poles'], 'removed_knot_lines': 0}",
@@ -436,6 +437,26 @@ TEST(CliConvert, ReportDescribesTheSample) {
   for (const char* condition : conditions)
     EXPECT_EQ(python_json_check(report, condition), 0) << condition << "\n" << read_text(report);
   EXPECT_NE(python_json_check(report, "r['patches']['total'] == 25"), 0);  // the check can fail
+}
+
+// --threads: the conversion on that many threads (the report says so), the same file to the bit.
+TEST(CliConvert, ThreadsGiveTheSameFile) {
+  TempDir dir;
+  const std::string cage = quote(std::string(SUBD2NURBS_CORPUS_DIR) + "/catmark_pole8.obj");
+  for (const char* n : {"1", "2"}) {
+    const std::string out = dir.file(std::string("t") + n + ".brep"), report = dir.file(std::string("t") + n + ".json");
+    const Result r = run("convert " + cage + " -o " + quote(out) + " --report " + quote(report) + " -q --threads " + n);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(python_json_check(report, std::string("r['timings_ms']['threads'] == min(") + n +
+                                            ", __import__('os').cpu_count())"),
+              0)
+        << read_text(report);
+  }
+  EXPECT_EQ(read_text(dir.file("t1.brep")), read_text(dir.file("t2.brep")));
+  const Result bad = run("convert " + cage + " -o " + quote(dir.file("x.brep")) + " --threads 0");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("threads"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("must be 1 .. 1024"), std::string::npos) << bad.err;
 }
 
 TEST(CliConvert, FacesPackedOrPerQuad) {

@@ -74,5 +74,56 @@ TEST(ParallelFor, HelpersJoinInWhenTheReservationEnds) {
   EXPECT_EQ(ids.size(), static_cast<size_t>(std::min(hardware, 200 / 16)));
 }
 
+TEST(ParallelFor, ThreadLimitKeepsLoopsOnTheCallingThread) {
+  const int hardware = hardware_threads();
+  EXPECT_EQ(loop_threads(), hardware);
+  {
+    const ThreadLimit one(1);
+    EXPECT_EQ(loop_threads(), 1);
+    const std::set<std::thread::id> ids = threads_used(200);
+    ASSERT_EQ(ids.size(), 1u);
+    EXPECT_EQ(*ids.begin(), std::this_thread::get_id());
+    // The limit is the calling thread's: a loop started on another thread uses every core.
+    std::set<std::thread::id> other;
+    std::thread beside([&] { other = threads_used(200); });
+    beside.join();
+    EXPECT_EQ(other.size(), static_cast<size_t>(std::min(hardware, 200 / 16)));
+    {
+      const ThreadLimit keep(0);  // 0 keeps the limit in force
+      EXPECT_EQ(loop_threads(), 1);
+      const ThreadLimit more(1000);  // never beyond the hardware
+      EXPECT_EQ(loop_threads(), hardware);
+    }
+    EXPECT_EQ(loop_threads(), 1);  // restored when the inner scopes end
+  }
+  EXPECT_EQ(loop_threads(), hardware);
+}
+
+TEST(ParallelFor, LoopsInsideALoopStayOnTheirThread) {
+  // Each item of the outer loop starts a loop of its own; those run on the thread that runs the
+  // item (the helpers have a limit of 1; the calling thread keeps its own).
+  std::vector<int> nested_threads(64, 0);
+  std::vector<int> limit_seen(64, -1);
+  std::vector<char> on_caller(64, 0);
+  const std::thread::id caller = std::this_thread::get_id();
+  parallel_for(64, [&](int i) {
+    std::set<std::thread::id> ids;
+    std::mutex m;
+    const bool main_thread = std::this_thread::get_id() == caller;
+    on_caller[i] = main_thread;
+    limit_seen[i] = loop_threads();
+    parallel_for(32, [&](int) {
+      std::lock_guard<std::mutex> lock(m);
+      ids.insert(std::this_thread::get_id());
+    });
+    nested_threads[i] = static_cast<int>(ids.size());
+  });
+  for (int i = 0; i < 64; ++i) {
+    if (on_caller[i]) continue;
+    EXPECT_EQ(limit_seen[i], 1) << "item " << i;
+    EXPECT_EQ(nested_threads[i], 1) << "item " << i;
+  }
+}
+
 }  // namespace
 }  // namespace subd2nurbs

@@ -211,6 +211,7 @@ class Workbench(unittest.TestCase):
             ({"faces": "all"}, ["--faces", "all"], {"Faces": "all"}, "faces", "must be packed or per-quad"),
             ({"max_faces": 0}, ["--max-faces", "0"], {"MaxFaces": -1.0}, "max_faces", "must be a positive number"),
             ({"max_memory": -1}, None, {"MaxMemoryMiB": -1.0}, "max_memory", "must be a positive number"),
+            ({"threads": 0}, ["--threads", "0"], {"Threads": -1}, "threads", "must be 1 .. 1024"),
             ({"max_memory": "12Q"}, ["--max-memory", "12Q"], None, "max_memory",
              "'12Q' is not a size (bytes, or a number with K, M, G or T, e.g. 8G)"),
             ({"preview": "curvature", "preview_samples": 1}, ["--preview", glb, "--preview-samples", "1"],

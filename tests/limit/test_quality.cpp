@@ -21,6 +21,7 @@
 #include "core/nurbs/nurbs_eval.h"
 #include "converter/pipeline/report.h"
 #include "core/eval/quality.h"
+#include "io/patch_json.h"
 #include "io/temp_dir.h"
 #include "limit_test_util.h"
 
@@ -390,12 +391,17 @@ TEST(QualityStage, IsTheStandaloneMeasureAndItsSectionIsInTheReport) {
 // The quality stage runs on a thread of its own from before packing to after the B-rep: an
 // exception on the conversion's thread at any point of that (here from the progress callback
 // or from after_brep) comes out of convert, with the stage's thread stopped, never a hang.
+// With threads = 1 the stage runs on the conversion's thread when its result is asked for; the
+// same exceptions end the conversion the same way.
 TEST(QualityStage, ExceptionsBesideItEndTheConversion) {
   Converted c = convert_shape("catmark_cube_creases0");
+  for (const std::optional<int> threads : {std::optional<int>{}, std::optional<int>{1}})
   for (const char* where : {"packing", "continuity", "brep", "after_brep"}) {
+    SCOPED_TRACE(threads ? "threads 1" : "threads: default");
     pipeline::ConversionSettings settings;
     settings.level = 0;
     settings.quality_samples = 5;
+    settings.limits.threads = threads;
     pipeline::ConversionProgress progress;
     progress.stage = [&](pipeline::Stage s, const std::string&) {
       if (pipeline::to_string(s) == std::string(where)) throw std::runtime_error(where);
@@ -410,6 +416,49 @@ TEST(QualityStage, ExceptionsBesideItEndTheConversion) {
       EXPECT_STREQ(e.what(), where);
     }
   }
+}
+
+// The `threads` setting (#30, #32): one thread gives the same conversion as all of them, to the
+// bit: the same faces and poles, the same continuity and quality measures (the stage then runs
+// on the conversion's thread, after the B-rep), on a cage with extraordinary vertices, creases
+// and a tolerance that chooses the levels.
+TEST(QualityStage, OneThreadGivesTheSameConversionToTheBit) {
+  Converted c = convert_shape("catmark_cube_creases1");
+  std::string patches[2], quality[2];
+  for (int run = 0; run < 2; ++run) {
+    pipeline::ConversionSettings settings;
+    settings.tolerance = 1e-4;
+    settings.quality_samples = 6;
+    if (run == 1) settings.limits.threads = 1;
+    const pipeline::ConversionResult r = pipeline::convert(c.base, c.pos, settings);
+    ASSERT_TRUE(r.quality);
+    EXPECT_TRUE(r.has_brep);
+    patches[run] = patch_set_to_json(r.exported.set);
+    const std::string json = pipeline::quality_report_json(r);
+    const size_t at = json.find("\n  \"quality\": ");  // the measures, after the stage's times
+    ASSERT_NE(at, std::string::npos);
+    quality[run] = json.substr(at);
+  }
+  EXPECT_GT(patches[0].size(), 1000u);
+  EXPECT_TRUE(patches[0] == patches[1]) << "the exported patches differ with one thread";
+  EXPECT_EQ(quality[0], quality[1]);
+}
+
+TEST(QualityStage, ThreadsFollowTheirRule) {
+  for (int threads : {0, -1, pipeline::kMaxThreads + 1}) {
+    pipeline::ConversionSettings settings;
+    settings.limits.threads = threads;
+    try {
+      pipeline::validate(settings);
+      ADD_FAILURE() << threads << " threads were accepted";
+    } catch (const pipeline::SettingsError& e) {
+      EXPECT_EQ(e.setting(), "threads");
+      EXPECT_EQ(e.rule(), "must be 1 .. 1024");
+    }
+  }
+  pipeline::ConversionSettings settings;
+  settings.limits.threads = pipeline::kMaxThreads;
+  EXPECT_NO_THROW(pipeline::validate(settings));
 }
 
 TEST(QualityStage, SamplesFollowTheirRules) {

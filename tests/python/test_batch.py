@@ -413,6 +413,37 @@ class Formats(unittest.TestCase):
         self.assertNotIn("%dH%s," % (len(login), login), global_section)
 
 
+class Threads(unittest.TestCase):
+    def test_threads_per_file(self):
+        """Each converter gets the cores shared by the files converted at once (cores // workers,
+        at least 1; the report's timings_ms.threads says what it used), --threads overrides it,
+        and changing it alone converts nothing again (the output does not depend on it)."""
+        tmp = tempfile.mkdtemp(prefix="s2n-batch-threads-")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        files = [os.path.join(CORPUS, n + ".obj") for n in FEW]
+        cores = len(os.sched_getaffinity(0))
+
+        def used(outdir, summary):
+            self.assertEqual(summary.counts, {"ok": len(FEW)})
+            out = set()
+            for row in summary.files:
+                with open(os.path.join(outdir, row["report"]), encoding="utf-8") as f:
+                    out.add(json.load(f)["timings_ms"]["threads"])
+            return out
+
+        for workers in (1, 2):
+            outdir = os.path.join(tmp, "w%d" % workers)
+            s = batch.run(files, outdir, FAST, workers=workers, cli=CLI)
+            self.assertEqual(used(outdir, s), {max(1, cores // workers)}, workers)
+        given = os.path.join(tmp, "given")
+        self.assertEqual(used(given, batch.run(files, given, dict(FAST, threads=1), workers=1, cli=CLI)), {1})
+        again = batch.run(files, os.path.join(tmp, "w1"), dict(FAST, threads=1), workers=1, cli=CLI)
+        self.assertEqual((again.converted, again.skipped), (0, len(FEW)))
+        for stem in FEW:
+            self.assertTrue(same_bytes(os.path.join(tmp, "w1", stem + ".step"), os.path.join(given, stem + ".step")),
+                            stem)
+
+
 # The slowest shapes (over 0.5 s each), left out of the runs that compare backends and resume
 # (two thirds of the time).
 HEAVY = ("catmark_pole360", "catmark_rook", "catmark_car", "catmark_bishop", "catmark_lefthanded",
