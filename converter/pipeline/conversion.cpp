@@ -547,6 +547,13 @@ void part_warnings(const Run& r) {
     double area = 0;    ///< twice the area of the cage's faces (fans of triangles)
   };
   std::vector<Part> part(m.num_vertices());
+  // A part is closed when none of its edges is on a boundary and none of its faces is a hole:
+  // one open part does not keep the closed ones of the same cage from their warnings.
+  std::vector<char> open(m.num_vertices(), 0);
+  for (int e = 0; e < m.num_edges(); ++e)
+    if (m.is_boundary_edge(e)) open[root(m.edge_vertex(e, 0))] = 1;
+  for (int f = 0; f < m.num_faces(); ++f)
+    if (f < static_cast<int>(r.base.face_hole.size()) && r.base.face_hole[f]) open[root(m.face_vertices(f)[0])] = 1;
   for (int f = 0; f < m.num_faces(); ++f) {
     const int* fv = m.face_vertices(f);
     Part& p = part[root(fv[0])];
@@ -569,7 +576,8 @@ void part_warnings(const Run& r) {
     }
   }
   const double tolerance = occt::brep_tolerance(r.c.build.set.model_size);
-  for (const Part& p : part) {
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    const Part& p = part[v];
     if (p.faces == 0) continue;
     double d2 = 0;
     for (int k = 0; k < 3; ++k) d2 += (p.hi[k] - p.lo[k]) * (p.hi[k] - p.lo[k]);
@@ -582,7 +590,7 @@ void part_warnings(const Run& r) {
     };
     // 2 V / A with V = volume / 6 and A = area / 2 (the fans' sums are 6 V and 2 A).
     const double thickness = p.area > 0 ? 2 * (std::fabs(p.volume) / 6) / (p.area / 2) : 0;
-    const bool closed = r.c.build.set.closed;
+    const bool closed = !open[v];
     if (size < limit) {
       r.warn(DiagnosticCode::TinyPart,
              which + " is " + short_number(size) + " across" + below(kMinPartTolerances) +
@@ -617,11 +625,24 @@ void intersection_warnings(const Run& r) {
   auto at = [](const Point3& p) {
     return "(" + short_number(p[0]) + ", " + short_number(p[1]) + ", " + short_number(p[2]) + ")";
   };
+  // "N pair(s) of faces cross" and / or "M touch (lie on each other without crossing)".
+  const auto counts = [](const std::vector<FaceCrossing>& list, const std::string& what, const std::string& cross) {
+    const long long touching = SelfIntersectionReport::touching_count(list);
+    const long long crossing = static_cast<long long>(list.size()) - touching;
+    std::string text;
+    if (crossing > 0) text = std::to_string(crossing) + " pair(s) of " + what + " " + cross;
+    if (touching > 0)
+      text += (text.empty() ? "" : ", ") + std::to_string(touching) + " pair(s) of " + what +
+              " touch or lie on each other without crossing";
+    return text;
+  };
   if (!x.self.empty()) {
     const FaceCrossing& w = x.self.front();
+    const bool touch_only = SelfIntersectionReport::touching_count(x.self) == static_cast<long long>(x.self.size());
     r.warn(DiagnosticCode::SelfIntersection,
-           "the surface intersects itself: " + std::to_string(x.self.size()) + " pair(s) of faces cross, e.g. faces " +
-               std::to_string(w.face_a) + " and " + std::to_string(w.face_b) + " at " + at(w.point) +
+           std::string(touch_only ? "the surface touches itself: " : "the surface intersects itself: ") +
+               counts(x.self, "faces", "cross") + ", e.g. faces " + std::to_string(w.face_a) + " and " +
+               std::to_string(w.face_b) + (w.touching ? " touch at " : " at ") + at(w.point) +
                "; offsets, shells and booleans of this body may fail");
   }
   if (!x.overlaps.empty()) {
@@ -630,11 +651,15 @@ void intersection_warnings(const Run& r) {
         w.inside ? "part " + std::to_string(w.component_a) + " (face " + std::to_string(w.face_a) + ") lies inside part " +
                        std::to_string(w.component_b)
                  : "parts " + std::to_string(w.component_a) + " and " + std::to_string(w.component_b) + " (faces " +
-                       std::to_string(w.face_a) + " and " + std::to_string(w.face_b) + ") cross at " + at(w.point);
+                       std::to_string(w.face_a) + " and " + std::to_string(w.face_b) + ")" +
+                       (w.touching ? " touch at " : " cross at ") + at(w.point);
+    const bool touch_only =
+        SelfIntersectionReport::touching_count(x.overlaps) == static_cast<long long>(x.overlaps.size());
     r.warn(DiagnosticCode::PartsOverlap,
            std::to_string(x.overlapping_components.size()) + " pair(s) of the " + std::to_string(x.components) +
-               " separate parts overlap, e.g. " + example +
-               "; their solids interpenetrate (fuse them in CAD if they are meant as one body)");
+               (touch_only ? " separate parts touch, e.g. " : " separate parts overlap, e.g. ") + example +
+               (touch_only ? "; booleans between them and offsets may fail (fuse them in CAD if they are meant as one body)"
+                           : "; their solids interpenetrate (fuse them in CAD if they are meant as one body)"));
   }
 }
 

@@ -253,14 +253,18 @@ void write_self_intersection(JsonWriter& w, const SelfIntersectionReport& x) {
     w.end_array();
   };
   w.key("self_intersection").begin_object();
+  const long long self_touching = SelfIntersectionReport::touching_count(x.self);
+  const long long overlaps_touching = SelfIntersectionReport::touching_count(x.overlaps);
   w.members("components", x.components, "triangles", x.triangles, "crossing_face_pairs",
-            static_cast<long long>(x.self.size()), "overlap_face_pairs", static_cast<long long>(x.overlaps.size()));
+            static_cast<long long>(x.self.size()) - self_touching, "overlap_face_pairs",
+            static_cast<long long>(x.overlaps.size()) - overlaps_touching, "touching_face_pairs",
+            self_touching + overlaps_touching);
   w.break_line(4).key("self").begin_array();
   for (size_t k = 0; k < x.self.size() && k < kMaxListed; ++k) {
     const FaceCrossing& c = x.self[k];
     w.break_line(6).begin_object();
     w.key("faces").begin_array().integer(c.face_a).integer(c.face_b).end_array();
-    w.members("component", c.component_a, "angle_deg", c.angle_deg);
+    w.members("component", c.component_a, "angle_deg", c.angle_deg, "touching", c.touching);
     point(c.point);
     w.end_object();
   }
@@ -271,7 +275,7 @@ void write_self_intersection(JsonWriter& w, const SelfIntersectionReport& x) {
     w.break_line(6).begin_object();
     w.key("components").begin_array().integer(c.component_a).integer(c.component_b).end_array();
     w.key("faces").begin_array().integer(c.face_a).integer(c.face_b).end_array();
-    w.members("inside", c.inside, "angle_deg", c.angle_deg);
+    w.members("inside", c.inside, "touching", c.touching, "angle_deg", c.angle_deg);
     point(c.point);
     w.end_object();
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <unordered_map>
 
 #include "core/nurbs/nurbs_eval.h"
@@ -201,6 +202,58 @@ bool triangles_cross(const Vec* A, const Vec* B, Vec& x) {
   return false;
 }
 
+/// Triangles A and B in one plane (B's vertices within `eps` of A's plane, the normals
+/// parallel) that overlap with positive area: an edge of one properly crosses an edge of the
+/// other, or a vertex lies strictly inside the other triangle. A point of the overlap in x.
+/// (Sheets lying on each other, e.g. a flat cage folded over: no transversal crossing.)
+bool triangles_overlap_in_plane(const Vec* A, const Vec* B, double eps, Vec& x) {
+  const Vec n = cross(sub(A[1], A[0]), sub(A[2], A[0]));
+  const double len = norm(n);
+  if (len == 0) return false;
+  const Vec u = scale(n, 1 / len);
+  for (int k = 0; k < 3; ++k)
+    if (std::fabs(dot(u, sub(B[k], A[0]))) > eps) return false;
+  const Vec m = cross(sub(B[1], B[0]), sub(B[2], B[0]));
+  if (norm(cross(n, m)) > 1e-6 * len * norm(m)) return false;
+  // 2-D coordinates: drop the normal's largest component.
+  int drop = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::fabs(n[k]) > std::fabs(n[drop])) drop = k;
+  const int i0 = drop == 0 ? 1 : 0, i1 = drop == 2 ? 1 : 2;
+  using P = std::array<double, 2>;
+  P a[3], b[3];
+  for (int k = 0; k < 3; ++k) {
+    a[k] = {A[k][i0], A[k][i1]};
+    b[k] = {B[k][i0], B[k][i1]};
+  }
+  const auto orient = [](const P& p, const P& q, const P& r) {
+    return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+  };
+  // Twice the larger triangle's area: what "strictly" is measured against.
+  const double area = std::max(std::fabs(orient(a[0], a[1], a[2])), std::fabs(orient(b[0], b[1], b[2])));
+  const double strict = 1e-9 * area;
+  const auto strictly_inside = [&](const P* t, const P& q) {
+    const double s = orient(t[0], t[1], t[2]) > 0 ? 1 : -1;
+    return s * orient(t[0], t[1], q) > strict && s * orient(t[1], t[2], q) > strict && s * orient(t[2], t[0], q) > strict;
+  };
+  for (int k = 0; k < 3; ++k) {
+    if (strictly_inside(a, b[k])) return x = B[k], true;
+    if (strictly_inside(b, a[k])) return x = A[k], true;
+  }
+  for (int e = 0; e < 3; ++e)
+    for (int f = 0; f < 3; ++f) {
+      const P &p = a[e], &q = a[(e + 1) % 3], &r = b[f], &t = b[(f + 1) % 3];
+      const double d1 = orient(p, q, r), d2 = orient(p, q, t), d3 = orient(r, t, p), d4 = orient(r, t, q);
+      if (((d1 > strict && d2 < -strict) || (d1 < -strict && d2 > strict)) &&
+          ((d3 > strict && d4 < -strict) || (d3 < -strict && d4 > strict))) {
+        const double w = d3 / (d3 - d4);
+        x = add(A[e], scale(sub(A[(e + 1) % 3], A[e]), w));
+        return true;
+      }
+    }
+  return false;
+}
+
 struct Node {
   Box box;
   int left = -1, right = -1;  ///< children, or -1 for a leaf
@@ -313,11 +366,23 @@ bool solve_crossing(const PatchEvaluator& ea, const PatchEvaluator& eb, const Do
     for (const Vec& ck : c)
       for (int r = 0; r < 3; ++r)
         for (int s = 0; s < 3; ++s) A[r][s] += ck[r] * ck[s];
-    const double det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-                       A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-                       A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    const auto determinant = [&] {
+      return A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+             A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+    };
+    double det = determinant();
     const double scale_a = A[0][0] + A[1][1] + A[2][2];
-    if (!(std::fabs(det) > 1e-14 * scale_a * scale_a * scale_a)) return false;
+    if (!(std::fabs(det) > 1e-14 * scale_a * scale_a * scale_a)) {
+      // Tangent planes: every derivative in one plane. Steps within it (A + |A| n n^T): sheets
+      // lying on each other converge, parallel sheets apart do not.
+      const Vec n = cross(sa.du, sa.dv);
+      const double nn = dot(n, n);
+      if (!(nn > 0)) return false;
+      for (int r = 0; r < 3; ++r)
+        for (int s = 0; s < 3; ++s) A[r][s] += scale_a * n[r] * n[s] / nn;
+      det = determinant();
+      if (!(std::fabs(det) > 1e-14 * scale_a * scale_a * scale_a)) return false;
+    }
     // y = A^-1 F by Cramer's rule.
     Vec y;
     for (int k = 0; k < 3; ++k) {
@@ -494,6 +559,9 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
     t.tri_box[i] = b;
   }
   const Bvh bvh = build_bvh(t);
+  // Triangles this close to one plane are tested for lying on each other (the tessellations of
+  // two flat sheets in one plane agree to rounding).
+  const double coplanar = 1e-9 * size;
 
   // Candidate triangle pairs, up to candidates_per_pair per pair of faces.
   std::map<uint64_t, std::vector<Candidate>> candidates;
@@ -510,7 +578,7 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
     const Vec A[3] = {t.pos[a->g[0]], t.pos[a->g[1]], t.pos[a->g[2]]};
     const Vec B[3] = {t.pos[b->g[0]], t.pos[b->g[1]], t.pos[b->g[2]]};
     Vec x;
-    if (!triangles_cross(A, B, x)) return;
+    if (!triangles_cross(A, B, x) && !triangles_overlap_in_plane(A, B, coplanar, x)) return;
     ++r.candidate_pairs;
     std::vector<Candidate>& list = candidates[pair_key(a->face, b->face)];
     if (static_cast<int>(list.size()) < options.candidates_per_pair) list.push_back({ia, ib, x});
@@ -586,16 +654,21 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
     const int fa = static_cast<int>(pairs[k].first >> 32), fb = static_cast<int>(pairs[k].first & 0xffffffffu);
     const Domain da = domain(ps.patches[fa]), db = domain(ps.patches[fb]);
     const bool near = neighbours(fa, fb);
+    // A transversal crossing wins; else the first tangent solution away from the shared
+    // boundary: the sheets touch or lie on each other there.
+    std::optional<FaceCrossing> touch;
     for (const Candidate& c : *pairs[k].second) {
       const auto pa = uv_at(t, t.tris[c.ta], c.x), pb = uv_at(t, t.tris[c.tb], c.x);
       double x[4] = {pa[0], pa[1], pb[0], pb[1]};
       SurfaceDerivs sa, sb;
       if (!solve_crossing(evals[fa], evals[fb], da, db, x, tol, sa, sb)) continue;
       const Vec na = unit_normal(sa), nb = unit_normal(sb);
-      const double sine = norm(cross(na, nb));
-      if (dot(na, na) == 0 || dot(nb, nb) == 0 || sine < 1e-3) continue;  // singular or tangent
+      if (dot(na, na) == 0 || dot(nb, nb) == 0) continue;  // singular
       if (near && da.on_boundary(x[0], x[1]) && db.on_boundary(x[2], x[3])) continue;  // the shared boundary
-      FaceCrossing& w = found[k];
+      if (fa == fb && std::fabs(x[0] - x[2]) <= 1e-7 * (da.u1 - da.u0) && std::fabs(x[1] - x[3]) <= 1e-7 * (da.v1 - da.v0))
+        continue;  // a face with itself: the trivial solution
+      const double sine = norm(cross(na, nb));
+      FaceCrossing w;
       w.face_a = fa;
       w.face_b = fb;
       w.component_a = r.component[fa];
@@ -607,8 +680,20 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
       w.point = sa.p;
       w.angle_deg = std::asin(std::min(1.0, sine)) * 180 / 3.14159265358979323846;
       if (dot(na, nb) < 0) w.angle_deg = 180 - w.angle_deg;
+      // Tangent, or on the edge of one face (a face standing on another, e.g. two boxes side by
+      // side): the surfaces touch there without passing through each other.
+      if (sine < 1e-3 || da.on_boundary(x[0], x[1]) || db.on_boundary(x[2], x[3])) {
+        w.touching = true;
+        if (!touch) touch = w;
+        continue;
+      }
+      found[k] = w;
       ok[k] = 1;
       break;
+    }
+    if (!ok[k] && touch) {
+      found[k] = *touch;
+      ok[k] = 1;
     }
   });
   std::map<std::pair<int, int>, int> component_pairs;

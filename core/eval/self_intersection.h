@@ -11,8 +11,10 @@
 // triangle. Each crossing found is then confirmed on the exact surfaces: Newton's method
 // (minimum-norm steps) for a point S_a(u_a, v_a) = S_b(u_b, v_b), which must be transversal
 // and, for a face with itself or a neighbour, not the trivial solution on the shared boundary.
-// A closed component with no crossing is tested for lying inside another closed one by ray
-// parity. Pure; tolerances relative to the model size. docs/downstream.md.
+// Triangles lying on each other in one plane are candidates too, and a tangent solution away
+// from a shared boundary is kept as "touching" (sheets that touch or lie on each other, which
+// OCCT's checker also flags) when the pair has no transversal crossing. A closed component with
+// no crossing is tested for lying inside another closed one by ray parity. Pure; tolerances relative to the model size. docs/downstream.md.
 #pragma once
 
 #include <vector>
@@ -44,6 +46,10 @@ struct FaceCrossing {
   Point3 point{};                          ///< a point on both surfaces (the witness)
   double angle_deg = 0;                    ///< angle between the two surfaces there
   bool inside = false;  ///< component_a lies inside closed component_b (no crossing): point on face_a, face_b one of b's
+  /// The surfaces meet tangentially there (angle below 0.06 deg), or on the edge of one of the
+  /// faces (away from a boundary they share): sheets that touch or lie on each other (e.g. a
+  /// flat cage folded over, two boxes side by side) without crossing.
+  bool touching = false;
 };
 
 struct SelfIntersectionReport {
@@ -51,13 +57,21 @@ struct SelfIntersectionReport {
   std::vector<int> component;    ///< per face
   long long triangles = 0;       ///< of the tessellation
   long long candidate_pairs = 0; ///< triangle pairs that crossed, before the exact check
-  /// Pairs of faces of one component whose surfaces cross, one witness per pair, sorted.
+  /// Pairs of faces of one component whose surfaces cross or touch, one witness per pair (a
+  /// crossing when there is one), sorted.
   std::vector<FaceCrossing> self;
-  /// Pairs of faces of different components that cross, and closed components inside others.
+  /// Pairs of faces of different components that cross or touch, and closed components inside
+  /// others.
   std::vector<FaceCrossing> overlaps;
   /// Pairs of components that overlap (cross or contain), sorted, a < b.
   std::vector<std::pair<int, int>> overlapping_components;
   bool empty() const { return self.empty() && overlaps.empty(); }
+  /// Witnesses in `list` that touch (FaceCrossing::touching), the rest cross or contain.
+  static long long touching_count(const std::vector<FaceCrossing>& list) {
+    long long n = 0;
+    for (const FaceCrossing& c : list) n += c.touching;
+    return n;
+  }
 };
 
 /// Finds where the patches cross themselves or each other. Cost: about the tessellation's
