@@ -6,8 +6,9 @@ of REPEATS runs, the three interleaved so that a change of the machine's load hi
 
 * one Python thread, each conversion on every core (`threads` not given: the default);
 * one Python thread, each conversion on one core (`threads=1`);
-* N Python threads, each conversion on one core (`threads=1`): what threads add once the
-  interpreter lock is released.
+* N Python threads, `threads` not given: the conversions running at once share the cores
+  (core/util/parallel.h JobShare);
+* N Python threads, each conversion on one core (`threads=1`).
 
 "cores busy" is the process's CPU time over the wall time. The results of the N-thread run are
 checked against the sequential run's (the same faces and poles, the same deviation to the bit).
@@ -75,6 +76,7 @@ def main():
     s2n.convert(cages[0])  # warm up (OCCT's first-use initialisation)
     configs = [("1 thread, each conversion on every core", 1, None),
                ("1 thread, threads=1", 1, 1),
+               ("%d threads, threads not given" % a.threads, a.threads, None),
                ("%d threads, threads=1" % a.threads, a.threads, 1)]
     walls = [[] for _ in configs]
     busy = [[] for _ in configs]

@@ -679,6 +679,7 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
                          std::vector<std::string> warnings) {
   validate(settings);
   const ThreadLimit thread_scope(settings.limits.threads.value_or(0));
+  const JobShare job;  // conversions side by side in this process share the cores
   ConversionResult c;
   c.ms.threads = loop_threads();
   const Run run{base, settings, progress, c};

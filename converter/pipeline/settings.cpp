@@ -264,7 +264,7 @@ void add_limit_rows(std::vector<SettingRow>& t) {
   }
   {
     SettingRow& r = add_row(t, "threads", SettingType::Integer, {});
-    r.default_text = "one per hardware thread";
+    r.default_text = "one per hardware thread (shared by the conversions running at once in one process)";
     r.help = "Threads one conversion uses, 1 .. 1024 (at most the machine's). Converting several models at once "
              "(a batch, Python threads), 1 per conversion is fastest";
     r.cli = "--threads";

@@ -42,11 +42,43 @@ class ThreadLimit {
   int previous_;
 };
 
-/// The threads a parallel loop started on the calling thread uses at most: the hardware threads,
-/// or fewer under a ThreadLimit.
+/// The jobs (conversions) running at once in this process, each counted once (JobShare).
+inline std::atomic<int>& running_jobs() {
+  static std::atomic<int> jobs{0};
+  return jobs;
+}
+
+/// Counts the calling thread's job among the running ones while it lives (nested scopes on one
+/// thread count once): parallel loops without a ThreadLimit share the hardware threads among
+/// the jobs running when they start, so that several Python threads converting at once do
+/// not each spread over every core.
+class JobShare {
+ public:
+  JobShare() : counted_(depth()++ == 0) {
+    if (counted_) running_jobs().fetch_add(1);
+  }
+  ~JobShare() {
+    --depth();
+    if (counted_) running_jobs().fetch_sub(1);
+  }
+  JobShare(const JobShare&) = delete;
+  JobShare& operator=(const JobShare&) = delete;
+
+ private:
+  static int& depth() {
+    thread_local int d = 0;
+    return d;
+  }
+  bool counted_;
+};
+
+/// The threads a parallel loop started on the calling thread uses at most: its ThreadLimit
+/// (at most the hardware threads), else the hardware threads shared by the running jobs
+/// (at least 1).
 inline int loop_threads() {
   const int limit = thread_limit();
-  return limit > 0 ? std::min(limit, hardware_threads()) : hardware_threads();
+  if (limit > 0) return std::min(limit, hardware_threads());
+  return std::max(1, hardware_threads() / std::max(1, running_jobs().load()));
 }
 
 /// The threads that single-threaded work running beside parallel loops has taken

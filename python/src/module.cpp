@@ -611,6 +611,7 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
   without_gil([&] {
     // threads= for the mesh path too (pipeline::convert sets it for itself)
     const ThreadLimit threads(settings.settings.conversion.limits.threads.value_or(0));
+    const JobShare job;  // Python threads converting at once share the cores
     if (route.mesh) {
       pipeline::MeshPathProgress mesh_progress;
       if (progress)

@@ -4,6 +4,7 @@
 // that work's core.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -97,6 +98,35 @@ TEST(ParallelFor, ThreadLimitKeepsLoopsOnTheCallingThread) {
     EXPECT_EQ(loop_threads(), 1);  // restored when the inner scopes end
   }
   EXPECT_EQ(loop_threads(), hardware);
+}
+
+TEST(ParallelFor, RunningJobsShareTheCores) {
+  const int hardware = hardware_threads();
+  EXPECT_EQ(running_jobs().load(), 0);
+  {
+    const JobShare first;
+    const JobShare nested;  // the same thread's job: counted once
+    EXPECT_EQ(running_jobs().load(), 1);
+    EXPECT_EQ(loop_threads(), hardware);
+    std::atomic<bool> started{false}, done{false};
+    std::thread other([&] {
+      const JobShare second;
+      started = true;
+      while (!done) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    });
+    while (!started) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    EXPECT_EQ(running_jobs().load(), 2);
+    EXPECT_EQ(loop_threads(), std::max(1, hardware / 2));
+    EXPECT_EQ(threads_used(200).size(), static_cast<size_t>(std::min(std::max(1, hardware / 2), 200 / 16)));
+    {
+      const ThreadLimit given(hardware);  // a ThreadLimit is the caller's own choice
+      EXPECT_EQ(loop_threads(), hardware);
+    }
+    done = true;
+    other.join();
+    EXPECT_EQ(loop_threads(), hardware);
+  }
+  EXPECT_EQ(running_jobs().load(), 0);
 }
 
 TEST(ParallelFor, LoopsInsideALoopStayOnTheirThread) {
