@@ -28,8 +28,11 @@
 // respected because the rows come from the tagged cage; polar structures are ignored
 // (Catmull-Clark rows everywhere).
 //
-// Cost per iteration: closest-point queries (BVH, parallel_for), then the normal equations,
-// accumulated as dense 3 x 3 blocks per cage vertex pair (72 n^2 bytes), and a sparse LDLT.
+// Cost per iteration: closest-point queries (BVH started from the previous iteration's answer,
+// parallel_for), then the normal equations: the samples' rows as one small dense product per
+// cage face (faces in parallel, summed in face order: results independent of the thread count),
+// the data points' rows one by one, into 3 x 3 blocks per cage vertex pair that shares a face's
+// support; then a sparse LDLT whose ordering and symbolic analysis are done once per fit.
 #pragma once
 
 #include <functional>
@@ -49,6 +52,11 @@ struct ShapeFitOptions {
   double tolerance = 1e-7;
   /// Stop when the objective falls by less than this fraction in an iteration of the last phase.
   double min_improvement = 1e-6;
+  /// Stop (in the point-to-plane phase: go on to point-to-point) when the measured two-sided RMS
+  /// distance (sqrt of the mean of the two terms' squared RMS) falls by less than this fraction
+  /// in an iteration: the fit has stopped improving the distance at a rate worth an iteration.
+  /// 0: off (only min_improvement, the tolerance and the iteration cap stop).
+  double min_gain = 0.02;
   /// Point-to-plane iterations at most, before point-to-point (also switched as soon as the
   /// objective falls by less than plane_switch in one iteration). 0: point-to-point throughout.
   /// Ignored (0) for a point cloud without normals.
@@ -76,7 +84,7 @@ struct ShapeFitOptions {
 
 enum class ShapeFitStop : unsigned char {
   Tolerance,      ///< both RMS distances at most options.tolerance (relative)
-  Converged,      ///< the objective improved by less than min_improvement
+  Converged,      ///< the objective improved by less than min_improvement, or the distance by less than min_gain
   IterationLimit, ///< max_iterations reached
   Cancelled,      ///< the progress callback returned false (positions: the last solved cage)
 };
