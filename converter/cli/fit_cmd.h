@@ -23,6 +23,8 @@ struct FitCommandOptions {
   int levels = 3;                 ///< 1 .. 4
   int max_iterations = 30;        ///< >= 1
   double tolerance = 1e-7;        ///< > 0, relative to the target's diagonal
+  double min_gain = 0.02;         ///< >= 0: stop when an iteration improves the distance less
+  bool tag_features = false;      ///< --tag-features: crease the cage edges along the target's sharp edges
   std::string report;             ///< JSON path, empty for none
   bool quiet = false;
   bool register_first = false;    ///< --register: a similarity pre-registration onto the target

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -1149,6 +1150,104 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   result.target_max = last.target_max;
   result.positions = std::move(P);
   return result;
+}
+
+std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vector<Point3>& positions,
+                                         const ShapeTarget& target, double angle_degrees, double reach) {
+  const PolyMesh& m = cage.mesh;
+  if (static_cast<int>(positions.size()) != m.num_vertices())
+    throw std::invalid_argument("feature_edges_on_target: one position per cage vertex");
+  if (!target.has_triangles()) return {};
+  MeshInput mi;
+  mi.positions = target.points();
+  for (const auto& t : target.triangles()) {
+    mi.face_sizes.push_back(3);
+    for (int v : t) mi.face_indices.push_back(v);
+  }
+  FeatureOptions fo;
+  fo.angle_degrees = angle_degrees;
+  FeatureSet fs;
+  try {
+    fs = detect_features(mi, fo);
+  } catch (const Error&) {
+    return {};
+  }
+  if (fs.edges.empty()) return {};
+  // Feature curves: the feature edges joined through vertices of two feature edges that are no
+  // corner.
+  const int np = static_cast<int>(target.points().size()), ne = static_cast<int>(fs.edges.size());
+  std::vector<std::vector<int>> at(np);
+  for (int i = 0; i < ne; ++i)
+    for (int v : fs.edges[i]) at[v].push_back(i);
+  std::vector<char> corner(np, 0);
+  for (int v : fs.corners) corner[v] = 1;
+  std::vector<int> curve(ne, -1);
+  int curves = 0;
+  for (int i = 0; i < ne; ++i) {
+    if (curve[i] >= 0) continue;
+    std::vector<int> stack = {i};
+    curve[i] = curves;
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      for (int v : fs.edges[e]) {
+        if (corner[v] || at[v].size() != 2) continue;
+        for (int e2 : at[v])
+          if (curve[e2] < 0) {
+            curve[e2] = curves;
+            stack.push_back(e2);
+          }
+      }
+    }
+    ++curves;
+  }
+  // Points along the feature edges (ends included), each with its edge and end.
+  constexpr int per = 8;
+  std::vector<Point3> pts;
+  std::vector<std::pair<int, int>> owner;  // (edge, k of 0..per)
+  for (int i = 0; i < ne; ++i) {
+    const Point3& a = target.points()[fs.edges[i][0]];
+    const Point3& b = target.points()[fs.edges[i][1]];
+    for (int k = 0; k <= per; ++k) {
+      const double t = static_cast<double>(k) / per;
+      pts.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
+      owner.push_back({i, k});
+    }
+  }
+  const ClosestPointTree tree(pts, {});
+  // The curves nearest to q (all those at a feature vertex) within r; empty beyond.
+  auto near = [&](const Point3& q, double r, std::vector<int>& out) {
+    out.clear();
+    const ClosestPointTree::Hit h = tree.closest(q);
+    if (h.element < 0 || h.distance2 > r * r) return;
+    const auto [e, k] = owner[h.element];
+    if (k == 0 || k == per)
+      for (int e2 : at[fs.edges[e][k == 0 ? 0 : 1]]) out.push_back(curve[e2]);
+    else
+      out.push_back(curve[e]);
+    std::sort(out.begin(), out.end());
+  };
+  std::vector<int> out, ca, cb, cm, ab;
+  for (int e = 0; e < m.num_edges(); ++e) {
+    if (m.is_boundary_edge(e) || cage.infinitely_sharp(e)) continue;
+    const int h = m.edge_corner(e);
+    const int f = m.corner_face(h), tw = m.twin(h);
+    if (cage.face_hole[f] || (tw >= 0 && cage.face_hole[m.corner_face(tw)])) continue;
+    const Point3& a = positions[m.edge_vertex(e, 0)];
+    const Point3& b = positions[m.edge_vertex(e, 1)];
+    const Vec3 d = vec(b) - vec(a);
+    const double r = reach * d.norm();
+    if (!(r > 0)) continue;
+    near(a, r, ca);
+    near(b, r, cb);
+    near({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])}, r, cm);
+    ab.clear();
+    std::set_intersection(ca.begin(), ca.end(), cb.begin(), cb.end(), std::back_inserter(ab));
+    bool shared = false;
+    for (int c : cm) shared = shared || std::binary_search(ab.begin(), ab.end(), c);
+    if (shared) out.push_back(e);
+  }
+  return out;
 }
 
 Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations) {

@@ -140,6 +140,18 @@ struct Similarity {
 /// scale or orientation (rotated by multiples of 90 degrees about the axes, or near them).
 Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations = 200);
 
+/// The cage edges that lie along the target's sharp features, to be tagged infinitely sharp
+/// before a fit (`subd2nurbs fit --tag-features`): an untagged cage's limit rounds a part's
+/// sharp edges off, a tagged one can make them. The target's feature edges (detect_features:
+/// interior edges whose faces' normals differ by more than `angle_degrees`) are split into
+/// feature curves at their corners; an interior cage edge that is not infinitely sharp yet is
+/// listed when both its ends and its midpoint (the cage's own `positions`, not its limit: for a
+/// cage drawn on the shape, e.g. a remesh) lie within `reach` x its length of the features, all
+/// three nearest to one same curve. Sorted edge indices; none for a point cloud or a target that
+/// is not manifold.
+std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vector<Point3>& positions,
+                                         const ShapeTarget& target, double angle_degrees = 30.0, double reach = 0.25);
+
 /// Fits the limit surface of `cage` (topology and tags; positions ignored) starting from the
 /// positions `start` to `target`. \throw std::invalid_argument (sizes, options), FitError
 /// (interpolate.h: a system could not be factorised)
