@@ -1215,18 +1215,33 @@ std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vec
     }
   }
   const ClosestPointTree tree(pts, {});
-  // The curves nearest to q (all those at a feature vertex) within r; empty beyond.
+  // The curves that pass within r of q (a point at a feature vertex on all the curves there).
   auto near = [&](const Point3& q, double r, std::vector<int>& out) {
     out.clear();
-    const ClosestPointTree::Hit h = tree.closest(q);
-    if (h.element < 0 || h.distance2 > r * r) return;
-    const auto [e, k] = owner[h.element];
-    if (k == 0 || k == per)
-      for (int e2 : at[fs.edges[e][k == 0 ? 0 : 1]]) out.push_back(curve[e2]);
-    else
-      out.push_back(curve[e]);
+    for (;;) {
+      const ClosestPointTree::Hit h = tree.closest_if(q, [&](int s) {
+        return std::find(out.begin(), out.end(), curve[owner[s].first]) == out.end();
+      });
+      if (h.element < 0 || h.distance2 > r * r) break;
+      const auto [e, k] = owner[h.element];
+      if (k == 0 || k == per) {
+        for (int e2 : at[fs.edges[e][k == 0 ? 0 : 1]])
+          if (std::find(out.begin(), out.end(), curve[e2]) == out.end()) out.push_back(curve[e2]);
+      } else {
+        out.push_back(curve[e]);
+      }
+    }
     std::sort(out.begin(), out.end());
   };
+  // Each vertex's shortest edge: the reach is a fraction of the local spacing (a long edge
+  // beside a feature, a short one away, is not along it).
+  std::vector<double> shortest(m.num_vertices(), std::numeric_limits<double>::infinity());
+  for (int e = 0; e < m.num_edges(); ++e) {
+    const int a = m.edge_vertex(e, 0), b = m.edge_vertex(e, 1);
+    const double len = (vec(positions[b]) - vec(positions[a])).norm();
+    shortest[a] = std::min(shortest[a], len);
+    shortest[b] = std::min(shortest[b], len);
+  }
   std::vector<int> out, ca, cb, cm, ab;
   for (int e = 0; e < m.num_edges(); ++e) {
     if (m.is_boundary_edge(e) || cage.infinitely_sharp(e)) continue;
@@ -1236,7 +1251,7 @@ std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vec
     const Point3& a = positions[m.edge_vertex(e, 0)];
     const Point3& b = positions[m.edge_vertex(e, 1)];
     const Vec3 d = vec(b) - vec(a);
-    const double r = reach * d.norm();
+    const double r = reach * std::min({d.norm(), shortest[m.edge_vertex(e, 0)], shortest[m.edge_vertex(e, 1)]});
     if (!(r > 0)) continue;
     near(a, r, ca);
     near(b, r, cb);

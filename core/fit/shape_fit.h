@@ -146,9 +146,9 @@ Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarg
 /// interior edges whose faces' normals differ by more than `angle_degrees`) are split into
 /// feature curves at their corners; an interior cage edge that is not infinitely sharp yet is
 /// listed when both its ends and its midpoint (the cage's own `positions`, not its limit: for a
-/// cage drawn on the shape, e.g. a remesh) lie within `reach` x its length of the features, all
-/// three nearest to one same curve. Sorted edge indices; none for a point cloud or a target that
-/// is not manifold.
+/// cage drawn on the shape, e.g. a remesh) lie within `reach` x the shortest cage edge at either
+/// end of one same curve. Sorted edge indices; none for a point cloud or a target that is not
+/// manifold.
 std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vector<Point3>& positions,
                                          const ShapeTarget& target, double angle_degrees = 30.0, double reach = 0.25);
 

@@ -17,6 +17,7 @@
 
 #include "core/eval/target_distance.h"
 #include "core/fit/shape_fit.h"
+#include "core/util/parallel.h"
 #include "io/obj_reader.h"
 #include "fit/shape_fit_test_util.h"
 #include "limit/limit_test_util.h"
@@ -376,6 +377,53 @@ TEST(ShapeFit, CreasesLandOnABoxsEdges) {
   EXPECT_LT(d.target_to_limit.max, 1e-6);
 }
 
+// Feature tagging: the box's cage without its crease tags, fitted to the sharp box: the edges
+// found along the box's feature curves are exactly those the tagged cage creases (the box's 12
+// edges, 3 cage edges each), and the fit of the tagged cage makes the box as the test above.
+TEST(ShapeFit, TagFeaturesFindsTheBoxsEdges) {
+  const Point3 size = {1.0, 0.5, 0.25};
+  const MeshInput tagged = box_cage(3, size, true), plain = box_cage(3, size, false);
+  const MeshInput box = box_cage(16, size, false);
+  std::vector<std::array<int, 3>> tris;
+  for (size_t f = 0; f < box.face_sizes.size(); ++f) {
+    const int* q = &box.face_indices[4 * f];
+    tris.push_back({q[0], q[1], q[2]});
+    tris.push_back({q[0], q[2], q[3]});
+  }
+  const ShapeTarget target(box.positions, tris);
+  SubdivLevel cage = SubdivLevel::from_input(plain);
+  // Off the box by up to 0.011 per coordinate, less than a quarter of the shortest cage edge
+  // (0.167): within the tagging's reach.
+  const std::vector<Point3> start = perturbed(positions_of(plain), 0.005, 5);
+  const std::vector<int> edges = feature_edges_on_target(cage, start, target);
+  std::set<std::pair<int, int>> found, expected;
+  for (int e : edges) {
+    const int a = cage.mesh.edge_vertex(e, 0), b = cage.mesh.edge_vertex(e, 1);
+    found.insert({std::min(a, b), std::max(a, b)});
+  }
+  for (const auto& c : tagged.creases) expected.insert({std::min(c.v0, c.v1), std::max(c.v0, c.v1)});
+  EXPECT_EQ(expected.size(), 36u);
+  EXPECT_EQ(found, expected);
+  for (const auto& [a, b] : found)
+    if (!expected.count({a, b}))
+      std::printf("extra %d (%g %g %g) %d (%g %g %g)\n", a, plain.positions[a][0], plain.positions[a][1],
+                  plain.positions[a][2], b, plain.positions[b][0], plain.positions[b][1], plain.positions[b][2]);
+  // A point cloud has no feature edges.
+  EXPECT_TRUE(feature_edges_on_target(cage, start, ShapeTarget(box.positions)).empty());
+
+  for (int e : edges) cage.edge_sharpness[e] = static_cast<float>(kInfiniteSharpness);
+  const ShapeFitResult r = fit_to_shape(cage, start, target, exact_options());
+  double worst = 0;
+  for (const Point3& p : crease_curve_points(tagged, LimitEvaluator(cage, r.positions), 16))
+    worst = std::max(worst, to_box_edges(p, size) / target.diagonal());
+  const TargetDistance d = measure_target_distance(LimitEvaluator(cage, r.positions), target, 32);
+  std::printf("box, tags found: %zu edges; crease curves to the box's edges %.2e, surface two-sided %.2e / %.2e\n",
+              edges.size(), worst, d.limit_to_target.max, d.target_to_limit.max);
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_LT(d.limit_to_target.max, 1e-6);
+  EXPECT_LT(d.target_to_limit.max, 1e-6);
+}
+
 // Registration: the exact limit of a cage (a torus cage perturbed: no symmetry), mapped by a known similarity (scale 2.6, 180 degrees
 // about y plus 10 degrees about z, a translation), is the target; the cage's own limit points
 // registered onto it recover the similarity (the mapped cage against the truth).
@@ -498,6 +546,50 @@ TEST(ShapeFit, StopReasons) {
     const ShapeFitResult r = fit_to_shape(cage, start, ShapeTarget(noisy, lt.triangles), t);
     EXPECT_EQ(r.stop, ShapeFitStop::Converged);
   }
+  {  // converged: the measured distance stops improving by min_gain (the objective rule off)
+    std::mt19937 rng(2);
+    std::normal_distribution<double> g(0, 1e-3 * target.diagonal());
+    std::vector<Point3> noisy = lt.points;
+    for (Point3& p : noisy)
+      for (double& c : p) c += g(rng);
+    ShapeFitOptions t = o;
+    t.min_improvement = 0;
+    t.min_gain = 0.05;
+    const ShapeFitResult r = fit_to_shape(cage, start, ShapeTarget(noisy, lt.triangles), t);
+    EXPECT_EQ(r.stop, ShapeFitStop::Converged);
+    auto distance = [](const ShapeFitIteration& h) {
+      return std::sqrt(0.5 * (h.surface_rms * h.surface_rms + h.target_rms * h.target_rms));
+    };
+    ASSERT_GE(r.history.size(), 2u);
+    const double last = distance(r.history.back()), before = distance(r.history[r.history.size() - 2]);
+    EXPECT_FALSE(r.history.back().point_to_plane);  // the point-to-plane phase hands over, not stops
+    EXPECT_LT(before - last, t.min_gain * last);
+    EXPECT_LT(r.iterations, t.max_iterations);
+  }
+}
+
+// The fit's result does not depend on the threads its parallel loops get: with one hardware
+// thread reserved (ThreadReservation, core/util/parallel.h) the loops run on the calling thread
+// alone, and the cage comes out bit for bit the same.
+TEST(ShapeFit, SameResultOnOneThread) {
+  const MeshInput in = corpus_cage("catmark_torus");
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  const std::vector<Point3> truth = positions_of(in);
+  const LimitTarget lt = limit_target(LimitEvaluator(cage, truth), 8);
+  const ShapeTarget target(lt.points, lt.triangles);
+  const std::vector<Point3> start = perturbed(truth, 0.03, 5);
+  ShapeFitOptions o;
+  o.max_iterations = 6;
+  const ShapeFitResult all = fit_to_shape(cage, start, target, o);
+  ShapeFitResult one;
+  {
+    const ThreadReservation reserve;
+    one = fit_to_shape(cage, start, target, o);
+  }
+  ASSERT_EQ(all.positions.size(), one.positions.size());
+  for (size_t v = 0; v < all.positions.size(); ++v)
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(all.positions[v][c], one.positions[v][c]);
+  EXPECT_EQ(all.iterations, one.iterations);
 }
 
 // Scaling the cage, the target and the start by 1e3 and translating them scales the result.
