@@ -1283,16 +1283,23 @@ Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarg
   const int n = static_cast<int>(points.size());
   std::vector<Point3> mapped(n);
   std::vector<ShapeTarget::Closest> closest(n);
-  auto rms_of = [&](const Eigen::Matrix3d& R, double s, const Vec3& t) {
-    for (int i = 0; i < n; ++i) {
-      const Vec3 q = s * R * vec(points[i]) + t;
-      mapped[i] = {q[0], q[1], q[2]};
+  // stride > 1: every stride-th point only (the 24 trials: which rotation fits best shows on a
+  // few thousand points, and far from the target each query is costly).
+  auto rms_of = [&](const Eigen::Matrix3d& R, double s, const Vec3& t, int stride = 1) {
+    const int m = (n + stride - 1) / stride;
+    for (int k = 0; k < m; ++k) {
+      const Vec3 q = s * R * vec(points[k * stride]) + t;
+      mapped[k * stride] = {q[0], q[1], q[2]};
     }
-    parallel_for(n, [&](int i) { closest[i] = target.closest(mapped[i], closest[i].element); });
+    parallel_for(m, [&](int k) {
+      const int i = k * stride;
+      closest[i] = target.closest(mapped[i], closest[i].element);
+    });
     double sum = 0;
-    for (const auto& c : closest) sum += c.distance * c.distance;
-    return std::sqrt(sum / n);
+    for (int k = 0; k < m; ++k) sum += closest[k * stride].distance * closest[k * stride].distance;
+    return std::sqrt(sum / m);
   };
+  const int trial_stride = std::max(1, n / 2048);
   // The 24 rotations that map axes to axes.
   Eigen::Matrix3d bestR = Eigen::Matrix3d::Identity();
   double best = std::numeric_limits<double>::infinity(), s = dt / dp;
@@ -1304,7 +1311,7 @@ Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarg
       for (int i = 0; i < 3; ++i) R(i, pm[i]) = (signs >> i) & 1 ? -1.0 : 1.0;
       if (R.determinant() < 0) continue;
       const Vec3 tr = ct - s * R * cp;
-      const double r = rms_of(R, s, tr);
+      const double r = rms_of(R, s, tr, trial_stride);
       if (r < best) {
         best = r;
         bestR = R;

@@ -135,9 +135,10 @@ struct Similarity {
 
 /// The similarity that best maps `points` (e.g. a cage's limit points) onto `target`: the 24
 /// axis-aligned rotations with the bounding boxes' centres and diagonals matched are tried, the
-/// one with the smallest RMS closest-point distance refined by closest-point iterations with
-/// Umeyama's closed-form similarity (`iterations` at most). For a shape given in another frame,
-/// scale or orientation (rotated by multiples of 90 degrees about the axes, or near them).
+/// one with the smallest RMS closest-point distance (of at most about 2 048 of the points, evenly
+/// strided) refined by closest-point iterations (all points) with Umeyama's closed-form
+/// similarity (`iterations` at most). For a shape given in another frame, scale or orientation
+/// (rotated by multiples of 90 degrees about the axes, or near them).
 Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations = 200);
 
 /// The cage edges that lie along the target's sharp features, to be tagged infinitely sharp
