@@ -33,6 +33,10 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   c->add_option("--min-gain", o.min_gain,
                 "Stop when an iteration improves the two-sided RMS distance by less than this fraction (>= 0, "
                 "0: off, default 0.02)");
+  c->add_flag("--exact-target", o.exact_target,
+              "The target lies on a subdivision surface (a dense sampling of one, no noise): weights that recover "
+              "it (target -> surface 30, surface -> target 1e-3 in the last phase, crease curves onto the target's "
+              "sharp edges; smoothing 0, tolerance 1e-8, 100 iterations unless given)");
   c->add_flag("--tag-features", o.tag_features,
               "Before fitting, tag the cage edges that lie along the target's sharp edges (faces meeting at more "
               "than 30 degrees) infinitely sharp (for a cage drawn on the shape, e.g. a remesh)");
@@ -45,11 +49,11 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
 }
 
 void run_fit(const FitCommandOptions& o, std::ostream& err) {
-  ShapeFitOptions fo;
-  fo.smoothing = o.smoothing;
+  ShapeFitOptions fo = o.exact_target ? exact_target_options() : ShapeFitOptions{};
+  if (o.smoothing) fo.smoothing = *o.smoothing;
   fo.levels = o.levels;
-  fo.max_iterations = o.max_iterations;
-  fo.tolerance = o.tolerance;
+  if (o.max_iterations) fo.max_iterations = *o.max_iterations;
+  if (o.tolerance) fo.tolerance = *o.tolerance;
   fo.min_gain = o.min_gain;
   pipeline::validate_shape_fit(fo);
   check_outputs(o.mesh, {{"-o", o.output}, {"--report", o.report}});

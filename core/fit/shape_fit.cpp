@@ -27,6 +27,17 @@ namespace subd2nurbs {
 
 using fit_detail::SparseMatrix;
 
+ShapeFitOptions exact_target_options() {
+  ShapeFitOptions o;
+  o.target_weight = 30;
+  o.final_surface_weight = 1e-3;
+  o.crease_angle = 30;
+  o.smoothing = 0;
+  o.max_iterations = 100;
+  o.tolerance = 1e-8;
+  return o;
+}
+
 const char* to_string(ShapeFitStop s) {
   switch (s) {
     case ShapeFitStop::Tolerance: return "tolerance";

@@ -82,6 +82,13 @@ struct ShapeFitOptions {
   double crease_reach = 4.0;
 };
 
+/// The options for a target that lies on a subdivision surface (a dense sampling of an exact
+/// limit, no noise): target -> surface weight 30, surface -> target 1e-3 in the last phase, the
+/// crease term at 30 deg, smoothing 0, tolerance 1e-8, up to 100 iterations. They recover a
+/// perturbed cage's surface to 1e-6 of the diagonal on the oracle shapes (docs/fitting.md); the
+/// defaults keep weights 1 / 1 for targets a cage cannot reach (scans, CAD meshes).
+ShapeFitOptions exact_target_options();
+
 enum class ShapeFitStop : unsigned char {
   Tolerance,      ///< both RMS distances at most options.tolerance (relative)
   Converged,      ///< the objective improved by less than min_improvement, or the distance by less than min_gain

@@ -89,14 +89,8 @@ void print(const char* what, const Recovery& r) {
 /// weights (1, 1, crease term off): the mesh path's fits of rounded cages to sharp parts need
 /// them (docs/fitting.md).
 ShapeFitOptions exact_options(int levels = 3) {
-  ShapeFitOptions o;
-  o.target_weight = 30;
-  o.final_surface_weight = 1e-3;
-  o.crease_angle = 30;
+  ShapeFitOptions o = exact_target_options();  // what `fit --exact-target` uses
   o.levels = levels;
-  o.smoothing = 0;
-  o.max_iterations = 100;
-  o.tolerance = 1e-8;
   return o;
 }
 
