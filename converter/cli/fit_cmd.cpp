@@ -30,6 +30,16 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
   c->add_option("--max-iterations", o.max_iterations, "Closest-point iterations at most (>= 1, default 30)");
   c->add_option("--tolerance", o.tolerance,
                 "Stop when both RMS distances are at most T x the target's diagonal (> 0, default 1e-7)");
+  c->add_option("--min-gain", o.min_gain,
+                "Stop when an iteration improves the two-sided RMS distance by less than this fraction (>= 0, "
+                "0: off, default 0.02)");
+  c->add_flag("--exact-target", o.exact_target,
+              "The target lies on a subdivision surface (a dense sampling of one, no noise): weights that recover "
+              "it (target -> surface 30, surface -> target 1e-3 in the last phase, crease curves onto the target's "
+              "sharp edges; smoothing 0, tolerance 1e-8, 100 iterations unless given)");
+  c->add_flag("--tag-features", o.tag_features,
+              "Before fitting, tag the cage edges that lie along the target's sharp edges (faces meeting at more "
+              "than 30 degrees) infinitely sharp (for a cage drawn on the shape, e.g. a remesh)");
   c->add_option("--report", o.report, "Also write a JSON report (iterations, distances before and after)");
   c->add_flag("--register", o.register_first,
               "First move, scale and rotate the cage onto the target (a similarity: for a target in another frame or "
@@ -39,11 +49,12 @@ CLI::App* add_fit_command(CLI::App& app, FitCommandOptions& o) {
 }
 
 void run_fit(const FitCommandOptions& o, std::ostream& err) {
-  ShapeFitOptions fo;
-  fo.smoothing = o.smoothing;
+  ShapeFitOptions fo = o.exact_target ? exact_target_options() : ShapeFitOptions{};
+  if (o.smoothing) fo.smoothing = *o.smoothing;
   fo.levels = o.levels;
-  fo.max_iterations = o.max_iterations;
-  fo.tolerance = o.tolerance;
+  if (o.max_iterations) fo.max_iterations = *o.max_iterations;
+  if (o.tolerance) fo.tolerance = *o.tolerance;
+  fo.min_gain = o.min_gain;
   pipeline::validate_shape_fit(fo);
   check_outputs(o.mesh, {{"-o", o.output}, {"--report", o.report}});
   if (same_file(o.target, o.output) || (!o.report.empty() && same_file(o.target, o.report)))
@@ -78,11 +89,24 @@ void run_fit(const FitCommandOptions& o, std::ostream& err) {
           << pipeline::short_number(sim.t[2]) << "), rms distance " << pipeline::short_number(sim.rms)
           << " of the target's diagonal\n";
   }
-  const pipeline::ShapeFitRun run = pipeline::run_shape_fit(loaded.level, start, target, fo, progress);
+  SubdivLevel level = loaded.level;
+  int tagged = -1;
+  if (o.tag_features) {
+    // The cage's edges along the target's feature curves, creased. The crease term (crease
+    // curves fitted to the target's feature vertices) stays off: on fandisk it left the largest
+    // distance at 0.56 % of the diagonal against 0.37 % without it (docs/benchmarks.md 9).
+    constexpr double kFeatureAngle = 30.0;
+    const std::vector<int> edges = feature_edges_on_target(level, start, target, kFeatureAngle);
+    for (int e : edges) level.edge_sharpness[e] = static_cast<float>(kInfiniteSharpness);
+    tagged = static_cast<int>(edges.size());
+    if (!o.quiet) err << "subd2nurbs: tagged " << tagged << " cage edges along the target's sharp edges\n";
+  }
+  pipeline::ShapeFitRun run = pipeline::run_shape_fit(level, start, target, fo, progress);
+  run.tagged_edges = tagged;
 
   // Both outputs staged, then renamed into place together.
   StagedFile obj(o.output);
-  obj.write([&](std::ostream& out) { write_obj(out, run.fit.positions, loaded.level); });
+  obj.write([&](std::ostream& out) { write_obj(out, run.fit.positions, level); });
   std::optional<StagedFile> report;
   if (!o.report.empty()) {
     const std::string text = pipeline::shape_fit_report_json(run, fo, o.mesh, o.target, o.output);

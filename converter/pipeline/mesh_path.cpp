@@ -413,6 +413,7 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   // samples per quad still outnumber the mesh's vertices; 4 x cheaper than level 3.
   rep.fit_options.levels = 2;
   rep.fit_options.max_iterations = 10;
+  rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
   ShapeFitProgress fit_progress;
   if (progress.fraction)
     fit_progress = [&](int iteration, double) {

@@ -32,6 +32,7 @@ void validate_shape_fit(const ShapeFitOptions& o) {
   if (o.levels < 1 || o.levels > 4) throw SettingsError("levels", "must be 1 .. 4");
   if (o.max_iterations < 1) throw SettingsError("max_iterations", "must be at least 1");
   if (!(o.tolerance > 0 && std::isfinite(o.tolerance))) throw SettingsError("tolerance", "must be a positive number");
+  if (!(o.min_gain >= 0 && std::isfinite(o.min_gain))) throw SettingsError("min_gain", "must be a number >= 0");
 }
 
 ShapeTarget make_target(TargetShape shape, const std::string& name) {
@@ -79,9 +80,10 @@ std::string shape_fit_report_json(const ShapeFitRun& run, const ShapeFitOptions&
   w.members("format", "subd2nurbs-fit", "version", 1, "input", input, "target", target, "output", output);
   w.key("options").begin_object();
   w.members("smoothing", o.smoothing, "levels", o.levels, "max_iterations", o.max_iterations, "tolerance",
-            o.tolerance);
+            o.tolerance, "min_gain", o.min_gain, "crease_angle", o.crease_angle);
   w.end_object();
   w.members("iterations", run.fit.iterations, "stop", to_string(run.fit.stop), "samples", run.fit.samples);
+  if (run.tagged_edges >= 0) w.member("tagged_edges", run.tagged_edges);
   write_target_distance(w.key("before"), run.before);
   write_target_distance(w.key("after"), run.after);
   w.key("history").begin_array(4, 2);

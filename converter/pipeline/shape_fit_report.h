@@ -27,6 +27,7 @@ struct ShapeFitRun {
   ShapeFitResult fit;
   TargetDistance before, after;  ///< the input cage's and the fitted cage's limit to the target
   double fit_ms = 0, measure_ms = 0;
+  int tagged_edges = -1;         ///< cage edges tagged along the target's features (-1: not asked)
 };
 
 /// Validates the options, fits `cage` from `start` to `target`, and measures both cages.

@@ -103,12 +103,12 @@ DistanceStats points_to_limit(const LimitEvaluator& limit, const std::vector<Poi
   std::vector<double> d(np);
   std::vector<PtexPoint> foot(np);
   // The foot may lie in a ptex face next to the nearest sample's (across an edge or a corner,
-  // where the samples of several faces coincide): the nearest sample of each of up to 4 faces
+  // where the samples of several faces coincide): the nearest sample of each of up to 8 faces
   // starts a projection, the closest result is kept.
   parallel_for(np, [&](int j) {
-    int tried[4] = {-1, -1, -1, -1};
+    int tried[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
     d[j] = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 8; ++k) {
       const ClosestPointTree::Hit h = tree.closest_if(points[j], [&](int e) {
         return std::find(tried, tried + k, where[e].ptex) == tried + k;
       });

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -25,6 +26,17 @@
 namespace subd2nurbs {
 
 using fit_detail::SparseMatrix;
+
+ShapeFitOptions exact_target_options() {
+  ShapeFitOptions o;
+  o.target_weight = 30;
+  o.final_surface_weight = 1e-3;
+  o.crease_angle = 30;
+  o.smoothing = 0;
+  o.max_iterations = 100;
+  o.tolerance = 1e-8;
+  return o;
+}
 
 const char* to_string(ShapeFitStop s) {
   switch (s) {
@@ -412,6 +424,11 @@ int ptex_faces(const SubdivLevel& cage) {
 /// r^T r (x) W to the matrix and r^T g to the right-hand side. The matrix is kept as 3 x 3 blocks
 /// of the vertex pairs (a <= b) that share a row, found through an open-addressing hash table:
 /// memory and time grow with the pairs (about 50 per vertex), not with n^2.
+///
+/// The object lives through the whole fit: its blocks are zeroed between solves, not dropped,
+/// so the sparse matrix keeps one structure (the pairs seeded at the start, every pair of one
+/// cage face's support, and any pair a row adds later), whose fill-reducing ordering and
+/// symbolic factorisation are computed once and only redone when a new pair appears.
 struct NormalEquations {
   int n = 0;
   std::vector<std::uint64_t> keys;   ///< table slots: a n + b + 1, 0 for an empty slot
@@ -419,6 +436,13 @@ struct NormalEquations {
   std::vector<int> block_a, block_b; ///< per block: its vertex pair
   std::vector<double> blocks;        ///< 9 per block, row-major
   Eigen::VectorXd rhs;               ///< coordinate-major: x of every vertex, then y, then z
+  /// The factorised structure: H's pattern, where each block entry (and its mirror) and each
+  /// diagonal entry sit in H's values, and lambda K there (the regulariser, constant).
+  SparseMatrix H;
+  std::size_t structured_blocks = 0;
+  std::vector<int> pos, pos_mirror, diag_pos;
+  std::vector<double> base;
+  Eigen::SimplicialLDLT<SparseMatrix> ldlt;
 
   explicit NormalEquations(int vertices) : n(vertices), rhs(Eigen::VectorXd::Zero(3 * n)) {
     std::size_t capacity = 1024;
@@ -426,15 +450,19 @@ struct NormalEquations {
     keys.assign(capacity, 0);
     slot_block.assign(capacity, -1);
   }
-  /// The block of (a, b), a <= b, created zero on first use.
-  double* block(int a, int b) {
+  void reset() {
+    std::fill(blocks.begin(), blocks.end(), 0.0);
+    rhs.setZero();
+  }
+  /// The index of block (a, b), a <= b, created zero on first use.
+  int block_index(int a, int b) {
     const std::uint64_t key = static_cast<std::uint64_t>(a) * static_cast<std::uint64_t>(n) + static_cast<std::uint64_t>(b) + 1;
     std::size_t mask = keys.size() - 1, i = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
     while (keys[i] != 0 && keys[i] != key) i = (i + 1) & mask;
     if (keys[i] == 0) {
       if (2 * (block_a.size() + 1) > keys.size()) {  // keep the load at most 1/2
         grow();
-        return block(a, b);
+        return block_index(a, b);
       }
       keys[i] = key;
       slot_block[i] = static_cast<int>(block_a.size());
@@ -442,8 +470,9 @@ struct NormalEquations {
       block_b.push_back(b);
       blocks.resize(blocks.size() + 9, 0.0);
     }
-    return &blocks[static_cast<std::size_t>(9) * static_cast<std::size_t>(slot_block[i])];
+    return slot_block[i];
   }
+  double* block(int a, int b) { return &blocks[static_cast<std::size_t>(9) * static_cast<std::size_t>(block_index(a, b))]; }
   void grow() {
     std::vector<std::uint64_t> old_keys(keys.size() * 2, 0);
     std::vector<int> old_slots(keys.size() * 2, -1);
@@ -472,19 +501,17 @@ struct NormalEquations {
       }
     }
   }
-  /// The sparse matrix (coordinate-major) with lambda K (x) I3 + mu I added.
-  SparseMatrix matrix(const SparseMatrix* K, double lambda, double mu) const {
+  /// H's structure (every block whole, lambda K (x) I3, the diagonal) and its symbolic
+  /// factorisation, when blocks were added since the last one.
+  void structure(const SparseMatrix* K, double lambda) {
+    if (structured_blocks == block_a.size() && H.rows() == 3 * n) return;
     std::vector<Eigen::Triplet<double>> trip;
     trip.reserve(18 * block_a.size() + 3 * static_cast<std::size_t>(n) * (K ? 26 : 1));
     for (std::size_t i = 0; i < block_a.size(); ++i) {
       const int a = block_a[i], b = block_b[i];
-      const double* blk = &blocks[9 * i];
-      bool any = false;  // a block is entered whole (its zeros too) when any entry is not zero
-      for (int k = 0; k < 9 && !any; ++k) any = blk[k] != 0;
-      if (!any) continue;
       for (int k = 0; k < 9; ++k) {
-        trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, blk[k]);
-        if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, blk[k]);
+        trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, 0.0);
+        if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, 0.0);
       }
     }
     for (int c = 0; c < 3; ++c) {
@@ -492,11 +519,46 @@ struct NormalEquations {
         for (int col = 0; col < n; ++col)
           for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
             trip.emplace_back(c * n + static_cast<int>(e.row()), c * n + col, lambda * e.value());
-      for (int v = 0; v < n; ++v) trip.emplace_back(c * n + v, c * n + v, mu);
+      for (int v = 0; v < n; ++v) trip.emplace_back(c * n + v, c * n + v, 0.0);
     }
-    SparseMatrix H(3 * n, 3 * n);
+    H = SparseMatrix(3 * n, 3 * n);
     H.setFromTriplets(trip.begin(), trip.end());
-    return H;
+    H.makeCompressed();
+    base.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
+    auto at = [&](int r, int c) {
+      const int* first = H.innerIndexPtr() + H.outerIndexPtr()[c];
+      const int* last = H.innerIndexPtr() + H.outerIndexPtr()[c + 1];
+      return static_cast<int>(std::lower_bound(first, last, r) - H.innerIndexPtr());
+    };
+    pos.resize(9 * block_a.size());
+    pos_mirror.resize(9 * block_a.size());
+    for (std::size_t i = 0; i < block_a.size(); ++i) {
+      const int a = block_a[i], b = block_b[i];
+      for (int k = 0; k < 9; ++k) {
+        pos[9 * i + k] = at((k / 3) * n + a, (k % 3) * n + b);
+        pos_mirror[9 * i + k] = b != a ? at((k % 3) * n + b, (k / 3) * n + a) : -1;
+      }
+    }
+    diag_pos.resize(3 * n);
+    for (int r = 0; r < 3 * n; ++r) diag_pos[r] = at(r, r);
+    structured_blocks = block_a.size();
+    ldlt.analyzePattern(H);
+  }
+  /// Solves (sum of the rows + lambda K (x) I3 + mu I) x = rhs + extra. \throw FitError
+  Eigen::VectorXd solve(const SparseMatrix* K, double lambda, double mu, const Eigen::VectorXd& extra) {
+    structure(K, lambda);
+    double* value = H.valuePtr();
+    std::copy(base.begin(), base.end(), value);
+    for (std::size_t i = 0; i < block_a.size(); ++i)
+      for (int k = 0; k < 9; ++k) {
+        value[pos[9 * i + k]] += blocks[9 * i + k];
+        if (pos_mirror[9 * i + k] >= 0) value[pos_mirror[9 * i + k]] += blocks[9 * i + k];
+      }
+    for (int r = 0; r < 3 * n; ++r) value[diag_pos[r]] += mu;
+    const Eigen::VectorXd b = rhs + extra;
+    ldlt.factorize(H);
+    if (ldlt.info() != Eigen::Success) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
+    return ldlt.solve(b);
   }
   double trace() const {
     double t = 0;
@@ -556,22 +618,119 @@ StencilTable shape_fit_sample_rows(const SubdivLevel& cage, int levels) {
 
 namespace {
 
+/// The surface samples' rows grouped by cage face: every sample whose row lies in one cage
+/// face's support (all of them, in practice) is a row of that face's dense matrix R over the
+/// support. A solve adds R^T diag(w) R for each of the six entries of the samples' 3 x 3
+/// weights (one small dense product per face, faces in parallel), then scatters the sums into
+/// the normal equations' blocks in face order: the same sums whatever the thread count.
+struct SampleGroups {
+  struct Group {
+    std::vector<int> vertices;   ///< the face's support (cage vertices)
+    std::vector<int> samples;    ///< its samples
+    Eigen::MatrixXd R;           ///< samples x vertices: the rows
+    std::vector<int> slot;       ///< m x m: block index of (vertices[a], vertices[b]) when a's <= b's, else -1
+  };
+  std::vector<Group> groups;
+  std::vector<int> loose;        ///< samples in no group (accumulated one by one)
+
+  SampleGroups(const SubdivLevel& cage, const Samples& S, const ExactRows& exact, NormalEquations& eq) {
+    const PolyMesh& m = S.level.mesh;
+    const int n = cage.mesh.num_vertices(), ns = static_cast<int>(S.vertex.size());
+    std::vector<std::vector<int>> bucket(cage.mesh.num_faces());
+    for (int i = 0; i < ns; ++i) {
+      const int v = S.vertex[i];
+      int face = -1;
+      const int* c = m.vertex_corners(v);
+      for (int k = 0, nc = m.vertex_face_count(v); k < nc && face < 0; ++k)
+        if (!S.level.face_hole[m.corner_face(c[k])]) face = S.ptex[m.corner_face(c[k])].face;
+      if (face < 0) loose.push_back(i);
+      else bucket[face].push_back(i);
+    }
+    std::vector<int> local(n, -1);
+    for (int f = 0; f < cage.mesh.num_faces(); ++f) {
+      if (bucket[f].empty()) continue;
+      Group g;
+      g.vertices = exact.support[f];
+      const int sz = static_cast<int>(g.vertices.size());
+      for (int a = 0; a < sz; ++a) local[g.vertices[a]] = a;
+      std::vector<int> in;
+      for (int i : bucket[f]) {
+        const int v = S.vertex[i];
+        bool inside = true;
+        for (int k = S.all_rows.offsets[v]; k < S.all_rows.offsets[v + 1] && inside; ++k)
+          inside = local[S.all_rows.indices[k]] >= 0;
+        (inside ? in : loose).push_back(i);
+      }
+      if (!in.empty()) {
+        g.samples = in;
+        g.R = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(in.size()), sz);
+        for (std::size_t r = 0; r < in.size(); ++r) {
+          const int v = S.vertex[in[r]];
+          for (int k = S.all_rows.offsets[v]; k < S.all_rows.offsets[v + 1]; ++k)
+            g.R(static_cast<Eigen::Index>(r), local[S.all_rows.indices[k]]) += S.all_rows.weights[k];
+        }
+        g.slot.assign(static_cast<std::size_t>(sz) * sz, -1);
+        for (int a = 0; a < sz; ++a)
+          for (int b = 0; b < sz; ++b)
+            if (g.vertices[a] <= g.vertices[b]) g.slot[a * sz + b] = eq.block_index(g.vertices[a], g.vertices[b]);
+      }
+      for (int a = 0; a < sz; ++a) local[g.vertices[a]] = -1;
+      if (!g.samples.empty()) groups.push_back(std::move(g));
+    }
+    std::sort(loose.begin(), loose.end());
+  }
+
+  /// Adds the samples' rows with weights Ma (xx, yy, zz, xy, xz, yz per sample) and W c = Ga.
+  void accumulate(const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga, NormalEquations& eq) const {
+    const int ng = static_cast<int>(groups.size());
+    std::vector<Eigen::MatrixXd> gram(ng), right(ng);
+    parallel_for(ng, [&](int gi) {
+      const Group& g = groups[gi];
+      const Eigen::Index rows = g.R.rows(), m = g.R.cols();
+      Eigen::MatrixXd weighted(rows, 6 * m), gc(rows, 3);
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const int i = g.samples[static_cast<std::size_t>(r)];
+        for (int c = 0; c < 6; ++c) weighted.block(r, c * m, 1, m) = Ma(i, c) * g.R.row(r);
+        gc.row(r) = Ga.row(i);
+      }
+      gram[gi].noalias() = g.R.transpose() * weighted;
+      right[gi].noalias() = g.R.transpose() * gc;
+    });
+    static const int comp[9] = {0, 3, 4, 3, 1, 5, 4, 5, 2};
+    for (int gi = 0; gi < ng; ++gi) {
+      const Group& g = groups[gi];
+      const int m = static_cast<int>(g.vertices.size());
+      const Eigen::MatrixXd& G = gram[gi];
+      for (int a = 0; a < m; ++a) {
+        for (int c = 0; c < 3; ++c) eq.rhs[c * eq.n + g.vertices[a]] += right[gi](a, c);
+        for (int b = 0; b < m; ++b) {
+          const int slot = g.slot[a * m + b];
+          if (slot < 0) continue;
+          double* blk = &eq.blocks[static_cast<std::size_t>(9) * static_cast<std::size_t>(slot)];
+          for (int k = 0; k < 9; ++k) blk[k] += G(a, comp[k] * m + b);
+        }
+      }
+    }
+  }
+};
+
 /// One solve of a fit iteration: the cage positions minimising the weighted pairings (rows of A:
 /// samples -> targets, weights Ma, W c Ga; rows of B: data points -> their feet, Mb, Gb) plus the
 /// regulariser lambda K and the proximal term mu |P - P_prev|^2. \throw FitError
 void solve_step(const Samples& S, const ExactRows* exact, const std::vector<Foot>& foot, const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga,
                 const Eigen::MatrixXd& Mb, const Eigen::MatrixXd& Gb, const SparseMatrix& K, double lambda,
-                double proximal, std::vector<Point3>& P) {
-  const int n = static_cast<int>(P.size()), ns = static_cast<int>(S.vertex.size()), nb = static_cast<int>(foot.size());
+                double proximal, const SampleGroups& groups, NormalEquations& eq, std::vector<Point3>& P) {
+  const int n = static_cast<int>(P.size()), nb = static_cast<int>(foot.size());
   // Solve (H + lambda K (x) I3 + mu I) P = rhs + mu P_prev, H = sum over the rows (samples,
   // then data points; each over the cage) of r^T r (x) W.
-  NormalEquations eq(n);
+  eq.reset();
   auto weight = [](const Eigen::MatrixXd& M, int i) {
     Eigen::Matrix3d W;
     W << M(i, 0), M(i, 3), M(i, 4), M(i, 3), M(i, 1), M(i, 5), M(i, 4), M(i, 5), M(i, 2);
     return W;
   };
-  for (int i = 0; i < ns; ++i) {
+  groups.accumulate(Ma, Ga, eq);
+  for (int i : groups.loose) {
     const int v = S.vertex[i], o = S.all_rows.offsets[v];
     eq.add(&S.all_rows.indices[o], &S.all_rows.weights[o], S.all_rows.row_size(v), weight(Ma, i), Ga.row(i).transpose());
   }
@@ -600,13 +759,10 @@ void solve_step(const Samples& S, const ExactRows* exact, const std::vector<Foot
     eq.add(row.idx.data(), row.w.data(), static_cast<int>(row.idx.size()), weight(Mb, j), Gb.row(j).transpose());
   }
   const double mu = proximal * eq.trace() / (3.0 * n) + 1e-300;
-  const SparseMatrix H = eq.matrix(lambda > 0 ? &K : nullptr, lambda, mu);
-  Eigen::VectorXd rhs = eq.rhs;
+  Eigen::VectorXd prox(3 * n);
   for (int c = 0; c < 3; ++c)
-    for (int v = 0; v < n; ++v) rhs[c * n + v] += mu * P[v][c];
-  Eigen::SimplicialLDLT<SparseMatrix> ldlt(H);
-  if (ldlt.info() != Eigen::Success) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
-  const Eigen::VectorXd x = ldlt.solve(rhs);
+    for (int v = 0; v < n; ++v) prox[c * n + v] = mu * P[v][c];
+  const Eigen::VectorXd x = eq.solve(lambda > 0 ? &K : nullptr, lambda, mu, prox);
   if (!x.allFinite()) throw FitError("fit_to_shape: the solve gave non-finite positions", {});
   for (int v = 0; v < n; ++v) P[v] = {x[v], x[n + v], x[2 * n + v]};
 }
@@ -751,6 +907,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   if (static_cast<int>(start.size()) != n) throw std::invalid_argument("fit_to_shape: one start position per cage vertex");
   if (options.levels < 1 || options.levels > 5) throw std::invalid_argument("fit_to_shape: levels must be 1..5");
   if (options.max_iterations < 0 || options.smoothing < 0 || options.target_weight < 0 || options.proximal < 0 ||
+      !(options.min_gain >= 0) ||
       !(options.final_surface_weight > 0))
     throw std::invalid_argument("fit_to_shape: negative option");
   const double diag = target.diagonal();
@@ -766,6 +923,18 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   std::unique_ptr<ExactRows> exact;
   std::optional<LimitEvaluator> E;
   exact = std::make_unique<ExactRows>(cage);
+  // The normal equations keep one structure through the fit: every pair of vertices in one cage
+  // face's support (any limit point's row, hence any sample's or foot's, lies in one), so that
+  // the symbolic factorisation is done once.
+  NormalEquations eq(n);
+  for (int f = 0; f < cage.mesh.num_faces(); ++f) {
+    if (cage.face_hole[f]) continue;
+    const std::vector<int>& sup = exact->support[f];
+    for (int a : sup)
+      for (int b : sup)
+        if (a <= b) eq.block_index(a, b);
+  }
+  const SampleGroups groups(cage, S, *exact, eq);
   const std::vector<Point3>& data = target.data_points();
   const int nb = static_cast<int>(data.size());
   const double wa1 = 1.0 / ns, wb = options.target_weight / nb;
@@ -801,6 +970,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   bool plane = can_plane, last_plane = can_plane;
   int plane_count = 0;
   double prev_objective = std::numeric_limits<double>::infinity();
+  double prev_distance = std::numeric_limits<double>::infinity();
   double damping = 0;
   struct {
     std::vector<Point3> P;
@@ -820,7 +990,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     for (int i = 0; i < ns; ++i) xs[i] = X[S.vertex[i]];
     sample_normals(S.level, X, normal);
     if (exact) E.emplace(cage, P);
-    parallel_for(ns, [&](int i) { closest[i] = target.closest(xs[i]); });
+    parallel_for(ns, [&](int i) { closest[i] = target.closest(xs[i], closest[i].element); });
     const ClosestPointTree sample_tree(xs, {});
     parallel_for(nb, [&](int j) {
       const Vec3 t = vec(data[j]);
@@ -938,16 +1108,20 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       Mb = accepted.Mb;
       Gb = accepted.Gb;
       result.history.back() = accepted.h;
-      solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, P);
+      solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, groups, eq, P);
       result.iterations = it + 1;
       continue;
     }
     if (same_phase) damping = damping > 1e-9 ? damping / 10 : 0;
+    // The measured two-sided RMS distance and its gain in this iteration (independent of the
+    // phase: the surface -> target part is always the whole distance).
+    const double distance = std::sqrt(0.5 * (h.surface_rms * h.surface_rms + h.target_rms * h.target_rms));
+    const bool stalled = it > 0 && prev_distance - distance < options.min_gain * distance;
     if (h.surface_rms <= options.tolerance && h.target_rms <= options.tolerance) {
       result.stop = ShapeFitStop::Tolerance;
       break;
     }
-    if (!plane && same_phase && improvement < options.min_improvement) {
+    if (!plane && same_phase && (improvement < options.min_improvement || stalled)) {
       result.stop = ShapeFitStop::Converged;
       break;
     }
@@ -961,9 +1135,10 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     }
     last_plane = plane;
     prev_objective = h.objective;
+    prev_distance = distance;
     if (plane) {
       ++plane_count;
-      if (plane_count >= options.plane_iterations || (it > 0 && improvement < options.plane_switch)) {
+      if (plane_count >= options.plane_iterations || (it > 0 && (improvement < options.plane_switch || stalled))) {
         plane = false;
         prev_objective = std::numeric_limits<double>::infinity();
       }
@@ -976,7 +1151,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     accepted.Mb = Mb;
     accepted.Gb = Gb;
     accepted.h = h;
-    solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, P);
+    solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, groups, eq, P);
     result.iterations = it + 1;
   }
   const ShapeFitIteration& last = result.history.back();
@@ -986,6 +1161,119 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   result.target_max = last.target_max;
   result.positions = std::move(P);
   return result;
+}
+
+std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vector<Point3>& positions,
+                                         const ShapeTarget& target, double angle_degrees, double reach) {
+  const PolyMesh& m = cage.mesh;
+  if (static_cast<int>(positions.size()) != m.num_vertices())
+    throw std::invalid_argument("feature_edges_on_target: one position per cage vertex");
+  if (!target.has_triangles()) return {};
+  MeshInput mi;
+  mi.positions = target.points();
+  for (const auto& t : target.triangles()) {
+    mi.face_sizes.push_back(3);
+    for (int v : t) mi.face_indices.push_back(v);
+  }
+  FeatureOptions fo;
+  fo.angle_degrees = angle_degrees;
+  FeatureSet fs;
+  try {
+    fs = detect_features(mi, fo);
+  } catch (const Error&) {
+    return {};
+  }
+  if (fs.edges.empty()) return {};
+  // Feature curves: the feature edges joined through vertices of two feature edges that are no
+  // corner.
+  const int np = static_cast<int>(target.points().size()), ne = static_cast<int>(fs.edges.size());
+  std::vector<std::vector<int>> at(np);
+  for (int i = 0; i < ne; ++i)
+    for (int v : fs.edges[i]) at[v].push_back(i);
+  std::vector<char> corner(np, 0);
+  for (int v : fs.corners) corner[v] = 1;
+  std::vector<int> curve(ne, -1);
+  int curves = 0;
+  for (int i = 0; i < ne; ++i) {
+    if (curve[i] >= 0) continue;
+    std::vector<int> stack = {i};
+    curve[i] = curves;
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      for (int v : fs.edges[e]) {
+        if (corner[v] || at[v].size() != 2) continue;
+        for (int e2 : at[v])
+          if (curve[e2] < 0) {
+            curve[e2] = curves;
+            stack.push_back(e2);
+          }
+      }
+    }
+    ++curves;
+  }
+  // Points along the feature edges (ends included), each with its edge and end.
+  constexpr int per = 8;
+  std::vector<Point3> pts;
+  std::vector<std::pair<int, int>> owner;  // (edge, k of 0..per)
+  for (int i = 0; i < ne; ++i) {
+    const Point3& a = target.points()[fs.edges[i][0]];
+    const Point3& b = target.points()[fs.edges[i][1]];
+    for (int k = 0; k <= per; ++k) {
+      const double t = static_cast<double>(k) / per;
+      pts.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
+      owner.push_back({i, k});
+    }
+  }
+  const ClosestPointTree tree(pts, {});
+  // The curves that pass within r of q (a point at a feature vertex on all the curves there).
+  auto near = [&](const Point3& q, double r, std::vector<int>& out) {
+    out.clear();
+    for (;;) {
+      const ClosestPointTree::Hit h = tree.closest_if(q, [&](int s) {
+        return std::find(out.begin(), out.end(), curve[owner[s].first]) == out.end();
+      });
+      if (h.element < 0 || h.distance2 > r * r) break;
+      const auto [e, k] = owner[h.element];
+      if (k == 0 || k == per) {
+        for (int e2 : at[fs.edges[e][k == 0 ? 0 : 1]])
+          if (std::find(out.begin(), out.end(), curve[e2]) == out.end()) out.push_back(curve[e2]);
+      } else {
+        out.push_back(curve[e]);
+      }
+    }
+    std::sort(out.begin(), out.end());
+  };
+  // Each vertex's shortest edge: the reach is a fraction of the local spacing (a long edge
+  // beside a feature, a short one away, is not along it).
+  std::vector<double> shortest(m.num_vertices(), std::numeric_limits<double>::infinity());
+  for (int e = 0; e < m.num_edges(); ++e) {
+    const int a = m.edge_vertex(e, 0), b = m.edge_vertex(e, 1);
+    const double len = (vec(positions[b]) - vec(positions[a])).norm();
+    shortest[a] = std::min(shortest[a], len);
+    shortest[b] = std::min(shortest[b], len);
+  }
+  std::vector<int> out, ca, cb, cm, ab;
+  for (int e = 0; e < m.num_edges(); ++e) {
+    if (m.is_boundary_edge(e) || cage.infinitely_sharp(e)) continue;
+    const int h = m.edge_corner(e);
+    const int f = m.corner_face(h), tw = m.twin(h);
+    if (cage.face_hole[f] || (tw >= 0 && cage.face_hole[m.corner_face(tw)])) continue;
+    const Point3& a = positions[m.edge_vertex(e, 0)];
+    const Point3& b = positions[m.edge_vertex(e, 1)];
+    const Vec3 d = vec(b) - vec(a);
+    const double r = reach * std::min({d.norm(), shortest[m.edge_vertex(e, 0)], shortest[m.edge_vertex(e, 1)]});
+    if (!(r > 0)) continue;
+    near(a, r, ca);
+    near(b, r, cb);
+    near({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])}, r, cm);
+    ab.clear();
+    std::set_intersection(ca.begin(), ca.end(), cb.begin(), cb.end(), std::back_inserter(ab));
+    bool shared = false;
+    for (int c : cm) shared = shared || std::binary_search(ab.begin(), ab.end(), c);
+    if (shared) out.push_back(e);
+  }
+  return out;
 }
 
 Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations) {
@@ -1006,16 +1294,23 @@ Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarg
   const int n = static_cast<int>(points.size());
   std::vector<Point3> mapped(n);
   std::vector<ShapeTarget::Closest> closest(n);
-  auto rms_of = [&](const Eigen::Matrix3d& R, double s, const Vec3& t) {
-    for (int i = 0; i < n; ++i) {
-      const Vec3 q = s * R * vec(points[i]) + t;
-      mapped[i] = {q[0], q[1], q[2]};
+  // stride > 1: every stride-th point only (the 24 trials: which rotation fits best shows on a
+  // few thousand points, and far from the target each query is costly).
+  auto rms_of = [&](const Eigen::Matrix3d& R, double s, const Vec3& t, int stride = 1) {
+    const int m = (n + stride - 1) / stride;
+    for (int k = 0; k < m; ++k) {
+      const Vec3 q = s * R * vec(points[k * stride]) + t;
+      mapped[k * stride] = {q[0], q[1], q[2]};
     }
-    parallel_for(n, [&](int i) { closest[i] = target.closest(mapped[i]); });
+    parallel_for(m, [&](int k) {
+      const int i = k * stride;
+      closest[i] = target.closest(mapped[i], closest[i].element);
+    });
     double sum = 0;
-    for (const auto& c : closest) sum += c.distance * c.distance;
-    return std::sqrt(sum / n);
+    for (int k = 0; k < m; ++k) sum += closest[k * stride].distance * closest[k * stride].distance;
+    return std::sqrt(sum / m);
   };
+  const int trial_stride = std::max(1, n / 2048);
   // The 24 rotations that map axes to axes.
   Eigen::Matrix3d bestR = Eigen::Matrix3d::Identity();
   double best = std::numeric_limits<double>::infinity(), s = dt / dp;
@@ -1027,7 +1322,7 @@ Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarg
       for (int i = 0; i < 3; ++i) R(i, pm[i]) = (signs >> i) & 1 ? -1.0 : 1.0;
       if (R.determinant() < 0) continue;
       const Vec3 tr = ct - s * R * cp;
-      const double r = rms_of(R, s, tr);
+      const double r = rms_of(R, s, tr, trial_stride);
       if (r < best) {
         best = r;
         bestR = R;

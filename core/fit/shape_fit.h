@@ -28,8 +28,11 @@
 // respected because the rows come from the tagged cage; polar structures are ignored
 // (Catmull-Clark rows everywhere).
 //
-// Cost per iteration: closest-point queries (BVH, parallel_for), then the normal equations,
-// accumulated as dense 3 x 3 blocks per cage vertex pair (72 n^2 bytes), and a sparse LDLT.
+// Cost per iteration: closest-point queries (BVH started from the previous iteration's answer,
+// parallel_for), then the normal equations: the samples' rows as one small dense product per
+// cage face (faces in parallel, summed in face order: results independent of the thread count),
+// the data points' rows one by one, into 3 x 3 blocks per cage vertex pair that shares a face's
+// support; then a sparse LDLT whose ordering and symbolic analysis are done once per fit.
 #pragma once
 
 #include <functional>
@@ -49,6 +52,11 @@ struct ShapeFitOptions {
   double tolerance = 1e-7;
   /// Stop when the objective falls by less than this fraction in an iteration of the last phase.
   double min_improvement = 1e-6;
+  /// Stop (in the point-to-plane phase: go on to point-to-point) when the measured two-sided RMS
+  /// distance (sqrt of the mean of the two terms' squared RMS) falls by less than this fraction
+  /// in an iteration: the fit has stopped improving the distance at a rate worth an iteration.
+  /// 0: off (only min_improvement, the tolerance and the iteration cap stop).
+  double min_gain = 0.02;
   /// Point-to-plane iterations at most, before point-to-point (also switched as soon as the
   /// objective falls by less than plane_switch in one iteration). 0: point-to-point throughout.
   /// Ignored (0) for a point cloud without normals.
@@ -74,9 +82,16 @@ struct ShapeFitOptions {
   double crease_reach = 4.0;
 };
 
+/// The options for a target that lies on a subdivision surface (a dense sampling of an exact
+/// limit, no noise): target -> surface weight 30, surface -> target 1e-3 in the last phase, the
+/// crease term at 30 deg, smoothing 0, tolerance 1e-8, up to 100 iterations. They recover a
+/// perturbed cage's surface to 1e-6 of the diagonal on the oracle shapes (docs/fitting.md); the
+/// defaults keep weights 1 / 1 for targets a cage cannot reach (scans, CAD meshes).
+ShapeFitOptions exact_target_options();
+
 enum class ShapeFitStop : unsigned char {
   Tolerance,      ///< both RMS distances at most options.tolerance (relative)
-  Converged,      ///< the objective improved by less than min_improvement
+  Converged,      ///< the objective improved by less than min_improvement, or the distance by less than min_gain
   IterationLimit, ///< max_iterations reached
   Cancelled,      ///< the progress callback returned false (positions: the last solved cage)
 };
@@ -127,10 +142,23 @@ struct Similarity {
 
 /// The similarity that best maps `points` (e.g. a cage's limit points) onto `target`: the 24
 /// axis-aligned rotations with the bounding boxes' centres and diagonals matched are tried, the
-/// one with the smallest RMS closest-point distance refined by closest-point iterations with
-/// Umeyama's closed-form similarity (`iterations` at most). For a shape given in another frame,
-/// scale or orientation (rotated by multiples of 90 degrees about the axes, or near them).
+/// one with the smallest RMS closest-point distance (of at most about 2 048 of the points, evenly
+/// strided) refined by closest-point iterations (all points) with Umeyama's closed-form
+/// similarity (`iterations` at most). For a shape given in another frame, scale or orientation
+/// (rotated by multiples of 90 degrees about the axes, or near them).
 Similarity register_to_target(const std::vector<Point3>& points, const ShapeTarget& target, int iterations = 200);
+
+/// The cage edges that lie along the target's sharp features, to be tagged infinitely sharp
+/// before a fit (`subd2nurbs fit --tag-features`): an untagged cage's limit rounds a part's
+/// sharp edges off, a tagged one can make them. The target's feature edges (detect_features:
+/// interior edges whose faces' normals differ by more than `angle_degrees`) are split into
+/// feature curves at their corners; an interior cage edge that is not infinitely sharp yet is
+/// listed when both its ends and its midpoint (the cage's own `positions`, not its limit: for a
+/// cage drawn on the shape, e.g. a remesh) lie within `reach` x the shortest cage edge at either
+/// end of one same curve. Sorted edge indices; none for a point cloud or a target that is not
+/// manifold.
+std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vector<Point3>& positions,
+                                         const ShapeTarget& target, double angle_degrees = 30.0, double reach = 0.25);
 
 /// Fits the limit surface of `cage` (topology and tags; positions ignored) starting from the
 /// positions `start` to `target`. \throw std::invalid_argument (sizes, options), FitError

@@ -117,12 +117,33 @@ int ClosestPointTree::build(int first, int count, const std::vector<Point3>& cen
   return id;
 }
 
-ClosestPointTree::Hit ClosestPointTree::closest(const Point3& q) const { return closest_if(q, {}); }
+ClosestPointTree::Hit ClosestPointTree::closest(const Point3& q, int hint) const {
+  Hit best;
+  best.distance2 = std::numeric_limits<double>::infinity();
+  if (hint >= 0 && hint < static_cast<int>(order_.size())) {
+    best.point = primitive_point(q, hint);
+    best.distance2 = dist2(best.point, q);
+    best.element = hint;
+  }
+  search(q, [](int) { return true; }, best);
+  return best;
+}
 
 ClosestPointTree::Hit ClosestPointTree::closest_if(const Point3& q, const std::function<bool(int)>& accept) const {
   Hit best;
   best.distance2 = std::numeric_limits<double>::infinity();
-  if (nodes_.empty()) return best;
+  if (accept) search(q, accept, best);
+  else search(q, [](int) { return true; }, best);
+  return best;
+}
+
+Point3 ClosestPointTree::primitive_point(const Point3& q, int e) const {
+  return tris_.empty() ? pts_[e] : closest_point_on_triangle(q, pts_[tris_[e][0]], pts_[tris_[e][1]], pts_[tris_[e][2]]);
+}
+
+template <class Accept>
+void ClosestPointTree::search(const Point3& q, const Accept& accept, Hit& best) const {
+  if (nodes_.empty()) return;
   int stack[128];
   int top = 0;
   stack[top++] = 0;
@@ -132,9 +153,8 @@ ClosestPointTree::Hit ClosestPointTree::closest_if(const Point3& q, const std::f
     if (node.left < 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
         const int e = order_[i];
-        if (accept && !accept(e)) continue;
-        const Point3 p = tris_.empty() ? pts_[e]
-                                       : closest_point_on_triangle(q, pts_[tris_[e][0]], pts_[tris_[e][1]], pts_[tris_[e][2]]);
+        if (!accept(e)) continue;
+        const Point3 p = primitive_point(q, e);
         const double d2 = dist2(p, q);
         if (d2 < best.distance2 || (d2 == best.distance2 && e < best.element)) best = {p, d2, e};
       }
@@ -151,7 +171,6 @@ ClosestPointTree::Hit ClosestPointTree::closest_if(const Point3& q, const std::f
       stack[top++] = node.right;
     }
   }
-  return best;
 }
 
 ShapeTarget::ShapeTarget(std::vector<Point3> points, std::vector<std::array<int, 3>> triangles,
@@ -197,8 +216,8 @@ ShapeTarget::ShapeTarget(std::vector<Point3> points, std::vector<std::array<int,
   tree_ = ClosestPointTree(points_, triangles_);
 }
 
-ShapeTarget::Closest ShapeTarget::closest(const Point3& q) const {
-  const ClosestPointTree::Hit h = tree_.closest(q);
+ShapeTarget::Closest ShapeTarget::closest(const Point3& q, int hint) const {
+  const ClosestPointTree::Hit h = tree_.closest(q, hint);
   Closest out;
   out.point = h.point;
   out.distance = std::sqrt(h.distance2);

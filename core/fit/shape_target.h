@@ -35,7 +35,11 @@ class ClosestPointTree {
     double distance2 = 0;  ///< its squared distance to the query
     int element = -1;      ///< the point's or the triangle's index; -1 if the tree is empty
   };
-  Hit closest(const Point3& q) const;
+  /// `hint`: a primitive likely near the answer (e.g. the previous answer for a query that moved
+  /// a little): its distance bounds the search from the start, so that far branches are skipped.
+  /// The answer is the closest primitive either way (among equally close ones, a hint may be
+  /// returned where the search without it would return another).
+  Hit closest(const Point3& q, int hint = -1) const;
   /// The closest among the primitives e with accept(e) (element -1 if none).
   Hit closest_if(const Point3& q, const std::function<bool(int)>& accept) const;
   bool empty() const { return nodes_.empty(); }
@@ -47,6 +51,9 @@ class ClosestPointTree {
     int left = -1, right = -1;
   };
   int build(int first, int count, const std::vector<Point3>& centre);
+  Point3 primitive_point(const Point3& q, int e) const;
+  template <class Accept>
+  void search(const Point3& q, const Accept& accept, Hit& best) const;
   std::vector<Point3> pts_;
   std::vector<std::array<int, 3>> tris_;
   std::vector<int> order_;
@@ -84,7 +91,8 @@ class ShapeTarget {
     double distance = 0;
     int element = -1;       ///< triangle index, or point index for a cloud
   };
-  Closest closest(const Point3& q) const;
+  /// `hint`: an element near the answer (ClosestPointTree::closest), e.g. the previous answer.
+  Closest closest(const Point3& q, int hint = -1) const;
 
  private:
   std::vector<Point3> points_;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 #include <tuple>
 #include <vector>
 
@@ -90,6 +91,54 @@ inline std::vector<Point3> perturbed(const std::vector<Point3>& p, double amount
   for (Point3& q : out)
     for (double& c : q) c += d * u(rng);
   return out;
+}
+
+/// A box cage: n x n quads per side of [-1, 1]^3 scaled by `size`, its 12 edges tagged
+/// infinitely sharp (creases = true): its limit is the box itself (flat sides, straight sharp
+/// edges, corners at the box's corners).
+inline MeshInput box_cage(int n, const Point3& size, bool creases) {
+  MeshInput in;
+  std::map<std::tuple<int, int, int>, int> id;
+  auto vertex = [&](int x, int y, int z) {  // lattice coordinates 0..n
+    const auto key = std::make_tuple(x, y, z);
+    const auto it = id.find(key);
+    if (it != id.end()) return it->second;
+    in.positions.push_back({size[0] * (-1 + 2.0 * x / n), size[1] * (-1 + 2.0 * y / n), size[2] * (-1 + 2.0 * z / n)});
+    return id[key] = static_cast<int>(in.positions.size()) - 1;
+  };
+  for (int a = 0; a < 3; ++a)
+    for (int side : {0, n}) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          int q[4];
+          const int ij[4][2] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
+          for (int k = 0; k < 4; ++k) {
+            int l[3];
+            l[a] = side;
+            l[b] = ij[k][0];
+            l[c] = ij[k][1];
+            q[k] = vertex(l[0], l[1], l[2]);
+          }
+          in.face_sizes.push_back(4);
+          if (side == n)
+            for (int k = 0; k < 4; ++k) in.face_indices.push_back(q[k]);
+          else
+            for (int k = 3; k >= 0; --k) in.face_indices.push_back(q[k]);
+        }
+    }
+  if (creases) {
+    std::set<std::pair<int, int>> seen;
+    for (size_t f = 0; f < in.face_sizes.size(); ++f)
+      for (int k = 0; k < 4; ++k) {
+        const int v0 = in.face_indices[4 * f + k], v1 = in.face_indices[4 * f + (k + 1) % 4];
+        int shared = 0;
+        for (int d = 0; d < 3; ++d)
+          shared += std::abs(std::abs(in.positions[v0][d]) - size[d]) < 1e-12 && in.positions[v0][d] == in.positions[v1][d];
+        if (shared >= 2 && seen.insert({std::min(v0, v1), std::max(v0, v1)}).second) in.creases.push_back({v0, v1, 10.0});
+      }
+  }
+  return in;
 }
 
 }  // namespace subd2nurbs::testing

@@ -17,6 +17,7 @@
 
 #include "core/eval/target_distance.h"
 #include "core/fit/shape_fit.h"
+#include "core/util/parallel.h"
 #include "io/obj_reader.h"
 #include "fit/shape_fit_test_util.h"
 #include "limit/limit_test_util.h"
@@ -88,14 +89,8 @@ void print(const char* what, const Recovery& r) {
 /// weights (1, 1, crease term off): the mesh path's fits of rounded cages to sharp parts need
 /// them (docs/fitting.md).
 ShapeFitOptions exact_options(int levels = 3) {
-  ShapeFitOptions o;
-  o.target_weight = 30;
-  o.final_surface_weight = 1e-3;
-  o.crease_angle = 30;
+  ShapeFitOptions o = exact_target_options();  // what `fit --exact-target` uses
   o.levels = levels;
-  o.smoothing = 0;
-  o.max_iterations = 100;
-  o.tolerance = 1e-8;
   return o;
 }
 
@@ -271,54 +266,6 @@ TEST(ShapeFit, CreaseCurvesFollowTheTargetsSharpEdges) {
   EXPECT_GT(off, 10 * after);
 }
 
-/// A box cage: n x n quads per side of [-1, 1]^3 scaled by `size`, its 12 edges tagged
-/// infinitely sharp (creases = true): its limit is the box itself (flat sides, straight sharp
-/// edges, corners at the box's corners).
-MeshInput box_cage(int n, const Point3& size, bool creases) {
-  MeshInput in;
-  std::map<std::tuple<int, int, int>, int> id;
-  auto vertex = [&](int x, int y, int z) {  // lattice coordinates 0..n
-    const auto key = std::make_tuple(x, y, z);
-    const auto it = id.find(key);
-    if (it != id.end()) return it->second;
-    in.positions.push_back({size[0] * (-1 + 2.0 * x / n), size[1] * (-1 + 2.0 * y / n), size[2] * (-1 + 2.0 * z / n)});
-    return id[key] = static_cast<int>(in.positions.size()) - 1;
-  };
-  for (int a = 0; a < 3; ++a)
-    for (int side : {0, n}) {
-      const int b = (a + 1) % 3, c = (a + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          int q[4];
-          const int ij[4][2] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
-          for (int k = 0; k < 4; ++k) {
-            int l[3];
-            l[a] = side;
-            l[b] = ij[k][0];
-            l[c] = ij[k][1];
-            q[k] = vertex(l[0], l[1], l[2]);
-          }
-          in.face_sizes.push_back(4);
-          if (side == n)
-            for (int k = 0; k < 4; ++k) in.face_indices.push_back(q[k]);
-          else
-            for (int k = 3; k >= 0; --k) in.face_indices.push_back(q[k]);
-        }
-    }
-  if (creases) {
-    std::set<std::pair<int, int>> seen;
-    for (size_t f = 0; f < in.face_sizes.size(); ++f)
-      for (int k = 0; k < 4; ++k) {
-        const int v0 = in.face_indices[4 * f + k], v1 = in.face_indices[4 * f + (k + 1) % 4];
-        int shared = 0;
-        for (int d = 0; d < 3; ++d)
-          shared += std::abs(std::abs(in.positions[v0][d]) - size[d]) < 1e-12 && in.positions[v0][d] == in.positions[v1][d];
-        if (shared >= 2 && seen.insert({std::min(v0, v1), std::max(v0, v1)}).second) in.creases.push_back({v0, v1, 10.0});
-      }
-  }
-  return in;
-}
-
 /// Distance from p to the nearest of the 12 edges of the box [-size, size].
 double to_box_edges(const Point3& p, const Point3& size) {
   double best = std::numeric_limits<double>::infinity();
@@ -372,6 +319,53 @@ TEST(ShapeFit, CreasesLandOnABoxsEdges) {
               d.target_to_limit.max);
   EXPECT_GT(worst_edge(start), 1e-2);
   EXPECT_LT(worst_edge(r.positions), 1e-6);
+  EXPECT_LT(d.limit_to_target.max, 1e-6);
+  EXPECT_LT(d.target_to_limit.max, 1e-6);
+}
+
+// Feature tagging: the box's cage without its crease tags, fitted to the sharp box: the edges
+// found along the box's feature curves are exactly those the tagged cage creases (the box's 12
+// edges, 3 cage edges each), and the fit of the tagged cage makes the box as the test above.
+TEST(ShapeFit, TagFeaturesFindsTheBoxsEdges) {
+  const Point3 size = {1.0, 0.5, 0.25};
+  const MeshInput tagged = box_cage(3, size, true), plain = box_cage(3, size, false);
+  const MeshInput box = box_cage(16, size, false);
+  std::vector<std::array<int, 3>> tris;
+  for (size_t f = 0; f < box.face_sizes.size(); ++f) {
+    const int* q = &box.face_indices[4 * f];
+    tris.push_back({q[0], q[1], q[2]});
+    tris.push_back({q[0], q[2], q[3]});
+  }
+  const ShapeTarget target(box.positions, tris);
+  SubdivLevel cage = SubdivLevel::from_input(plain);
+  // Off the box by up to 0.011 per coordinate, less than a quarter of the shortest cage edge
+  // (0.167): within the tagging's reach.
+  const std::vector<Point3> start = perturbed(positions_of(plain), 0.005, 5);
+  const std::vector<int> edges = feature_edges_on_target(cage, start, target);
+  std::set<std::pair<int, int>> found, expected;
+  for (int e : edges) {
+    const int a = cage.mesh.edge_vertex(e, 0), b = cage.mesh.edge_vertex(e, 1);
+    found.insert({std::min(a, b), std::max(a, b)});
+  }
+  for (const auto& c : tagged.creases) expected.insert({std::min(c.v0, c.v1), std::max(c.v0, c.v1)});
+  EXPECT_EQ(expected.size(), 36u);
+  EXPECT_EQ(found, expected);
+  for (const auto& [a, b] : found)
+    if (!expected.count({a, b}))
+      std::printf("extra %d (%g %g %g) %d (%g %g %g)\n", a, plain.positions[a][0], plain.positions[a][1],
+                  plain.positions[a][2], b, plain.positions[b][0], plain.positions[b][1], plain.positions[b][2]);
+  // A point cloud has no feature edges.
+  EXPECT_TRUE(feature_edges_on_target(cage, start, ShapeTarget(box.positions)).empty());
+
+  for (int e : edges) cage.edge_sharpness[e] = static_cast<float>(kInfiniteSharpness);
+  const ShapeFitResult r = fit_to_shape(cage, start, target, exact_options());
+  double worst = 0;
+  for (const Point3& p : crease_curve_points(tagged, LimitEvaluator(cage, r.positions), 16))
+    worst = std::max(worst, to_box_edges(p, size) / target.diagonal());
+  const TargetDistance d = measure_target_distance(LimitEvaluator(cage, r.positions), target, 32);
+  std::printf("box, tags found: %zu edges; crease curves to the box's edges %.2e, surface two-sided %.2e / %.2e\n",
+              edges.size(), worst, d.limit_to_target.max, d.target_to_limit.max);
+  EXPECT_LT(worst, 1e-6);
   EXPECT_LT(d.limit_to_target.max, 1e-6);
   EXPECT_LT(d.target_to_limit.max, 1e-6);
 }
@@ -498,6 +492,50 @@ TEST(ShapeFit, StopReasons) {
     const ShapeFitResult r = fit_to_shape(cage, start, ShapeTarget(noisy, lt.triangles), t);
     EXPECT_EQ(r.stop, ShapeFitStop::Converged);
   }
+  {  // converged: the measured distance stops improving by min_gain (the objective rule off)
+    std::mt19937 rng(2);
+    std::normal_distribution<double> g(0, 1e-3 * target.diagonal());
+    std::vector<Point3> noisy = lt.points;
+    for (Point3& p : noisy)
+      for (double& c : p) c += g(rng);
+    ShapeFitOptions t = o;
+    t.min_improvement = 0;
+    t.min_gain = 0.05;
+    const ShapeFitResult r = fit_to_shape(cage, start, ShapeTarget(noisy, lt.triangles), t);
+    EXPECT_EQ(r.stop, ShapeFitStop::Converged);
+    auto distance = [](const ShapeFitIteration& h) {
+      return std::sqrt(0.5 * (h.surface_rms * h.surface_rms + h.target_rms * h.target_rms));
+    };
+    ASSERT_GE(r.history.size(), 2u);
+    const double last = distance(r.history.back()), before = distance(r.history[r.history.size() - 2]);
+    EXPECT_FALSE(r.history.back().point_to_plane);  // the point-to-plane phase hands over, not stops
+    EXPECT_LT(before - last, t.min_gain * last);
+    EXPECT_LT(r.iterations, t.max_iterations);
+  }
+}
+
+// The fit's result does not depend on the threads its parallel loops get: with one hardware
+// thread reserved (ThreadReservation, core/util/parallel.h) the loops run on the calling thread
+// alone, and the cage comes out bit for bit the same.
+TEST(ShapeFit, SameResultOnOneThread) {
+  const MeshInput in = corpus_cage("catmark_torus");
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  const std::vector<Point3> truth = positions_of(in);
+  const LimitTarget lt = limit_target(LimitEvaluator(cage, truth), 8);
+  const ShapeTarget target(lt.points, lt.triangles);
+  const std::vector<Point3> start = perturbed(truth, 0.03, 5);
+  ShapeFitOptions o;
+  o.max_iterations = 6;
+  const ShapeFitResult all = fit_to_shape(cage, start, target, o);
+  ShapeFitResult one;
+  {
+    const ThreadReservation reserve;
+    one = fit_to_shape(cage, start, target, o);
+  }
+  ASSERT_EQ(all.positions.size(), one.positions.size());
+  for (size_t v = 0; v < all.positions.size(); ++v)
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(all.positions[v][c], one.positions[v][c]);
+  EXPECT_EQ(all.iterations, one.iterations);
 }
 
 // Scaling the cage, the target and the start by 1e3 and translating them scales the result.

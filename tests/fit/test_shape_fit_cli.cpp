@@ -113,12 +113,85 @@ TEST(ShapeFitCli, FitsAPerturbedTorusToItsLimit) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("missing.ply"), std::string::npos) << r.err;
   for (const std::string& bad : {std::string("--smoothing -1"), std::string("--levels 0"), std::string("--levels 5"),
-                                 std::string("--max-iterations 0"), std::string("--tolerance 0")}) {
+                                 std::string("--max-iterations 0"), std::string("--tolerance 0"),
+                                 std::string("--min-gain -1")}) {
     r = run_command(quote(kExe) + " fit " + quote(cage) + " --to " + quote(target) + " -o " + quote(out2) + " " + bad);
     EXPECT_EQ(r.exit_code, 1) << bad << ": " << r.err;
     EXPECT_NE(r.err.find(bad.substr(0, bad.find(' '))), std::string::npos) << r.err;
   }
   EXPECT_FALSE(std::ifstream(out2).good());
+}
+
+// fit --exact-target: the recovery setting from the command line. The same perturbed creased
+// torus and exact target as above: the default weights stop near the smoothing's pull (about
+// 2e-5), the exact-target weights recover the limit to 1e-6 of the diagonal (two-sided,
+// measured here again on the written OBJ).
+TEST(ShapeFitCli, ExactTargetRecoversTheLimit) {
+  TempDir dir;
+  const MeshInput in = creased_torus();
+  const SubdivLevel level = SubdivLevel::from_input(in);
+  const std::vector<Point3> truth = positions_of(in);
+  const LimitTarget lt = limit_target(LimitEvaluator(level, truth), 16);
+  const std::string target = dir.file("target.ply"), cage = dir.file("cage.obj");
+  write_ply(target, lt.points, lt.triangles);
+  write_obj(cage, perturbed(truth, 0.01, 7), level);
+  double after[2] = {0, 0};
+  for (int exact = 0; exact < 2; ++exact) {
+    const std::string out = dir.file(exact ? "exact.obj" : "default.obj");
+    const CommandResult r = run_command(quote(kExe) + " fit " + quote(cage) + " --to " + quote(target) + " -o " +
+                                        quote(out) + " -q" + (exact ? " --exact-target" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const TargetDistance d =
+        measure_target_distance(LimitEvaluator(level, positions_of(read_obj(out).input)), ShapeTarget(lt.points, lt.triangles));
+    after[exact] = std::max(d.limit_to_target.max, d.target_to_limit.max);
+  }
+  std::printf("fit: two-sided max distance, default weights %.3g, --exact-target %.3g (relative)\n", after[0], after[1]);
+  EXPECT_LT(after[1], 1e-6);
+  EXPECT_GT(after[0], 1e-6);  // the flag is what makes the difference
+}
+
+// fit --tag-features: the box cage without tags, against the sharp box (a triangulated
+// PLY): the report's tagged_edges and the written creases are the box's 36 edge-running cage
+// edges (oracle: both ends on one box edge, two coordinates at the box's bounds), and the
+// tagged fit ends closer than the untagged one.
+TEST(ShapeFitCli, TagFeaturesCreasesTheBoxsEdges) {
+  TempDir dir;
+  const Point3 size = {1.0, 0.5, 0.25};
+  const MeshInput plain = box_cage(3, size, false), box = box_cage(16, size, false);
+  std::vector<std::array<int, 3>> tris;
+  for (size_t f = 0; f < box.face_sizes.size(); ++f) {
+    const int* q = &box.face_indices[4 * f];
+    tris.push_back({q[0], q[1], q[2]});
+    tris.push_back({q[0], q[2], q[3]});
+  }
+  const std::string target = dir.file("box.ply"), cage = dir.file("cage.obj"), out = dir.file("tagged.obj"),
+                    report = dir.file("tagged.json"), out0 = dir.file("plain.obj"), report0 = dir.file("plain.json");
+  write_ply(target, box.positions, tris);
+  write_obj(cage, perturbed(positions_of(plain), 0.005, 5), SubdivLevel::from_input(plain));
+  CommandResult r = run_command(quote(kExe) + " fit " + quote(cage) + " --to " + quote(target) + " -o " + quote(out) +
+                                " --tag-features --max-iterations 10 --report " + quote(report));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("tagged 36 cage edges"), std::string::npos) << r.err;
+  const std::string json = read_text(report);
+  EXPECT_EQ(json_number(json, {"tagged_edges"}), 36);
+  const LoadedCage fitted = read_obj(out);
+  ASSERT_EQ(fitted.input.creases.size(), 36u);
+  for (const CreaseTag& c : fitted.input.creases) {
+    EXPECT_GE(c.sharpness, kInfiniteSharpness);
+    int shared = 0;  // coordinates where both ends sit on the same bound of the box
+    for (int d = 0; d < 3; ++d)
+      shared += std::abs(std::abs(plain.positions[c.v0][d]) - size[d]) < 1e-12 &&
+                plain.positions[c.v0][d] == plain.positions[c.v1][d];
+    EXPECT_GE(shared, 2) << c.v0 << " " << c.v1;
+  }
+  r = run_command(quote(kExe) + " fit " + quote(cage) + " --to " + quote(target) + " -o " + quote(out0) +
+                  " --max-iterations 10 --report " + quote(report0));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string json0 = read_text(report0);
+  EXPECT_TRUE(read_obj(out0).input.creases.empty());
+  std::printf("box: two-sided max after the fit: untagged %.3g, tagged %.3g\n", two_sided(json0, "after"),
+              two_sided(json, "after"));
+  EXPECT_LT(two_sided(json, "after"), 0.1 * two_sided(json0, "after"));
 }
 
 // check --to: the cage's own limit samples are at distance 0 (rounding); moved, they are not.
