@@ -223,7 +223,8 @@ ResourceEstimate fan_estimate(const FanCost& f, const EstimateOptions& o) {
   e.bytes = kBytesPerPiece * pieces + kBytesPerPatchPole * poles + kBytesPerFanValence * f.valence +
             (o.build_brep ? kBytesPerFacePole : kBytesPerFacePoleNoBrep) * poles;
   e.seconds = kSecondsPerPiece * pieces + kSecondsPerPole * poles + kSecondsPerFanValenceLevel * f.valence * L +
-              kSecondsPerFanValence2Level * f.valence * f.corners * L;
+              (f.corners > kSharedPieceValence ? 0.0 : kSecondsPerFanValence2Level * f.valence * f.corners * L) +
+              kSecondsPerFanValence2Intersections * f.valence * f.corners;
   return e;
 }
 

@@ -44,15 +44,21 @@ constexpr double kRefineBytesPerFace = 450;
 
 /// CPU time of a conversion to STEP (one core of this machine, idle; fitted as the bytes): the
 /// start, per piece, per exported pole and face (the B-rep and the STEP writer), per valence and
-/// level of a fan, and per valence^2 and level: every quad at a valence-n vertex refines a piece
-/// holding the vertex's whole star at each level down to its zone (core/patch/patch_builder.cpp,
-/// leaves_of), which makes a deepened 1000-gon cost tens of seconds.
+/// level of a fan, per valence^2 and level at a fan of at most kSharedPieceValence faces (each
+/// quad there refines its own piece holding the vertex's whole star at each level down to its
+/// zone; above that valence the quads share one piece, core/patch/patch_builder.cpp, and the
+/// per-valence term covers it), and per valence^2 of any fan for the self-intersection check
+/// (core/eval/self_intersection.cpp): the n thin faces at a valence-n vertex are tessellated into
+/// slivers whose boxes overlap those of the neighbouring faces' (a 1000-gon: about 10 s).
 constexpr double kStartSeconds = 0.05;
 constexpr double kSecondsPerPiece = 4e-6;
 constexpr double kSecondsPerPole = 1e-5;
 constexpr double kSecondsPerFace = 1e-3;
 constexpr double kSecondsPerFanValenceLevel = 5e-5;
 constexpr double kSecondsPerFanValence2Level = 1.4e-6;
+constexpr double kSecondsPerFanValence2Intersections = 1e-5;
+/// PatchOptions::shared_piece_valence's default (core/patch/patch_builder.h).
+constexpr int kSharedPieceValence = 8;
 
 /// Most levels a uniform refinement takes: beyond the face limit for any cage, and 4^levels
 /// stays far from overflowing.

@@ -219,18 +219,24 @@ VertexFans build_fans_at(const SubdivLevel& la, const std::vector<Point3>& xa, i
   return out;
 }
 
-/// An active sub-quad of a coarse face: its frame corner in the current piece (x along u) and
-/// its square in the patch domain.
+/// An active sub-quad of a coarse face: its frame corner in the current piece (x along u), its
+/// square in the patch domain, and which of the faces being built it belongs to.
 struct SubQuad {
   int corner;
   double u0, v0, size;
+  int owner;
 };
 
-/// The leaves of coarse face F (a quad), refining locally where they are not yet one bicubic.
-PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a, const FanResults& fans,
-                      int& deepest) {
+/// The leaves of the coarse faces Fs (quads, none a regular leaf at level a), refining locally
+/// where they are not yet one bicubic: leaves[k] and deepest[k] for Fs[k]. All of Fs share one
+/// piece per level, the union of the 2-rings of what they still split; a point of a level that
+/// lies inside the 2-ring margin of both a face's own piece and a shared one is the same number
+/// (the pieces' faces, corners and fans keep the order of the whole level, so every stencil
+/// sums in the same order), so the leaves do not depend on which faces are built together.
+/// Several quads at a valence-n vertex built together cost O(n L) instead of O(n^2 L).
+void leaves_of_faces(const SubdivLevel& la, const std::vector<Point3>& xa, const std::vector<int>& Fs, int a,
+                     const FanResults& fans, std::vector<PatchLeaves*>& leaves, std::vector<int>& deepest) {
   const PolyMesh& ma = la.mesh;
-  PatchLeaves leaves;
   auto emit_regular = [&](const LevelView& L, int c, const SubQuad& q, int level) {
     const int f = L.m.corner_face(c), r = rotation_in_face(L.m, c);
     Point3 net[16];
@@ -242,15 +248,8 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
     leaf.level = level;
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) leaf.net[i * 4 + j] = net[face_net_index(r, i, j)];
-    leaves.push_back(leaf);
+    leaves[q.owner]->push_back(leaf);
   };
-  {  // Most coarse quads are one bicubic already.
-    const LevelView L{la, ma, xa};
-    if (is_regular_leaf(L, F)) {
-      emit_regular(L, ma.face_begin(F), {ma.face_begin(F), 0, 0, 1}, a);
-      return leaves;
-    }
-  }
   // The corner of F a sub-quad touches (-1 if none); corner i sits at (cu, cv).
   auto touched_corner = [](const SubQuad& q) {
     const bool lo_u = q.u0 == 0, hi_u = q.u0 + q.size == 1, lo_v = q.v0 == 0, hi_v = q.v0 + q.size == 1;
@@ -261,17 +260,20 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
     return -1;
   };
   std::vector<int> follow;
-  const std::vector<int> first_faces = face_rings(ma, vertices_of(ma, {F}), 2);
+  const std::vector<int> first_faces = face_rings(ma, vertices_of(ma, Fs), 2);
   LocalMesh piece = cut_out(la, xa, first_faces);
-  const int F_in_piece = static_cast<int>(std::lower_bound(first_faces.begin(), first_faces.end(), F) - first_faces.begin());
-  std::vector<SubQuad> active{{piece.level.mesh.face_begin(F_in_piece), 0, 0, 1}};
+  std::vector<SubQuad> active;
+  for (size_t k = 0; k < Fs.size(); ++k) {
+    const int F_in_piece = static_cast<int>(std::lower_bound(first_faces.begin(), first_faces.end(), Fs[k]) - first_faces.begin());
+    active.push_back({piece.level.mesh.face_begin(F_in_piece), 0, 0, 1, static_cast<int>(k)});
+  }
   for (int level = a;; ++level) {
-    if (level - a > kMaxDepth) throw std::logic_error("patch builder: coarse face " + std::to_string(F) + " does not resolve");
+    if (level - a > kMaxDepth) throw std::logic_error("patch builder: coarse face " + std::to_string(Fs.front()) + " does not resolve");
     const LevelView L{piece.level, piece.level.mesh, piece.x};
     std::vector<SubQuad> split;
     for (const SubQuad& q : active) {
       const int ci = touched_corner(q);
-      const int zi = ci >= 0 ? fans.zone_of_corner[F][ci] : -1;
+      const int zi = ci >= 0 ? fans.zone_of_corner[Fs[q.owner]][ci] : -1;
       if (zi >= 0) {
         const Zone& z = fans.zones[zi];
         if (level == z.level - 1) {
@@ -290,9 +292,9 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
                   if (I >= 3 * qa && I <= 3 * qa + 3 && J >= 3 * qb && J <= 3 * qb + 3)
                     leaf.net[(I - 3 * qa) * 4 + (J - 3 * qb)] = z.net[x * 7 + y];
                 }
-              leaves.push_back(leaf);
+              leaves[q.owner]->push_back(leaf);
             }
-          deepest = std::max(deepest, z.level);
+          deepest[q.owner] = std::max(deepest[q.owner], z.level);
           continue;
         }
         split.push_back(q);
@@ -300,7 +302,7 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
       }
       if (is_regular_leaf(L, L.m.corner_face(q.corner))) {
         emit_regular(L, q.corner, q, level);
-        deepest = std::max(deepest, level);
+        deepest[q.owner] = std::max(deepest[q.owner], level);
       } else {
         split.push_back(q);
       }
@@ -329,12 +331,35 @@ PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int 
       for (int j = 0; j < 4; ++j) {
         const int child_face = mp.face_begin(P) + (r + j) % mp.face_size(P);
         const int child_corner = mc.face_begin(child_face) + (4 - j) % 4;
-        children.push_back({child_corner, q.u0 + dx[j] * h, q.v0 + dy[j] * h, h});
+        children.push_back({child_corner, q.u0 + dx[j] * h, q.v0 + dy[j] * h, h, q.owner});
       }
     }
     piece = std::move(refined);
     active.swap(children);
   }
+}
+
+/// The leaves of coarse face F alone; a regular leaf at level a is its own patch.
+PatchLeaves leaves_of(const SubdivLevel& la, const std::vector<Point3>& xa, int F, int a, const FanResults& fans,
+                      int& deepest) {
+  const PolyMesh& ma = la.mesh;
+  PatchLeaves leaves;
+  const LevelView L{la, ma, xa};
+  if (is_regular_leaf(L, F)) {  // most coarse quads are one bicubic already
+    const int r = 0;
+    Point3 net[16];
+    regular_net(L, F, net);
+    PatchLeaf leaf;
+    leaf.level = a;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) leaf.net[i * 4 + j] = net[face_net_index(r, i, j)];
+    leaves.push_back(leaf);
+    return leaves;
+  }
+  std::vector<PatchLeaves*> out{&leaves};
+  std::vector<int> d{deepest};
+  leaves_of_faces(la, xa, {F}, a, fans, out, d);
+  deepest = d[0];
   return leaves;
 }
 
@@ -713,6 +738,56 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     for (size_t pi = 0; pi < reuse->coarse_face.size(); ++pi)
       if (reuse->coarse_face[pi] >= 0) reuse_patch[reuse->coarse_face[pi]] = static_cast<int>(pi);
   }
+  // Which quads to build (not copied from `reuse`), and in which piece: the quads at a vertex
+  // of more than shared_piece_valence faces share one piece per vertex, the others have their own.
+  std::vector<char> copied(ma.num_faces(), 0);
+  if (!reuse_patch.empty())
+    for (int F = 0; F < ma.num_faces(); ++F) {
+      if (patch_of_face[F] < 0 || reuse_patch[F] < 0) continue;
+      bool same = true;
+      for (int h = ma.face_begin(F); h < ma.face_end(F); ++h)
+        same = same && reuse->vertex_extra[ma.corner_vertex(h)] == out.vertex_extra[ma.corner_vertex(h)];
+      copied[F] = same;
+    }
+  std::vector<std::vector<int>> tasks;  // coarse faces built together
+  {
+    std::vector<int> task_of_vertex(ma.num_vertices(), -1);
+    const LevelView La{la, ma, xa};
+    for (int F = 0; F < ma.num_faces(); ++F) {
+      if (patch_of_face[F] < 0 || copied[F]) continue;
+      int hub = -1;
+      for (int h = ma.face_begin(F); h < ma.face_end(F); ++h) {
+        const int v = ma.corner_vertex(h);
+        if (ma.vertex_face_count(v) > options.shared_piece_valence &&
+            (hub < 0 || ma.vertex_face_count(v) > ma.vertex_face_count(hub)))
+          hub = v;
+      }
+      if (hub < 0 || is_regular_leaf(La, F)) {
+        tasks.push_back({F});
+        continue;
+      }
+      if (task_of_vertex[hub] < 0) {
+        task_of_vertex[hub] = static_cast<int>(tasks.size());
+        tasks.emplace_back();
+      }
+      tasks[task_of_vertex[hub]].push_back(F);
+    }
+  }
+  parallel_for(static_cast<int>(tasks.size()), [&](int t) {
+    const std::vector<int>& Fs = tasks[t];
+    if (Fs.size() == 1) {
+      const int F = Fs[0], pi = patch_of_face[F];
+      int deepest = a;
+      out.leaves[pi] = leaves_of(la, xa, F, a, fans, deepest);
+      out.patch_deepest[pi] = deepest;
+      return;
+    }
+    std::vector<PatchLeaves*> leaves;
+    std::vector<int> deepest(Fs.size(), a);
+    for (int F : Fs) leaves.push_back(&out.leaves[patch_of_face[F]]);
+    leaves_of_faces(la, xa, Fs, a, fans, leaves, deepest);
+    for (size_t k = 0; k < Fs.size(); ++k) out.patch_deepest[patch_of_face[Fs[k]]] = deepest[k];
+  });
   parallel_for(ma.num_faces(), [&](int F) {
     const int pi = patch_of_face[F];
     if (pi < 0) return;
@@ -720,24 +795,16 @@ PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& pos
     PatchLeaves& leaves = out.leaves[pi];
     out.coarse_face[pi] = F;
     const int base_face = a == 0 ? F : base.mesh.corner_face(F);  // level-1 face F = child of corner F
-    if (!reuse_patch.empty() && reuse_patch[F] >= 0) {
-      bool same = true;
-      for (int h = ma.face_begin(F); h < ma.face_end(F); ++h)
-        same = same && reuse->vertex_extra[ma.corner_vertex(h)] == out.vertex_extra[ma.corner_vertex(h)];
-      if (same) {
-        const int ri = reuse_patch[F];
-        leaves = reuse->leaves[ri];
-        patch = reuse->set.patches[ri];
-        patch.base_faces = {base_face};
-        out.patch_deepest[pi] = reuse->patch_deepest[ri];
-        out.patch_removed_knots[pi] = reuse->patch_removed_knots[ri];
-        return;
-      }
+    if (copied[F]) {
+      const int ri = reuse_patch[F];
+      leaves = reuse->leaves[ri];
+      patch = reuse->set.patches[ri];
+      patch.base_faces = {base_face};
+      out.patch_deepest[pi] = reuse->patch_deepest[ri];
+      out.patch_removed_knots[pi] = reuse->patch_removed_knots[ri];
+      return;
     }
     patch.base_faces = {base_face};
-    int deepest = a;
-    leaves = leaves_of(la, xa, F, a, fans, deepest);
-    out.patch_deepest[pi] = deepest;
     // Zone lines: h and 2h from every corner with a zone.
     std::vector<double> du, dv;
     bool pccm = false;

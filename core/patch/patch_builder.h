@@ -55,6 +55,12 @@ struct PatchOptions {
   /// another structure get the separating first step (docs/math.md 3.7, polar_separation.h) and
   /// become caps of twice the valence; the patches are then built from that level-1 cage.
   bool separate_poles = false;
+  /// Coarse quads with a corner of more than this many faces are refined in one shared piece
+  /// per such vertex (the union of their 2-rings, refined once per level: O(n L) for the n quads
+  /// at a valence-n vertex) instead of one piece per quad (each holding the vertex's whole star:
+  /// O(n^2 L)). The pieces are the same either way (a point inside both pieces is computed by
+  /// the same stencils in the same order); a huge value gives the per-quad path (tests).
+  int shared_piece_valence = 8;
 };
 
 /// How the quads around one irregular vertex (one fan between sharp edges) were built.

@@ -182,7 +182,7 @@ CASES = {
     "valence_64": dict(cage=lambda: bipyramid(64), kind="heavy", timeout=600, slow=True),
     "valence_256": dict(cage=lambda: bipyramid(256), kind="heavy", timeout=900, slow=True, heavy=True),
     "valence_1024": dict(cage=lambda: bipyramid(1024), kind="heavy", timeout=1800, slow=True, heavy=True),
-    "ngon_1000": dict(cage=lambda: ngon(1000), kind="heavy", open=True, timeout=1800, slow=True),
+    "ngon_1000": dict(cage=lambda: ngon(1000), kind="heavy", open=True, timeout=600, slow=True),
     "prism_1000": dict(cage=lambda: prism(1000), kind="heavy", timeout=1800, slow=True, heavy=True),
     "capsule_1024": dict(cage=lambda: capsule(1024), kind="heavy", timeout=1800, slow=True, heavy=True),
     "prism_12": dict(cage=lambda: prism(12), kind="solid", timeout=120),

@@ -10,12 +10,14 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "core/nurbs/nurbs_eval.h"
 #include "core/patch/knot_assembly.h"
 #include "core/patch/local_mesh.h"
 #include "core/patch/patch_builder.h"
 #include "io/obj_reader.h"
+#include "patch/patch_test_util.h"
 
 namespace subd2nurbs::testing {
 namespace {
@@ -272,6 +274,109 @@ TEST(PatchReuse, RebuildingOnlyTheDeepenedCornersGivesTheSamePatches) {
   EXPECT_GT(changed, 0);  // the deepened vertex's quads did change
   EXPECT_EQ(scratch.info.total_poles, reused.info.total_poles);
   EXPECT_EQ(scratch.info.removed_knots, reused.info.removed_knots);
+}
+
+}  // namespace
+}  // namespace subd2nurbs::testing
+
+namespace subd2nurbs::testing {
+namespace {
+
+// A wavy n-gon (an open disc whose rim goes up and down), a prism with wavy n-gon caps (closed;
+// rim vertices of valence 3 next to the caps' centres) and a bipyramid (two triangle fans: the
+// poles of valence n at level 1), with a semi-sharp crease on one spoke of the prism's cap.
+MeshInput wavy_ngon(int n) {
+  MeshInput in;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * M_PI * k / n;
+    in.positions.push_back({std::cos(t), std::sin(t), 0.2 * std::sin(3 * t)});
+  }
+  in.face_sizes = {n};
+  for (int k = 0; k < n; ++k) in.face_indices.push_back(k);
+  return in;
+}
+
+MeshInput wavy_prism(int n) {
+  MeshInput in;
+  for (int z = 0; z < 2; ++z)
+    for (int k = 0; k < n; ++k) {
+      const double t = 2 * M_PI * k / n;
+      in.positions.push_back({std::cos(t), std::sin(t), z + 0.15 * std::sin(5 * t)});
+    }
+  in.face_sizes = {n, n};
+  for (int k = n; k-- > 0;) in.face_indices.push_back(k);
+  for (int k = 0; k < n; ++k) in.face_indices.push_back(n + k);
+  for (int k = 0; k < n; ++k) {
+    const int a = k, b = (k + 1) % n;
+    in.face_sizes.push_back(4);
+    for (int v : {a, b, b + n, a + n}) in.face_indices.push_back(v);
+  }
+  in.creases.push_back({0, 1, 1.5});  // a semi-sharp rim edge: deeper pieces at one sector
+  return in;
+}
+
+MeshInput bipyramid(int n) {
+  MeshInput in;
+  in.positions = {{0, 0, 1}, {0, 0, -1}};
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * M_PI * k / n;
+    in.positions.push_back({std::cos(t), std::sin(t), 0.1 * std::cos(4 * t)});
+  }
+  for (int k = 0; k < n; ++k) {
+    const int a = 2 + k, b = 2 + (k + 1) % n;
+    in.face_sizes.push_back(3);
+    for (int v : {0, a, b}) in.face_indices.push_back(v);
+    in.face_sizes.push_back(3);
+    for (int v : {1, b, a}) in.face_indices.push_back(v);
+  }
+  return in;
+}
+
+// The quads at a vertex of high valence are refined in one shared piece per vertex
+// (PatchOptions::shared_piece_valence, O(n L)); the reference is the per-quad definition (each
+// quad's own piece, O(n^2 L)): every leaf and every pole must be the same number. Fans deepened
+// by 3 extra levels, so that the shared piece is refined several levels down.
+TEST(SharedPieces, HighValenceQuadsBuiltTogetherGiveThePiecesOfTheirOwnPieces) {
+  for (const auto& [name, in] : {std::pair<std::string, MeshInput>{"wavy 40-gon", wavy_ngon(40)},
+                                 {"prism with wavy 40-gon caps", wavy_prism(40)},
+                                 {"bipyramid of valence 24", bipyramid(24)}}) {
+    SCOPED_TRACE(name);
+    const SubdivLevel base = SubdivLevel::from_input(in);
+    PatchOptions shared, own;
+    shared.extra_levels = own.extra_levels = 3;
+    own.shared_piece_valence = 1 << 30;
+    ASSERT_LT(shared.shared_piece_valence, 24);
+    const PatchBuild a = build_patches(base, in.positions, shared);
+    const PatchBuild b = build_patches(base, in.positions, own);
+    ASSERT_EQ(a.leaves.size(), b.leaves.size());
+    long long zone_leaves = 0, deep_leaves = 0;
+    for (size_t pi = 0; pi < a.leaves.size(); ++pi) {
+      ASSERT_EQ(a.leaves[pi].size(), b.leaves[pi].size()) << "patch " << pi;
+      EXPECT_EQ(a.patch_deepest[pi], b.patch_deepest[pi]) << "patch " << pi;
+      for (size_t k = 0; k < a.leaves[pi].size(); ++k) {
+        const PatchLeaf &x = a.leaves[pi][k], &y = b.leaves[pi][k];
+        EXPECT_EQ(x.u0, y.u0);
+        EXPECT_EQ(x.v0, y.v0);
+        EXPECT_EQ(x.size, y.size);
+        EXPECT_EQ(x.level, y.level);
+        EXPECT_EQ(x.zone, y.zone);
+        EXPECT_EQ(x.net, y.net) << "patch " << pi << " leaf " << k;
+        zone_leaves += x.zone;
+        deep_leaves += x.level >= b.info.coarse_level + 4;
+      }
+    }
+    EXPECT_GT(zone_leaves, 0);
+    EXPECT_GT(deep_leaves, 0);
+    ASSERT_EQ(a.set.patches.size(), b.set.patches.size());
+    for (size_t pi = 0; pi < a.set.patches.size(); ++pi) {
+      EXPECT_EQ(a.set.patches[pi].poles, b.set.patches[pi].poles) << "patch " << pi;
+      EXPECT_EQ(a.set.patches[pi].knots_u.knots, b.set.patches[pi].knots_u.knots) << "patch " << pi;
+      EXPECT_EQ(a.set.patches[pi].knots_v.knots, b.set.patches[pi].knots_v.knots) << "patch " << pi;
+    }
+    // And against the exact limit (core/limit, Stam's eigenbases): the regular pieces are it.
+    EXPECT_LT(max_corner_limit_error(a), 1e-11 * a.set.model_size);
+    EXPECT_LT(max_piece_error(a), 1e-11 * a.set.model_size);
+  }
 }
 
 }  // namespace
