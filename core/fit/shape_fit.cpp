@@ -815,9 +815,9 @@ std::vector<int> target_border(const ShapeTarget& target) {
   return out;
 }
 
-/// The target's feature vertices: ends of its sharp interior edges (detect_features, dihedral
-/// angle; boundary edges left out: the border term holds them). None for a non-manifold target.
-std::vector<int> target_creases(const ShapeTarget& target, double angle_degrees) {
+/// The sharp features of a triangle target (detect_features at `angle_degrees`); none for a
+/// non-manifold target (its features are not defined).
+FeatureSet target_features(const ShapeTarget& target, double angle_degrees) {
   MeshInput mi;
   mi.positions = target.points();
   for (const auto& t : target.triangles()) {
@@ -826,12 +826,17 @@ std::vector<int> target_creases(const ShapeTarget& target, double angle_degrees)
   }
   FeatureOptions fo;
   fo.angle_degrees = angle_degrees;
-  FeatureSet fs;
   try {
-    fs = detect_features(mi, fo);
+    return detect_features(mi, fo);
   } catch (const Error&) {
     return {};
   }
+}
+
+/// The target's feature vertices: ends of its sharp interior edges (detect_features, dihedral
+/// angle; boundary edges left out: the border term holds them). None for a non-manifold target.
+std::vector<int> target_creases(const ShapeTarget& target, double angle_degrees) {
+  const FeatureSet fs = target_features(target, angle_degrees);
   std::map<std::pair<int, int>, int> count;
   for (const auto& t : target.triangles())
     for (int k = 0; k < 3; ++k) ++count[{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}];
@@ -1169,20 +1174,7 @@ std::vector<int> feature_edges_on_target(const SubdivLevel& cage, const std::vec
   if (static_cast<int>(positions.size()) != m.num_vertices())
     throw std::invalid_argument("feature_edges_on_target: one position per cage vertex");
   if (!target.has_triangles()) return {};
-  MeshInput mi;
-  mi.positions = target.points();
-  for (const auto& t : target.triangles()) {
-    mi.face_sizes.push_back(3);
-    for (int v : t) mi.face_indices.push_back(v);
-  }
-  FeatureOptions fo;
-  fo.angle_degrees = angle_degrees;
-  FeatureSet fs;
-  try {
-    fs = detect_features(mi, fo);
-  } catch (const Error&) {
-    return {};
-  }
+  const FeatureSet fs = target_features(target, angle_degrees);
   if (fs.edges.empty()) return {};
   // Feature curves: the feature edges joined through vertices of two feature edges that are no
   // corner.
