@@ -685,13 +685,16 @@ py::dict fit_cage(const DoubleArray& positions, const IntArray& face_sizes, cons
                   const std::vector<std::tuple<int, int, double>>& creases,
                   const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                   const py::dict& options, const DoubleArray& target_points, const IntArray& target_sizes,
-                  const IntArray& target_indices, const std::string& target_name, double smoothing, int levels,
-                  int max_iterations, double tolerance, const py::object& progress) {
-  ShapeFitOptions fo;
-  fo.smoothing = smoothing;
+                  const IntArray& target_indices, const std::string& target_name, std::optional<double> smoothing,
+                  int levels, std::optional<int> max_iterations, std::optional<double> tolerance, double min_gain,
+                  bool exact_target, const py::object& progress) {
+  // As `fit --exact-target`: the recovery setting, the options given still override it.
+  ShapeFitOptions fo = exact_target ? exact_target_options() : ShapeFitOptions{};
+  if (smoothing) fo.smoothing = *smoothing;
   fo.levels = levels;
-  fo.max_iterations = max_iterations;
-  fo.tolerance = tolerance;
+  if (max_iterations) fo.max_iterations = *max_iterations;
+  if (tolerance) fo.tolerance = *tolerance;
+  fo.min_gain = min_gain;
   pipeline::validate_shape_fit(fo);
   if (target_points.ndim() != 2 || target_points.shape(1) != 3)
     throw pipeline::SettingsError("target", "must be an array of shape (n, 3)");
@@ -715,7 +718,7 @@ py::dict fit_cage(const DoubleArray& positions, const IntArray& face_sizes, cons
   if (!progress.is_none())
     report = [&](int iteration, double objective) {
       py::gil_scoped_acquire locked;
-      const py::object go = progress(iteration, max_iterations, objective);
+      const py::object go = progress(iteration, fo.max_iterations, objective);
       return go.is_none() || go.cast<bool>();
     };
   const pipeline::ShapeFitRun run = without_gil([&] { return pipeline::run_shape_fit(level, start, target, fo, report); });

@@ -619,7 +619,8 @@ def _target(target, triangles):
     return name, points, np.full(tris.shape[0], 3, dtype=np.int32), tris.reshape(-1)
 
 
-def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-7, triangles=None, progress=None):
+def fit(cage, target, smoothing=None, levels=3, max_iterations=None, tolerance=None, triangles=None, progress=None,
+        min_gain=0.02, exact_target=False):
     """Fits a cage to a target shape (as `subd2nurbs fit`): moves its vertices so that the exact
     limit surface fits the target, from the cage's own positions (docs/fitting.md).
 
@@ -630,6 +631,11 @@ def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-
     after (the two-sided distance of the input and the fitted limit surface to the target:
     diagonal, limit_to_target and target_to_limit, each max / rms / p95 relative to the target's
     diagonal), history, fit_ms, measure_ms).
+    smoothing, max_iterations, tolerance: None for the defaults (1e-4, 30, 1e-7; with exact_target
+    0, 100, 1e-8). min_gain: stop when an iteration improves the two-sided RMS distance by less
+    than this fraction (0: off). exact_target=True: the target lies on a subdivision surface (a
+    dense, noise-free sampling of an exact limit): the weights that recover it, as
+    `subd2nurbs fit --exact-target` (docs/fitting.md).
     progress: None, or a callable progress(iteration, max_iterations, objective) called after each
     closest-point pairing; returning False cancels the fit (stop "cancelled", the cage of the last
     solve is returned)."""
@@ -637,13 +643,20 @@ def fit(cage, target, smoothing=1e-4, levels=3, max_iterations=30, tolerance=1e-
         raise SettingsError("progress must be callable or None, not %r" % (progress,), setting="progress",
                             rule="must be callable or None")
     cage = _cage(cage)
-    smoothing = _checked("smoothing", smoothing, _is_number, "a number", float)
+    if smoothing is not None:
+        smoothing = _checked("smoothing", smoothing, _is_number, "a number", float)
     levels = _checked("levels", levels, _is_int, "an integer", int)
-    max_iterations = _checked("max_iterations", max_iterations, _is_int, "an integer", int)
-    tolerance = _checked("tolerance", tolerance, _is_number, "a number", float)
+    if max_iterations is not None:
+        max_iterations = _checked("max_iterations", max_iterations, _is_int, "an integer", int)
+    if tolerance is not None:
+        tolerance = _checked("tolerance", tolerance, _is_number, "a number", float)
+    min_gain = _checked("min_gain", min_gain, _is_number, "a number", float)
+    if not isinstance(exact_target, bool):
+        raise SettingsError("exact_target must be True or False, not %r" % (exact_target,), setting="exact_target",
+                            rule="must be True or False")
     name, points, sizes, indices = _target(target, triangles)
     d = _subd2nurbs.fit(*cage._args(), points, sizes, indices, name, smoothing, levels, max_iterations, tolerance,
-                        progress)
+                        min_gain, exact_target, progress)
     info = json.loads(d["report"])
     for key in ("format", "version", "input", "output"):
         info.pop(key, None)

@@ -964,6 +964,37 @@ class ShapeFitTest(unittest.TestCase):
             with self.assertRaises(s2n.CageError):
                 s2n.fit(start, os.path.join(d, "missing.ply"))
 
+    def test_exact_target_recovers_the_cage(self):
+        """exact_target=True (as `fit --exact-target`): a perturbed torus cage (no creases: every
+        refined vertex regular) fitted to exact limit points of the true cage comes back to the
+        true cage. Oracle: the limit points are the level-3 vertices pushed to the limit with
+        the regular Catmull-Clark limit mask (16 v + 4 sum of edge neighbours + sum of diagonal
+        neighbours) / 36."""
+        t = torus_cage()
+        truth = s2n.Cage(t.vertices, t.faces, name="torus")
+        fine = s2n.refine(truth, 3)
+        v = np.asarray(fine.vertices, float)
+        acc = 16 * v.copy()
+        for f in fine.faces:  # each edge neighbour is in two of the vertex's faces
+            for k in range(4):
+                acc[f[k]] += 2 * (v[f[(k + 1) % 4]] + v[f[(k + 3) % 4]]) + v[f[(k + 2) % 4]]
+        limit = acc / 36
+        tris = np.array([[f[0], f[k], f[k + 1]] for f in fine.faces for k in (1, 2)])
+        diag = np.linalg.norm(truth.vertices.max(0) - truth.vertices.min(0))
+        rng = np.random.default_rng(3)
+        start = s2n.Cage(truth.vertices + rng.uniform(-0.01, 0.01, truth.vertices.shape) * diag, truth.faces)
+        errors = {}
+        for exact in (False, True):
+            fitted, info = s2n.fit(start, limit, triangles=tris, exact_target=exact)
+            errors[exact] = np.abs(fitted.vertices - truth.vertices).max() / diag
+        print("fit: cage error (relative) default %.3g, exact_target %.3g" % (errors[False], errors[True]))
+        self.assertLess(errors[True], 1e-5)
+        self.assertGreater(errors[False], 1e-4)  # the flag is what makes the difference
+        for bad in ({"min_gain": -1}, {"exact_target": "yes"}):
+            with self.assertRaises(s2n.SettingsError) as e:
+                s2n.fit(start, limit, **bad)
+            self.assertEqual(e.exception.setting, next(iter(bad)))
+
     def test_fit_progress_and_cancel(self):
         truth = torus_cage()
         fine = s2n.refine(truth, 3)
@@ -991,7 +1022,7 @@ class ShapeFitTest(unittest.TestCase):
         cage = torus_cage()
         points = cage.vertices
         for kwargs, setting in (({"smoothing": "x"}, "smoothing"), ({"levels": 2.5}, "levels"),
-                                ({"max_iterations": None}, "max_iterations"), ({"tolerance": True}, "tolerance"),
+                                ({"max_iterations": "10"}, "max_iterations"), ({"tolerance": True}, "tolerance"),
                                 ({"smoothing": -1.0}, "smoothing"), ({"levels": 5}, "levels"),
                                 ({"max_iterations": 0}, "max_iterations"), ({"tolerance": 0.0}, "tolerance"),
                                 ({"triangles": [[0, 1]]}, "triangles"), ({"triangles": [[0, 1, 999]]}, "triangles")):
