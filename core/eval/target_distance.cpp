@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/util/gauss_newton.h"
 #include "core/util/parallel.h"
 
 namespace subd2nurbs {
@@ -70,12 +71,9 @@ double project(const LimitEvaluator& limit, const Point3& q, PtexPoint& at) {
   LimitPoint s = limit.evaluate_point(f, sub, at.u, at.v);
   double best = (vec(s.p) - vec(q)).norm();
   for (int iter = 0; iter < 12; ++iter) {
-    const Vec3 r = vec(s.p) - vec(q), du = vec(s.du), dv = vec(s.dv);
-    Eigen::Matrix2d JtJ;
-    JtJ << du.dot(du), du.dot(dv), du.dot(dv), dv.dot(dv);
-    const Eigen::Vector2d step = JtJ.ldlt().solve(-Eigen::Vector2d(du.dot(r), dv.dot(r)));
-    if (!step.allFinite()) break;
-    const double u = std::clamp(at.u + step[0], 0.0, 1.0), v = std::clamp(at.v + step[1], 0.0, 1.0);
+    const auto next = closest_point_step(vec(s.p) - vec(q), vec(s.du), vec(s.dv), at.u, at.v);
+    if (!next) break;
+    const auto [u, v] = *next;
     const LimitPoint t = limit.evaluate_point(f, sub, u, v);
     const double d = (vec(t.p) - vec(q)).norm();
     if (d >= best) break;

@@ -20,6 +20,7 @@
 #include "core/limit/limit_evaluator.h"
 #include "core/refine/quad_grid.h"
 #include "core/util/error.h"
+#include "core/util/gauss_newton.h"
 #include "core/util/bicubic.h"
 #include "core/util/parallel.h"
 
@@ -288,12 +289,9 @@ void project_exact(const Samples& S, const LimitEvaluator& E, int f, const Vec3&
   };
   eval();
   for (int iter = 0; iter < 10; ++iter) {
-    const Vec3 res = vec(q.p) - t;
-    Eigen::Matrix2d JtJ;
-    JtJ << ds.dot(ds), ds.dot(dr), ds.dot(dr), dr.dot(dr);
-    const Eigen::Vector2d step = JtJ.ldlt().solve(-Eigen::Vector2d(ds.dot(res), dr.dot(res)));
-    if (!step.allFinite()) break;
-    const double ns = std::clamp(s + step[0], 0.0, 1.0), nr = std::clamp(r + step[1], 0.0, 1.0);
+    const auto next = closest_point_step(vec(q.p) - t, ds, dr, s, r);
+    if (!next) break;
+    const auto [ns, nr] = *next;
     const bool done = std::abs(ns - s) + std::abs(nr - r) < 1e-15;
     s = ns;
     r = nr;
@@ -325,12 +323,9 @@ void project_to_patch(const Samples& S, int grid, const std::vector<Point3>& Y, 
     bspline(v, bv, dbv);
     bicubic_first(net, bu, dbu, bv, dbv, p, du, dv);
     if (iter == 8) break;
-    const Vec3 r = vec(p) - t, a = vec(du), b = vec(dv);
-    Eigen::Matrix2d JtJ;
-    JtJ << a.dot(a), a.dot(b), a.dot(b), b.dot(b);
-    const Eigen::Vector2d step = JtJ.ldlt().solve(-Eigen::Vector2d(a.dot(r), b.dot(r)));
-    if (!step.allFinite()) break;
-    const double nu = std::clamp(u + step[0], 0.0, 1.0), nv = std::clamp(v + step[1], 0.0, 1.0);
+    const auto next = closest_point_step(vec(p) - t, vec(du), vec(dv), u, v);
+    if (!next) break;
+    const auto [nu, nv] = *next;
     const bool done = std::abs(nu - u) + std::abs(nv - v) < 1e-15;
     u = nu;
     v = nv;
