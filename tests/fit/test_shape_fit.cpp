@@ -514,9 +514,9 @@ TEST(ShapeFit, StopReasons) {
   }
 }
 
-// The fit's result does not depend on the threads its parallel loops get: with one hardware
-// thread reserved (ThreadReservation, core/util/parallel.h) the loops run on the calling thread
-// alone, and the cage comes out bit for bit the same.
+// The fit's result does not depend on the threads its parallel loops get: under a ThreadLimit of
+// 1 (core/util/parallel.h, the `threads` setting) the loops run on the calling thread alone, and
+// the cage comes out bit for bit the same.
 TEST(ShapeFit, SameResultOnOneThread) {
   const MeshInput in = corpus_cage("catmark_torus");
   const SubdivLevel cage = SubdivLevel::from_input(in);
@@ -529,7 +529,8 @@ TEST(ShapeFit, SameResultOnOneThread) {
   const ShapeFitResult all = fit_to_shape(cage, start, target, o);
   ShapeFitResult one;
   {
-    const ThreadReservation reserve;
+    const ThreadLimit single(1);
+    ASSERT_EQ(loop_threads(), 1);
     one = fit_to_shape(cage, start, target, o);
   }
   ASSERT_EQ(all.positions.size(), one.positions.size());
