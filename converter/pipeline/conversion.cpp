@@ -625,23 +625,19 @@ void intersection_warnings(const Run& r) {
   auto at = [](const Point3& p) {
     return "(" + short_number(p[0]) + ", " + short_number(p[1]) + ", " + short_number(p[2]) + ")";
   };
-  // "N pair(s) of faces cross" and / or "M touch (lie on each other without crossing)".
-  const auto counts = [](const std::vector<FaceCrossing>& list, const std::string& what, const std::string& cross) {
-    const long long touching = SelfIntersectionReport::touching_count(list);
-    const long long crossing = static_cast<long long>(list.size()) - touching;
-    std::string text;
-    if (crossing > 0) text = std::to_string(crossing) + " pair(s) of " + what + " " + cross;
-    if (touching > 0)
-      text += (text.empty() ? "" : ", ") + std::to_string(touching) + " pair(s) of " + what +
-              " touch or lie on each other without crossing";
-    return text;
-  };
   if (!x.self.empty()) {
     const FaceCrossing& w = x.self.front();
-    const bool touch_only = SelfIntersectionReport::touching_count(x.self) == static_cast<long long>(x.self.size());
+    // "N pair(s) of faces cross" and / or "M ... touch or lie on each other without crossing".
+    const long long touching = SelfIntersectionReport::touching_count(x.self);
+    const long long crossing = static_cast<long long>(x.self.size()) - touching;
+    std::string pairs;
+    if (crossing > 0) pairs = std::to_string(crossing) + " pair(s) of faces cross";
+    if (touching > 0)
+      pairs += (pairs.empty() ? "" : ", ") + std::to_string(touching) +
+               " pair(s) of faces touch or lie on each other without crossing";
     r.warn(DiagnosticCode::SelfIntersection,
-           std::string(touch_only ? "the surface touches itself: " : "the surface intersects itself: ") +
-               counts(x.self, "faces", "cross") + ", e.g. faces " + std::to_string(w.face_a) + " and " +
+           std::string(crossing == 0 ? "the surface touches itself: " : "the surface intersects itself: ") + pairs +
+               ", e.g. faces " + std::to_string(w.face_a) + " and " +
                std::to_string(w.face_b) + (w.touching ? " touch at " : " at ") + at(w.point) +
                "; offsets, shells and booleans of this body may fail");
   }

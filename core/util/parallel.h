@@ -111,8 +111,9 @@ inline int available_threads() { return std::max(1, hardware_threads() - reserve
 ///
 /// Only available_threads() of them take runs at any time: while other work holds a
 /// ThreadReservation, the helper threads beyond that wait (waking every millisecond), and they
-/// join in as soon as the reservation ends. The calling thread always works. Loops that fn
-/// starts run on the thread that calls fn alone (the helpers have a limit of 1).
+/// join in as soon as the reservation ends. The calling thread always works. A loop that fn
+/// starts on a helper thread stays on that thread (the helpers have a limit of 1); on the
+/// calling thread it gets the caller's limit.
 template <class Fn>
 void parallel_for(int n, Fn&& fn) {
   const int threads = std::min(loop_threads(), std::max(1, n / 16));
