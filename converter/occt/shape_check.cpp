@@ -7,6 +7,7 @@
 #include <GProp_GProps.hxx>
 #include <Geom2d_Curve.hxx>
 #include <Geom_Curve.hxx>
+#include <Geom_BSplineSurface.hxx>
 #include <Geom_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESControl_Reader.hxx>
@@ -15,6 +16,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 
@@ -25,6 +27,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <vector>
 
 #include "converter/occt/occt_util.h"
 #include "converter/occt/writers.h"
@@ -86,8 +89,93 @@ TopoDS_Shape read_shape(const std::string& path) {
 
 namespace {
 
-/// Relative error bound for area and volume integration.
+/// Relative error bound of OCCT's adaptive area and volume integration (faces that
+/// `span_properties` does not take).
 constexpr double kIntegrationEps = 1e-12;
+
+/// Gauss-Legendre nodes and weights on [0, 1], n points (Newton on P_n from the usual cosine
+/// guesses; P_n and P_n-1 by the three-term recurrence).
+void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.assign(static_cast<std::size_t>(n), 0);
+  w.assign(static_cast<std::size_t>(n), 0);
+  for (int i = 0; i < n; ++i) {
+    double t = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = t;  // P_0, P_1, ... up to P_n-1, P_n
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * t * p1 - (k - 1) * p0) / k;
+        p0 = p1, p1 = p2;
+      }
+      dp = n * (t * p1 - p0) / (t * t - 1);
+      const double step = p1 / dp;
+      t -= step;
+      if (std::abs(step) < 1e-16) break;
+    }
+    x[static_cast<std::size_t>(i)] = 0.5 * (1 - t);
+    w[static_cast<std::size_t>(i)] = 1.0 / ((1 - t * t) * dp * dp);  // 2 / ((1 - t^2) P_n'^2), halved
+  }
+}
+
+/// Adds the area and the signed volume contribution (1/3 of the integral of x . n dA, n the
+/// face's outward normal) of a face that is its B-spline surface's whole parameter rectangle,
+/// by Gauss-Legendre rules on every knot span (see the rule's comment below). Returns false,
+/// adding nothing, for any other face: not a B-spline surface, more than one wire, or an edge
+/// whose pcurve leaves the rectangle's border (a trimmed face).
+bool span_properties(const TopoDS_Face& face, double& area, double& volume) {
+  const Handle(Geom_BSplineSurface) surface = Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(face));
+  if (surface.IsNull()) return false;
+  double u0 = 0, u1 = 0, v0 = 0, v1 = 0;
+  surface->Bounds(u0, u1, v0, v1);
+  const double tu = 1e-9 * (u1 - u0), tv = 1e-9 * (v1 - v0);
+  int wires = 0;
+  for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) ++wires;
+  if (wires != 1) return false;
+  for (TopExp_Explorer it(face, TopAbs_EDGE); it.More(); it.Next()) {
+    double first = 0, last = 0;
+    const Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(TopoDS::Edge(it.Current()), face, first, last);
+    if (pcurve.IsNull()) return false;
+    for (const double f : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+      const gp_Pnt2d uv = pcurve->Value(first + f * (last - first));
+      const bool on_u = std::abs(uv.X() - u0) <= tu || std::abs(uv.X() - u1) <= tu;
+      const bool on_v = std::abs(uv.Y() - v0) <= tv || std::abs(uv.Y() - v1) <= tv;
+      if (!on_u && !on_v) return false;
+    }
+  }
+  // The rule: ceil(3p / 2) points per direction integrate the volume integrand of a polynomial
+  // surface of degree p exactly; 3 more (8 more for a rational surface, whose spans are often
+  // a quarter circle wide) for the area, whose integrand |Su x Sv| is not a polynomial. Measured:
+  // 7 s against OCCT's 230 s on a valence-256 fan of 1536 faces; the area within 1e-9 of the
+  // closed forms of OCCT's sphere and torus made B-splines (test Summarize.*), 1.2e-7 of
+  // OCCT's adaptive value on the valence-256 fan, whose innermost spans' area element is a fractional power of the distance
+  // to the centre.
+  const bool rational = surface->IsURational() || surface->IsVRational();
+  const int nu = (3 * surface->UDegree() + 1) / 2 + (rational ? 8 : 3);
+  const int nv = (3 * surface->VDegree() + 1) / 2 + (rational ? 8 : 3);
+  std::vector<double> xu, wu, xv, wv;
+  gauss_legendre(nu, xu, wu);
+  gauss_legendre(nv, xv, wv);
+  double a = 0, vol = 0;
+  const TColStd_Array1OfReal& uk = surface->UKnots();
+  const TColStd_Array1OfReal& vk = surface->VKnots();
+  for (int i = uk.Lower(); i < uk.Upper(); ++i)
+    for (int j = vk.Lower(); j < vk.Upper(); ++j) {
+      const double ua = uk(i), du = uk(i + 1) - uk(i), va = vk(j), dv = vk(j + 1) - vk(j);
+      if (!(du > 0 && dv > 0)) continue;
+      for (int p = 0; p < nu; ++p)
+        for (int q = 0; q < nv; ++q) {
+          gp_Pnt x;
+          gp_Vec su, sv;
+          surface->D1(ua + xu[static_cast<std::size_t>(p)] * du, va + xv[static_cast<std::size_t>(q)] * dv, x, su, sv);
+          const gp_Vec n = su.Crossed(sv);
+          const double weight = wu[static_cast<std::size_t>(p)] * wv[static_cast<std::size_t>(q)] * du * dv;
+          a += weight * n.Magnitude();
+          vol += weight * (x.X() * n.X() + x.Y() * n.Y() + x.Z() * n.Z()) / 3;
+        }
+    }
+  area += a;
+  volume += face.Orientation() == TopAbs_REVERSED ? -vol : vol;
+  return true;
+}
 
 /// One occurrence of an edge in a face's wires, with orientations composed from the top
 /// shape down (so a face of a reversed shell is REVERSED here, and its normal is flipped).
@@ -201,18 +289,32 @@ ShapeSummary summarize_impl(const TopoDS_Shape& shape, const std::vector<TopoDS_
       ++s.shared_edges_sampled;
     }
 
-    // The adaptive integrators, with a relative error bound: the fixed-order ones use the
-    // same number of Gauss points per face whatever its number of knot spans, so a face of
-    // many spans comes out visibly wrong (5e-5 relative for the 1-face B-spline torus).
+    // Area and volume: Gauss rules per knot span on the faces that are whole B-spline
+    // surfaces (span_properties); the others by OCCT's adaptive integrators, with a relative
+    // error bound (its fixed-order ones use the same number of Gauss points per face whatever
+    // its number of knot spans: 5e-5 relative error on the 1-face B-spline torus). Every
+    // occurrence of a face counts, as in BRepGProp.
     if (mass_properties) {
-    GProp_GProps area;
-    BRepGProp::SurfaceProperties(shape, area, kIntegrationEps);
-    s.area = area.Mass();
-    }
-    if (mass_properties && s.solids > 0) {
-      GProp_GProps volume;
-      BRepGProp::VolumeProperties(shape, volume, kIntegrationEps);
-      s.volume = volume.Mass();
+      double area = 0, volume = 0;
+      TopoDS_Compound rest;
+      BRep_Builder builder;
+      builder.MakeCompound(rest);
+      bool any_rest = false;
+      for (TopExp_Explorer it(shape, TopAbs_FACE); it.More(); it.Next())
+        if (span_properties(TopoDS::Face(it.Current()), area, volume)) ++s.span_faces;
+        else builder.Add(rest, it.Current()), any_rest = true;
+      if (any_rest) {
+        GProp_GProps a;
+        BRepGProp::SurfaceProperties(rest, a, kIntegrationEps);
+        area += a.Mass();
+        if (s.solids > 0) {
+          GProp_GProps v;
+          BRepGProp::VolumeProperties(rest, v, kIntegrationEps);
+          volume += v.Mass();
+        }
+      }
+      s.area = area;
+      if (s.solids > 0) s.volume = volume;
     }
     s.valid = detail::check_shape(shape, s.check_message);
   });

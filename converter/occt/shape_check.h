@@ -20,8 +20,14 @@ struct ShapeSummary {
   int free_edges = 0;  ///< non-degenerate edges bounding only one face (open boundary)
   bool valid = false;  ///< BRepCheck_Analyzer found no defect
   std::string check_message;  ///< BRepCheck's findings, one per line (empty when valid)
-  double area = 0;     ///< total face area
-  double volume = 0;   ///< total solid volume (0 without solids)
+  /// Total face area and solid volume (0 without solids). A face that is its B-spline
+  /// surface's whole parameter rectangle (ours are) is integrated by Gauss rules on each knot
+  /// span: the volume exactly for a polynomial surface, the area to about 1e-9 relative (1.2e-7
+  /// on a valence-256 fan); any other face by OCCT's adaptive integrators (relative
+  /// bound 1e-12), which take minutes on faces of thousands of spans.
+  double area = 0;
+  double volume = 0;
+  int span_faces = 0;  ///< face occurrences integrated by the span rules
   /// Largest distance, over the sampled shared edges and parameters, between the two faces'
   /// points (surface at the edge's pcurve) and the edge's 3D curve.
   double max_gap = 0;

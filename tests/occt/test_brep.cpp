@@ -3,6 +3,14 @@
 // (the same surface, so the same area and volume), open patches.
 #include <gtest/gtest.h>
 
+#include <BRepAlgoAPI_Cut.hxx>
+#include <BRepBuilderAPI_NurbsConvert.hxx>
+#include <BRepGProp.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
+#include <GProp_GProps.hxx>
 #include <TopAbs_ShapeEnum.hxx>
 
 #include <cmath>
@@ -196,6 +204,43 @@ TEST(BuildBrep, InconsistentPatchSetsThrowNamingThePatch) {
     EXPECT_THROW(build_brep(ps), ExportError);
   }
   EXPECT_THROW(build_brep(PatchSet{}), ExportError);
+}
+
+
+// summarize's area and volume against closed forms: OCCT's sphere and torus made B-spline
+// surfaces (rational, whole rectangles with seams and collapsed sides: the span rules), and a
+// box with a hole drilled through (trimmed planes: OCCT's adaptive integrators); and the span
+// rules against OCCT's adaptive integrators on the polynomial B-spline torus.
+TEST(Summarize, AreaAndVolumeMatchClosedForms) {
+  const double pi = std::acos(-1.0);
+  const TopoDS_Shape sphere = BRepBuilderAPI_NurbsConvert(BRepPrimAPI_MakeSphere(2.0).Shape()).Shape();
+  const ShapeSummary s = summarize(sphere);
+  EXPECT_EQ(s.span_faces, s.faces);
+  EXPECT_NEAR(s.volume, 4.0 / 3.0 * pi * 8.0, 1e-10 * 32.0);
+  EXPECT_NEAR(s.area, 4.0 * pi * 4.0, 1e-9 * 16.0 * pi);
+
+  const TopoDS_Shape torus = BRepBuilderAPI_NurbsConvert(BRepPrimAPI_MakeTorus(3.0, 1.0).Shape()).Shape();
+  const ShapeSummary t = summarize(torus);
+  EXPECT_EQ(t.span_faces, t.faces);
+  EXPECT_NEAR(t.volume, 2.0 * pi * pi * 3.0, 1e-10 * 60.0);
+  EXPECT_NEAR(t.area, 4.0 * pi * pi * 3.0, 1e-9 * 120.0);
+
+  const TopoDS_Shape drilled =
+      BRepAlgoAPI_Cut(BRepPrimAPI_MakeBox(gp_Pnt(-2, -2, 0), 4, 4, 4).Shape(), BRepPrimAPI_MakeCylinder(1.0, 4.0).Shape())
+          .Shape();
+  const ShapeSummary d = summarize(drilled);
+  EXPECT_EQ(d.span_faces, 0);  // planes and a cylinder: no B-spline surface
+  EXPECT_NEAR(d.volume, 64.0 - pi * 4.0, 1e-9 * 64.0);
+  EXPECT_NEAR(d.area, 4 * 16.0 + 2 * (16.0 - pi) + 2 * pi * 4.0, 1e-9 * 100.0);
+
+  const TopoDS_Shape bspline = build_brep(bspline_torus(8, 6)).shape;
+  const ShapeSummary b = summarize(bspline);
+  EXPECT_EQ(b.span_faces, b.faces);
+  GProp_GProps volume, area;
+  BRepGProp::VolumeProperties(bspline, volume, 1e-12);
+  BRepGProp::SurfaceProperties(bspline, area, 1e-12);
+  EXPECT_NEAR(b.volume, volume.Mass(), 1e-12 * volume.Mass());
+  EXPECT_NEAR(b.area, area.Mass(), 1e-9 * area.Mass());
 }
 
 }  // namespace
