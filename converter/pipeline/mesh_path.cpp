@@ -262,16 +262,21 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
 }
 
 /// The planar regions of the target's triangles (at least a cage edge wide: the mean edge of
-/// the cage `start`, on the mesh) and the fitted cage's faces in them made exactly planar.
-FlattenStats flatten_planar(const SubdivLevel& cage, const std::vector<Point3>& start, std::vector<Point3>& positions,
-                            const ShapeTarget& target) {
+/// the cage `start`, on the mesh) and the cage's faces and vertices held in them.
+struct PlanarSetup {
+  std::vector<PlanarRegion> regions;
+  PlanarConstraints constraints;
+};
+PlanarSetup planar_setup(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target) {
   const PolyMesh& m = cage.mesh;
   double length = 0;
   for (int e = 0; e < m.num_edges(); ++e) length += norm(sub(start[m.edge_vertex(e, 1)], start[m.edge_vertex(e, 0)]));
   PlanarRegionOptions po;
   po.min_width = m.num_edges() > 0 ? length / m.num_edges() : 0;
-  const auto regions = detect_planar_regions(target.points(), target.triangles(), po);
-  return flatten_planar_regions(cage, start, positions, target.points(), target.triangles(), regions, target.diagonal());
+  PlanarSetup s;
+  s.regions = detect_planar_regions(target.points(), target.triangles(), po);
+  s.constraints = planar_constraints(cage, start, target.points(), target.triangles(), s.regions, target.diagonal());
+  return s;
 }
 
 void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
@@ -428,6 +433,9 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   rep.fit_options.levels = 2;
   rep.fit_options.max_iterations = 10;
   rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
+  // The cage's vertices that planar regions' faces depend on, held on their planes (core/fit/planar_regions.h).
+  const PlanarSetup planar = planar_setup(out.cage.level, start, target);
+  rep.fit_options.vertex_planes = vertex_planes(planar.constraints, planar.regions);
   ShapeFitProgress fit_progress;
   if (progress.fraction)
     fit_progress = [&](int iteration, double) {
@@ -439,9 +447,9 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   rep.fit_ms = rep.fit.fit_ms;
   rep.measure_ms = rep.fit.measure_ms;
 
-  // The mesh's planar regions made exactly planar (core/fit/planar_regions.h); measured again.
+  // The planar regions' faces made exactly planar (the held vertices onto their planes); measured again.
   t = Clock::now();
-  rep.planar = flatten_planar(out.cage.level, start, out.positions, target);
+  rep.planar = flatten_planar_regions(out.cage.level, planar.constraints, out.positions, planar.regions, target.diagonal());
   if (rep.planar.vertices_moved > 0)
     rep.fit.after = measure_target_distance(LimitEvaluator(out.cage.level, out.positions), target);
   rep.measure_ms += ms_since(t);

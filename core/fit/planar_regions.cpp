@@ -43,6 +43,32 @@ Plane fit_plane(const std::vector<Point3>& points, const std::vector<int>& verti
   return pl;
 }
 
+/// The closest point x to p on every plane of `ids` (p + N^+ (d - N p), N's pseudo-inverse with
+/// singular values below 1e-2 of the largest dropped: near-parallel planes); false when x misses
+/// a plane by more than 1e-9 x diagonal (parallel planes apart).
+bool onto_planes(const std::vector<Plane>& planes, const std::vector<int>& ids, const Point3& p3, double diagonal,
+                 Point3& out) {
+  const int k = static_cast<int>(ids.size());
+  Eigen::MatrixXd N(k, 3);
+  Eigen::VectorXd d(k);
+  const Eigen::Vector3d p(p3[0], p3[1], p3[2]);
+  for (int i = 0; i < k; ++i) {
+    const Plane& pl = planes[ids[i]];
+    N.row(i) << pl.normal[0], pl.normal[1], pl.normal[2];
+    d[i] = dot(pl.normal, pl.point);
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(N, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const Eigen::VectorXd rhs = svd.matrixU().transpose() * (d - N * p);
+  Eigen::Vector3d x = p;
+  for (int i = 0; i < sv.size(); ++i)
+    if (sv[i] > 1e-2 * sv[0]) x += svd.matrixV().col(i) * (rhs[i] / sv[i]);
+  for (int i = 0; i < k; ++i)
+    if (std::abs(N.row(i).dot(x) - d[i]) > 1e-9 * diagonal) return false;
+  out = {x[0], x[1], x[2]};
+  return true;
+}
+
 }  // namespace
 
 std::vector<PlanarRegion> detect_planar_regions(const std::vector<Point3>& points,
@@ -219,21 +245,19 @@ std::vector<int> limit_support(const SubdivLevel& cage, int f) {
   return out;
 }
 
-FlattenStats flatten_planar_regions(const SubdivLevel& cage, const std::vector<Point3>& on_mesh,
-                                    std::vector<Point3>& positions, const std::vector<Point3>& points,
-                                    const std::vector<std::array<int, 3>>& triangles,
-                                    const std::vector<PlanarRegion>& regions, double diagonal,
-                                    const FlattenOptions& options) {
+PlanarConstraints planar_constraints(const SubdivLevel& cage, const std::vector<Point3>& on_mesh,
+                                     const std::vector<Point3>& points, const std::vector<std::array<int, 3>>& triangles,
+                                     const std::vector<PlanarRegion>& regions, double diagonal,
+                                     const FlattenOptions& options) {
   const PolyMesh& m = cage.mesh;
   const int nf = m.num_faces(), nv = m.num_vertices();
-  if (static_cast<int>(positions.size()) != nv || static_cast<int>(on_mesh.size()) != nv)
-    throw std::invalid_argument("flatten_planar_regions: one position per cage vertex");
-  FlattenStats s;
-  s.regions = static_cast<int>(regions.size());
-  s.face_region.assign(nf, -1);
-  if (regions.empty() || triangles.empty() || !(diagonal > 0)) return s;
+  if (static_cast<int>(on_mesh.size()) != nv) throw std::invalid_argument("planar_constraints: one position per cage vertex");
+  PlanarConstraints pc;
+  pc.face_region.assign(nf, -1);
+  pc.vertex_regions.assign(nv, {});
+  if (regions.empty() || triangles.empty() || !(diagonal > 0)) return pc;
   std::vector<int> triangle_region(triangles.size(), -1);
-  for (int r = 0; r < s.regions; ++r)
+  for (int r = 0; r < static_cast<int>(regions.size()); ++r)
     for (int t : regions[r].triangles) triangle_region[t] = r;
   std::vector<Plane> planes(regions.size());
   for (std::size_t r = 0; r < regions.size(); ++r) planes[r] = {regions[r].point, regions[r].normal};
@@ -257,63 +281,64 @@ FlattenStats flatten_planar_regions(const SubdivLevel& cage, const std::vector<P
     // vertices off the region (across a thin wall, along a fillet that leaves the plane).
     std::vector<int> sup = limit_support(cage, f);
     if (!std::all_of(sup.begin(), sup.end(), [&](int v) { return planes[r].distance(on_mesh[v]) <= on_plane; })) {
-      ++s.faces_off_plane;
+      ++pc.faces_off_plane;
       continue;
     }
-    s.face_region[f] = r;
+    pc.face_region[f] = r;
     support[f] = std::move(sup);
   }
 
-  // Constraints per vertex; faces whose vertices cannot meet theirs are given up, until all meet.
-  std::vector<Point3> moved = positions;
-  std::vector<char> constrained(nv, 0);
+  // Planes per vertex; faces whose vertices' planes do not meet near them are given up, until all meet.
   const double max_move = options.max_move * diagonal;
   for (;;) {
-    std::vector<std::vector<int>> planes_at(nv);
+    auto& vr = pc.vertex_regions;
+    for (auto& x : vr) x.clear();
     for (int f = 0; f < nf; ++f)
-      if (s.face_region[f] >= 0)
-        for (int v : support[f]) planes_at[v].push_back(s.face_region[f]);
+      if (pc.face_region[f] >= 0)
+        for (int v : support[f]) vr[v].push_back(pc.face_region[f]);
     std::vector<char> bad(nv, 0);
     bool any_bad = false;
     for (int v = 0; v < nv; ++v) {
-      auto& ps = planes_at[v];
-      constrained[v] = !ps.empty();
-      if (ps.empty()) continue;
-      std::sort(ps.begin(), ps.end());
-      ps.erase(std::unique(ps.begin(), ps.end()), ps.end());
-      // The closest point to the fitted position on every plane: x = p + N^+ (d - N p), N's
-      // pseudo-inverse with singular values below 1e-2 of the largest dropped (parallel planes).
-      const int k = static_cast<int>(ps.size());
-      Eigen::MatrixXd N(k, 3);
-      Eigen::VectorXd d(k);
-      const Eigen::Vector3d p(positions[v][0], positions[v][1], positions[v][2]);
-      for (int i = 0; i < k; ++i) {
-        const Plane& pl = planes[ps[i]];
-        N.row(i) << pl.normal[0], pl.normal[1], pl.normal[2];
-        d[i] = dot(pl.normal, pl.point);
-      }
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(N, Eigen::ComputeThinU | Eigen::ComputeThinV);
-      const Eigen::VectorXd sv = svd.singularValues();
-      const Eigen::VectorXd rhs = svd.matrixU().transpose() * (d - N * p);
-      Eigen::Vector3d x = p;
-      for (int i = 0; i < sv.size(); ++i)
-        if (sv[i] > 1e-2 * sv[0]) x += svd.matrixV().col(i) * (rhs[i] / sv[i]);
-      bool ok = (x - p).norm() <= max_move;
-      for (int i = 0; i < k && ok; ++i) ok = std::abs(N.row(i).dot(x) - d[i]) <= 1e-9 * diagonal;
-      if (!ok) {
-        bad[v] = 1;
-        any_bad = true;
-        continue;
-      }
-      moved[v] = {x[0], x[1], x[2]};
+      std::sort(vr[v].begin(), vr[v].end());
+      vr[v].erase(std::unique(vr[v].begin(), vr[v].end()), vr[v].end());
+      if (vr[v].empty()) continue;
+      Point3 x;
+      if (!onto_planes(planes, vr[v], on_mesh[v], diagonal, x) || norm(sub(x, on_mesh[v])) > max_move) bad[v] = 1, any_bad = true;
     }
     if (!any_bad) break;
     for (int f = 0; f < nf; ++f) {
-      if (s.face_region[f] < 0) continue;
+      if (pc.face_region[f] < 0) continue;
       if (std::any_of(support[f].begin(), support[f].end(), [&](int v) { return bad[v] != 0; }))
-        s.face_region[f] = -1, ++s.faces_dropped;
+        pc.face_region[f] = -1, ++pc.faces_dropped;
     }
-    moved = positions;
+  }
+  return pc;
+}
+
+FlattenStats flatten_planar_regions(const SubdivLevel& cage, const PlanarConstraints& constraints,
+                                    std::vector<Point3>& positions, const std::vector<PlanarRegion>& regions,
+                                    double diagonal, const FlattenOptions& options) {
+  const PolyMesh& m = cage.mesh;
+  const int nf = m.num_faces(), nv = m.num_vertices();
+  if (static_cast<int>(positions.size()) != nv || static_cast<int>(constraints.vertex_regions.size()) != nv ||
+      static_cast<int>(constraints.face_region.size()) != nf)
+    throw std::invalid_argument("flatten_planar_regions: one position per cage vertex");
+  FlattenStats s;
+  s.regions = static_cast<int>(regions.size());
+  s.face_region = constraints.face_region;
+  s.faces_off_plane = constraints.faces_off_plane;
+  s.faces_dropped = constraints.faces_dropped;
+  std::vector<Plane> planes(regions.size());
+  for (std::size_t r = 0; r < regions.size(); ++r) planes[r] = {regions[r].point, regions[r].normal};
+  std::vector<Point3> moved = positions;
+  for (int v = 0; v < nv; ++v) {
+    if (constraints.vertex_regions[v].empty()) continue;
+    Point3 x;
+    if (!onto_planes(planes, constraints.vertex_regions[v], positions[v], diagonal, x)) continue;  // not for planar_constraints' planes
+    moved[v] = x;
+    const double move = norm(sub(x, positions[v]));
+    if (move > 0) ++s.vertices_moved;
+    s.max_move = std::max(s.max_move, move / diagonal);
   }
 
   // The flatness of the regions' faces before and after.
@@ -321,12 +346,6 @@ FlattenStats flatten_planar_regions(const SubdivLevel& cage, const std::vector<P
   for (int f = 0; f < nf; ++f)
     if (s.face_region[f] >= 0) ++s.faces, used[s.face_region[f]] = 1;
   s.regions_used = static_cast<int>(std::count(used.begin(), used.end(), 1));
-  for (int v = 0; v < nv; ++v) {
-    if (!constrained[v]) continue;
-    const double move = norm(sub(moved[v], positions[v]));
-    if (move > 0) ++s.vertices_moved;
-    s.max_move = std::max(s.max_move, move / diagonal);
-  }
   if (s.faces > 0) {
     const LimitEvaluator before(cage, positions), after(cage, moved);
     const int n = std::max(2, options.samples);
@@ -348,6 +367,23 @@ FlattenStats flatten_planar_regions(const SubdivLevel& cage, const std::vector<P
   }
   positions = std::move(moved);
   return s;
+}
+
+FlattenStats flatten_planar_regions(const SubdivLevel& cage, const std::vector<Point3>& on_mesh,
+                                    std::vector<Point3>& positions, const std::vector<Point3>& points,
+                                    const std::vector<std::array<int, 3>>& triangles,
+                                    const std::vector<PlanarRegion>& regions, double diagonal,
+                                    const FlattenOptions& options) {
+  const PlanarConstraints pc = planar_constraints(cage, on_mesh, points, triangles, regions, diagonal, options);
+  return flatten_planar_regions(cage, pc, positions, regions, diagonal, options);
+}
+
+std::vector<ShapeFitOptions::VertexPlane> vertex_planes(const PlanarConstraints& constraints,
+                                                        const std::vector<PlanarRegion>& regions) {
+  std::vector<ShapeFitOptions::VertexPlane> out;
+  for (int v = 0; v < static_cast<int>(constraints.vertex_regions.size()); ++v)
+    for (int r : constraints.vertex_regions[v]) out.push_back({v, regions[r].normal, dot(regions[r].normal, regions[r].point)});
+  return out;
 }
 
 }  // namespace subd2nurbs

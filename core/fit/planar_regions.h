@@ -18,13 +18,14 @@
 //   point (the closest point of it to the fitted position). Catmull-Clark limit points are
 //   affine combinations of the support, so that face's limit lies exactly in the plane (to
 //   rounding). Vertices whose planes do not meet (parallel planes: a wall thinner than the
-//   cage's faces; or a point farther than `max_move` from the fitted position) drop the faces
+//   cage's faces; or a point farther than `max_move` from its position on the mesh) drop the faces
 //   that asked for them, until every remaining constraint is met.
 #pragma once
 
 #include <array>
 #include <vector>
 
+#include "core/fit/shape_fit.h"
 #include "core/refine/refiner.h"
 #include "core/util/point3.h"
 
@@ -56,7 +57,7 @@ std::vector<int> limit_support(const SubdivLevel& cage, int f);
 
 struct FlattenOptions {
   double on_plane = 1e-5;   ///< a cage vertex (on_mesh position) is on a region's plane within this x diagonal
-  double max_move = 0.05;   ///< a vertex is not moved farther than this x diagonal
+  double max_move = 1e-3;   ///< a vertex's planes must meet within this x diagonal of its position on the mesh
   int samples = 5;          ///< limit samples per face side for the flatness measure (n x n)
 };
 
@@ -74,9 +75,32 @@ struct FlattenStats {
   std::vector<int> face_region;  ///< per cage face: the region it was flattened to, or -1
 };
 
-/// Moves `positions` (the fitted cage) so that the faces of planar regions are exactly planar.
-/// `on_mesh`: the cage's positions on the mesh (classification); `regions` from
-/// detect_planar_regions on `points` / `triangles`; `diagonal` the mesh's.
+/// Which cage faces are flattened, and onto which planes each cage vertex goes (the regions'
+/// indices, sorted), decided on the cage's positions on the mesh (`on_mesh`) before a fit.
+struct PlanarConstraints {
+  std::vector<int> face_region;                  ///< per cage face: its region, or -1
+  std::vector<std::vector<int>> vertex_regions;  ///< per cage vertex: the regions whose planes hold it
+  int faces_off_plane = 0, faces_dropped = 0;    ///< as FlattenStats'
+};
+
+/// `on_mesh`: the cage's positions on the mesh; `regions` from detect_planar_regions on
+/// `points` / `triangles`; `diagonal` the mesh's.
+PlanarConstraints planar_constraints(const SubdivLevel& cage, const std::vector<Point3>& on_mesh,
+                                     const std::vector<Point3>& points, const std::vector<std::array<int, 3>>& triangles,
+                                     const std::vector<PlanarRegion>& regions, double diagonal,
+                                     const FlattenOptions& options = {});
+
+/// The constraints as the fit's held vertices (ShapeFitOptions::vertex_planes): one per vertex and plane.
+std::vector<ShapeFitOptions::VertexPlane> vertex_planes(const PlanarConstraints& constraints,
+                                                        const std::vector<PlanarRegion>& regions);
+
+/// Moves `positions` (the fitted cage) onto the constraints' planes, so that the faces of planar
+/// regions are exactly planar; measures their flatness before and after.
+FlattenStats flatten_planar_regions(const SubdivLevel& cage, const PlanarConstraints& constraints,
+                                    std::vector<Point3>& positions, const std::vector<PlanarRegion>& regions,
+                                    double diagonal, const FlattenOptions& options = {});
+
+/// planar_constraints, then flatten_planar_regions.
 FlattenStats flatten_planar_regions(const SubdivLevel& cage, const std::vector<Point3>& on_mesh,
                                     std::vector<Point3>& positions, const std::vector<Point3>& points,
                                     const std::vector<std::array<int, 3>>& triangles,
