@@ -10,6 +10,7 @@
 
 #include "converter/pipeline/settings_error.h"
 #include "converter/pipeline/text.h"
+#include "core/fit/planar_regions.h"
 #include "core/limit/limit_evaluator.h"
 #include "core/mesh/quad_recovery.h"
 #include "core/util/error.h"
@@ -260,6 +261,24 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
   return s;
 }
 
+/// The planar regions of the target's triangles (at least a cage edge wide: the mean edge of
+/// the cage `start`, on the mesh) and the cage's faces and vertices held in them.
+struct PlanarSetup {
+  std::vector<PlanarRegion> regions;
+  PlanarConstraints constraints;
+};
+PlanarSetup planar_setup(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target) {
+  const PolyMesh& m = cage.mesh;
+  double length = 0;
+  for (int e = 0; e < m.num_edges(); ++e) length += norm(sub(start[m.edge_vertex(e, 1)], start[m.edge_vertex(e, 0)]));
+  PlanarRegionOptions po;
+  po.min_width = m.num_edges() > 0 ? length / m.num_edges() : 0;
+  PlanarSetup s;
+  s.regions = detect_planar_regions(target.points(), target.triangles(), po);
+  s.constraints = planar_constraints(cage, start, target.points(), target.triangles(), s.regions, target.diagonal());
+  return s;
+}
+
 void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
   w.begin_object();
   w.members("faces", r.faces, "vertices", r.vertices, "extraordinary_vertices", r.extraordinary_vertices,
@@ -414,6 +433,9 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   rep.fit_options.levels = 2;
   rep.fit_options.max_iterations = 10;
   rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
+  // The cage's vertices that planar regions' faces depend on, held on their planes (core/fit/planar_regions.h).
+  const PlanarSetup planar = planar_setup(out.cage.level, start, target);
+  rep.fit_options.vertex_planes = vertex_planes(planar.constraints, planar.regions);
   ShapeFitProgress fit_progress;
   if (progress.fraction)
     fit_progress = [&](int iteration, double) {
@@ -424,6 +446,13 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   out.positions = rep.fit.fit.positions;
   rep.fit_ms = rep.fit.fit_ms;
   rep.measure_ms = rep.fit.measure_ms;
+
+  // The planar regions' faces made exactly planar (the held vertices onto their planes); measured again.
+  t = Clock::now();
+  rep.planar = flatten_planar_regions(out.cage.level, planar.constraints, out.positions, planar.regions, target.diagonal());
+  if (rep.planar.vertices_moved > 0)
+    rep.fit.after = measure_target_distance(LimitEvaluator(out.cage.level, out.positions), target);
+  rep.measure_ms += ms_since(t);
 
   // The kept features' normal angles against the mesh's dihedrals.
   Diagnostics ignore;
@@ -453,6 +482,12 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   w.members("samples", r.feature_angles.samples, "max_difference_deg", r.feature_angles.max_difference,
             "mean_difference_deg", r.feature_angles.mean_difference, "where_edge", r.feature_angles.where_edge);
   w.end_object();
+  w.key("planar").begin_object();
+  w.members("regions", r.planar.regions, "regions_used", r.planar.regions_used, "faces", r.planar.faces,
+            "faces_off_plane", r.planar.faces_off_plane, "faces_dropped", r.planar.faces_dropped, "vertices_moved", r.planar.vertices_moved);
+  w.members("max_move", r.planar.max_move, "flatness_before", r.planar.flatness_before, "flatness_after",
+            r.planar.flatness_after);
+  w.end_object();
   w.key("ms").begin_object();
   w.members("remesh", r.remesh_ms, "fit", r.fit_ms, "measure", r.measure_ms);
   w.end_object();
@@ -473,6 +508,10 @@ std::string mesh_path_summary(const MeshPathReport& r) {
   if (r.feature_angles.samples > 0)
     o << "  features   normal angle across kept feature curves within " << short_number(r.feature_angles.max_difference)
       << " deg of the mesh's dihedral (mean " << short_number(r.feature_angles.mean_difference) << ")\n";
+  if (r.planar.faces > 0)
+    o << "  planar     " << r.planar.faces << " cage faces in " << r.planar.regions_used << " of " << r.planar.regions
+      << " planar regions flat within " << short_number(r.planar.flatness_after) << " of the diagonal (fit: "
+      << short_number(r.planar.flatness_before) << ")\n";
   return o.str();
 }
 

@@ -24,6 +24,7 @@
 
 #include "converter/pipeline/input.h"
 #include "converter/pipeline/shape_fit_report.h"
+#include "core/fit/planar_regions.h"
 #include "core/remesh/quad_remesh.h"
 
 namespace subd2nurbs::pipeline {
@@ -93,6 +94,7 @@ struct MeshPathReport {
   ShapeFitOptions fit_options;
   ShapeFitRun fit;              ///< the fit, with the two-sided distance before and after
   FeatureAngleStats feature_angles;
+  FlattenStats planar;          ///< the planar regions made exactly planar (core/fit/planar_regions.h)
   double remesh_ms = 0, fit_ms = 0, measure_ms = 0;
 };
 

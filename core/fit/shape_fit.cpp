@@ -712,9 +712,11 @@ struct SampleGroups {
 /// One solve of a fit iteration: the cage positions minimising the weighted pairings (rows of A:
 /// samples -> targets, weights Ma, W c Ga; rows of B: data points -> their feet, Mb, Gb) plus the
 /// regulariser lambda K and the proximal term mu |P - P_prev|^2. \throw FitError
-void solve_step(const Samples& S, const ExactRows* exact, const std::vector<Foot>& foot, const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga,
+/// Returns the weight of the held vertices' planes in this solve (ShapeFitOptions::vertex_planes).
+double solve_step(const Samples& S, const ExactRows* exact, const std::vector<Foot>& foot, const Eigen::MatrixXd& Ma, const Eigen::MatrixXd& Ga,
                 const Eigen::MatrixXd& Mb, const Eigen::MatrixXd& Gb, const SparseMatrix& K, double lambda,
-                double proximal, const SampleGroups& groups, NormalEquations& eq, std::vector<Point3>& P) {
+                double proximal, const SampleGroups& groups, const ShapeFitOptions& options, NormalEquations& eq,
+                std::vector<Point3>& P) {
   const int n = static_cast<int>(P.size()), nb = static_cast<int>(foot.size());
   // Solve (H + lambda K (x) I3 + mu I) P = rhs + mu P_prev, H = sum over the rows (samples,
   // then data points; each over the cage) of r^T r (x) W.
@@ -753,13 +755,21 @@ void solve_step(const Samples& S, const ExactRows* exact, const std::vector<Foot
     row.finish();
     eq.add(row.idx.data(), row.w.data(), static_cast<int>(row.idx.size()), weight(Mb, j), Gb.row(j).transpose());
   }
-  const double mu = proximal * eq.trace() / (3.0 * n) + 1e-300;
+  const double mean_diagonal = eq.trace() / (3.0 * n);
+  const double mu = proximal * mean_diagonal + 1e-300;
+  const double plane_w = options.plane_weight * mean_diagonal;
+  for (const ShapeFitOptions::VertexPlane& c : options.vertex_planes) {
+    const Vec3 nv(c.normal[0], c.normal[1], c.normal[2]);
+    const double one = 1;
+    eq.add(&c.vertex, &one, 1, plane_w * nv * nv.transpose(), plane_w * c.offset * nv);
+  }
   Eigen::VectorXd prox(3 * n);
   for (int c = 0; c < 3; ++c)
     for (int v = 0; v < n; ++v) prox[c * n + v] = mu * P[v][c];
   const Eigen::VectorXd x = eq.solve(lambda > 0 ? &K : nullptr, lambda, mu, prox);
   if (!x.allFinite()) throw FitError("fit_to_shape: the solve gave non-finite positions", {});
   for (int v = 0; v < n; ++v) P[v] = {x[v], x[n + v], x[2 * n + v]};
+  return plane_w;
 }
 
 
@@ -912,6 +922,8 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     throw std::invalid_argument("fit_to_shape: negative option");
   const double diag = target.diagonal();
   if (!(diag > 0)) throw std::invalid_argument("fit_to_shape: the target has no extent");
+  for (const ShapeFitOptions::VertexPlane& c : options.vertex_planes)
+    if (c.vertex < 0 || c.vertex >= n) throw std::invalid_argument("fit_to_shape: a held vertex out of range");
 
   const Samples S = make_samples(cage, options.levels);
   const int ns = static_cast<int>(S.vertex.size());
@@ -970,6 +982,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   bool plane = can_plane, last_plane = can_plane;
   int plane_count = 0;
   double prev_objective = std::numeric_limits<double>::infinity();
+  double plane_w = 0;  // the held vertices' weight in the last solve (0 before the first)
   double prev_distance = std::numeric_limits<double>::infinity();
   double damping = 0;
   struct {
@@ -1082,6 +1095,10 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
         for (int v = 0; v < n; ++v) p[v] = P[v][c];
         reg += lambda * p.dot(K * p);
       }
+    for (const ShapeFitOptions::VertexPlane& c : options.vertex_planes) {
+      const double off = c.normal[0] * P[c.vertex][0] + c.normal[1] * P[c.vertex][1] + c.normal[2] * P[c.vertex][2] - c.offset;
+      reg += plane_w * off * off;
+    }
     h.objective = (data_sum + reg) / (diag * diag);
     h.surface_rms = std::sqrt(sa / ns) / diag;
     h.surface_max /= diag;
@@ -1108,7 +1125,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
       Mb = accepted.Mb;
       Gb = accepted.Gb;
       result.history.back() = accepted.h;
-      solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, groups, eq, P);
+      plane_w = solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, groups, options, eq, P);
       result.iterations = it + 1;
       continue;
     }
@@ -1151,7 +1168,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
     accepted.Mb = Mb;
     accepted.Gb = Gb;
     accepted.h = h;
-    solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, groups, eq, P);
+    plane_w = solve_step(S, exact.get(), foot, Ma, Ga, Mb, Gb, K, lambda, options.proximal + damping, groups, options, eq, P);
     result.iterations = it + 1;
   }
   const ShapeFitIteration& last = result.history.back();

@@ -80,6 +80,16 @@ struct ShapeFitOptions {
   /// within crease_reach x the mean length of the level-k crease edges.
   double crease_angle = 0.0;
   double crease_reach = 4.0;
+  /// Cage vertices held on planes (the mesh path's planar regions, core/fit/planar_regions.h):
+  /// each adds plane_weight x (the normal equations' mean diagonal) x (normal . P_vertex -
+  /// offset)^2 to every solve, so that the rest of the cage fits around the held vertices.
+  struct VertexPlane {
+    int vertex = 0;
+    Point3 normal{};  ///< unit
+    double offset = 0;
+  };
+  std::vector<VertexPlane> vertex_planes;
+  double plane_weight = 1e3;
 };
 
 /// The options for a target that lies on a subdivision surface (a dense sampling of an exact

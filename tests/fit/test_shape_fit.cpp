@@ -594,5 +594,34 @@ TEST(TargetDistance, KnownOffsets) {
   EXPECT_NEAR(d.p95, 1e-3, 1e-11);
 }
 
+// Held vertices (ShapeFitOptions::vertex_planes, the mesh path's planar regions): a vertex held
+// on a plane 5 % of the diagonal off where the free fit puts it ends on that plane (the penalty
+// leaves a residual of about 1 / plane_weight of the offset), the others fit around it; an index
+// out of range is refused.
+TEST(ShapeFit, HeldVerticesStayOnTheirPlanes) {
+  const MeshInput in = corpus_cage("catmark_torus");
+  const SubdivLevel cage = SubdivLevel::from_input(in);
+  const std::vector<Point3> truth = positions_of(in);
+  const LimitTarget lt = limit_target(LimitEvaluator(cage, truth), 8);
+  const ShapeTarget target(lt.points, lt.triangles);
+  const std::vector<Point3> start = perturbed(truth, 0.03, 5);
+  ShapeFitOptions o;
+  o.max_iterations = 6;
+  const ShapeFitResult free_fit = fit_to_shape(cage, start, target, o);
+  const double offset = 0.05 * target.diagonal();
+  const Point3 n{0.6, 0, 0.8};
+  for (int v : {0, 7}) {
+    const Point3& p = free_fit.positions[v];
+    o.vertex_planes.push_back({v, n, n[0] * p[0] + n[1] * p[1] + n[2] * p[2] + offset});
+  }
+  const ShapeFitResult held = fit_to_shape(cage, start, target, o);
+  for (const ShapeFitOptions::VertexPlane& c : o.vertex_planes) {
+    const Point3& p = held.positions[c.vertex];
+    EXPECT_LT(std::abs(n[0] * p[0] + n[1] * p[1] + n[2] * p[2] - c.offset), 0.02 * offset) << "vertex " << c.vertex;
+  }
+  o.vertex_planes.push_back({static_cast<int>(truth.size()), n, 0});
+  EXPECT_THROW(fit_to_shape(cage, start, target, o), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace subd2nurbs::testing

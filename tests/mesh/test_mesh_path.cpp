@@ -32,6 +32,7 @@
 #include <TopoDS_Face.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <gp_Ax2.hxx>
+#include <gp_Pln.hxx>
 #include <gp_Pnt.hxx>
 
 #include <cmath>
@@ -256,6 +257,47 @@ void check_against(const TopoDS_Shape& exact, const Triangles& mesh, const Conve
               json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}));
 }
 
+/// Planar faces stay planar (issue #28): every B-rep face of ours whose n x n grid points all lie
+/// within 1e-3 x the diagonal of one plane of the exact solid, inside that face's box, must lie in
+/// it within 1e-4 x the diagonal (the goal; the flattening reaches rounding). At least
+/// `min_fraction` of our faces must be such faces. Returns the largest distance over them,
+/// relative to the diagonal.
+double check_planar_faces(const TopoDS_Shape& exact, const TopoDS_Shape& ours, double diag, double min_fraction) {
+  struct ExactPlane {
+    gp_Pln plane;
+    Bnd_Box box;
+  };
+  std::vector<ExactPlane> planes;
+  for (TopExp_Explorer ex(exact, TopAbs_FACE); ex.More(); ex.Next()) {
+    const BRepAdaptor_Surface s(TopoDS::Face(ex.Current()));
+    if (s.GetType() != GeomAbs_Plane) continue;
+    ExactPlane p{s.Plane(), {}};
+    BRepBndLib::Add(ex.Current(), p.box);
+    p.box.Enlarge(1e-3 * diag);
+    planes.push_back(p);
+  }
+  int faces = 0, on_planes = 0;
+  double worst = 0;
+  for (TopExp_Explorer ex(ours, TopAbs_FACE); ex.More(); ex.Next()) {
+    ++faces;
+    const std::vector<gp_Pnt> pts = grid_points(ex.Current(), 5);
+    for (const ExactPlane& p : planes) {
+      double far = 0;
+      bool inside = true;
+      for (const gp_Pnt& q : pts) far = std::max(far, p.plane.Distance(q)), inside = inside && !p.box.IsOut(q);
+      if (!inside || far > 1e-3 * diag) continue;
+      ++on_planes;
+      worst = std::max(worst, far);
+      break;
+    }
+  }
+  EXPECT_LT(worst, 1e-4 * diag) << "relative " << worst / diag;
+  EXPECT_GE(on_planes, min_fraction * faces) << on_planes << " of " << faces;
+  std::printf("  %d of %d B-rep faces on planes of the exact solid, within %.3g of the diagonal\n", on_planes, faces,
+              worst / diag);
+  return worst / diag;
+}
+
 TopoDS_Shape box_with_hole() {
   const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-20, -15, 0), 40, 30, 10).Shape();
   const TopoDS_Shape drill = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, -1), gp::DZ()), 6, 12).Shape();
@@ -276,6 +318,27 @@ TEST(MeshPath, BoxWithDrilledHole) {
   // (The issue's goal, every point within 3 degrees, is not met yet: the largest is printed.)
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 0);
   EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}), 3.0);
+  // The box's planar faces (with the hole's rims) are flat.
+  check_planar_faces(exact, c.shape, diagonal(mesh), 0.3);
+  EXPECT_LT(json_number(c.report, {"mesh", "planar", "flatness_after"}), 1e-12);
+}
+
+/// A stepped block (an L-shaped profile extruded, a hole drilled through the lower step): its
+/// nine planar faces stay planar.
+TEST(MeshPath, SteppedBlockStaysPlanar) {
+  TempDir dir;
+  const TopoDS_Shape block = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 40, 24, 16).Shape();
+  const TopoDS_Shape step = BRepPrimAPI_MakeBox(gp_Pnt(20, -1, 8), 21, 26, 9).Shape();
+  const TopoDS_Shape drill = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(30, 12, -1), gp::DZ()), 4, 20).Shape();
+  const TopoDS_Shape exact = BRepAlgoAPI_Cut(BRepAlgoAPI_Cut(block, step).Shape(), drill).Shape();
+  const Triangles mesh = tessellate(exact, 0.01);
+  ASSERT_EQ(euler_characteristic(mesh), 0);  // genus 1
+  const std::string stl = dir.file("stepped.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir, "--target-faces 300");
+  check_against(exact, mesh, c, 2e-2);
+  check_planar_faces(exact, c.shape, diagonal(mesh), 0.5);
+  EXPECT_GE(json_number(c.report, {"mesh", "planar", "regions_used"}), 8);
 }
 
 TEST(MeshPath, CylinderSideStaysOnTheCylinder) {
