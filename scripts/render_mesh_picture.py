@@ -11,6 +11,8 @@ which runs `build/subd2nurbs convert tests/data/mesh/fandisk.off -o TMP/x.step -
 with the defaults, reads the STEP back with FreeCAD (`freecadcmd`: Part.read, each face
 tessellated, each edge discretised; Debian package freecad) and writes docs/images/mesh_to_nurbs.png.
 Options: --cli, --mesh (an OFF file), --out, --freecadcmd, --width, --azimuth, --elevation.
+Needs the Debian packages python3-numpy, python3-pil and freecad (not the build's: nothing in the
+build or the tests runs this script). Takes a minute or two (most of it the z-buffer in Python).
 
 Rendering: numpy only (PIL for the captions, the downsampling and the PNG): an orthographic
 camera, a z-buffer at 3x the final size, flat shading for the mesh (its facets), smooth shading
@@ -20,6 +22,7 @@ sharp), lines drawn where the z-buffer shows them, then a box filter down to the
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -268,6 +271,13 @@ def main():
     out.save(a.out, optimize=True)
     print("%s: %d triangles -> %d NURBS faces (%d solid(s)); %d bytes"
           % (a.out, triangles, nfaces, brep["solids"], os.path.getsize(a.out)), file=sys.stderr)
+    # The numbers the README's paragraph under the picture quotes.
+    after = r["mesh"]["fit"]["after"]
+    print("two-sided distance max %.2g of the diagonal; %d pair(s) of faces cross"
+          % (max(after["limit_to_target"]["max"], after["target_to_limit"]["max"]),
+             r["self_intersection"]["crossing_face_pairs"]), file=sys.stderr)
+    if not a.workdir:
+        shutil.rmtree(tmp)
 
 
 if __name__ == "__main__":
