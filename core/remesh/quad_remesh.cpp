@@ -720,10 +720,16 @@ V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
   return a + ab * t;
 }
 
+// Points of the split (edge midpoints, polygon centres) placed on the dense mesh.
 struct Projector {
   const Dense& d;
   const Fields& fl;
   std::vector<int> vf_offsets, vf;
+  std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along feature edges
+  std::vector<V3> face_normal;          // unit normals of the dense triangles
+  double longest_edge = 0;
+  mutable std::vector<int> mark;        // search stamps
+  mutable int stamp = 0;
 
   Projector(const Dense& dense, const Fields& fields) : d(dense), fl(fields) {
     int n = static_cast<int>(d.p.size());
@@ -735,17 +741,92 @@ struct Projector {
     std::vector<int> fill(vf_offsets.begin(), vf_offsets.end() - 1);
     for (size_t i = 0; i < d.t.size(); ++i)
       for (int v : d.t[i]) vf[fill[v]++] = int(i);
+    chain.assign(n, {});
+    for (int v = 0; v < n; ++v)
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        const int w = fl.adj[i];
+        longest_edge = std::max(longest_edge, (d.p[v] - d.p[w]).norm());
+        if (d.feature.count(edge_key(v, w))) chain[v].push_back(w);
+      }
+    for (const Tri& t : d.t) {
+      V3 fn = (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]);
+      double l = fn.norm();
+      face_normal.push_back(l > 0 ? V3(fn / l) : V3::Zero());
+    }
+    mark.assign(n, -1);
   }
-  // Walks from dense vertex `start` towards x (over feature edges only when `on_feature`), then
-  // projects onto the faces (or feature edges) around the vertex reached.
-  V3 project(const V3& x, int start, bool on_feature) const {
+
+  // The closest point to x on the dense triangles that face within 90 degrees of `normal` (any
+  // triangle if none does, or if `normal` is zero), among those reached from dense vertex `start`
+  // over vertices no farther from x than start is (plus the longest edge): every triangle that
+  // holds a point closer than start is within that ball. (A greedy walk towards x stops in local
+  // minima: across a sharp edge it can end on the wrong face of the part, a quad's centre on the
+  // bottom instead of the wall beside it.)
+  V3 project(const V3& x, int start, const V3& normal) const {
+    const double reach = (d.p[start] - x).norm() + longest_edge;
+    ++stamp;
+    std::vector<int> queue{start};
+    mark[start] = stamp;
+    V3 best[2] = {d.p[start], d.p[start]};  // facing `normal`, any
+    double bd[2] = {INFINITY, INFINITY};
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const int v = queue[head];
+      for (int i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
+        const Tri& t = d.t[vf[i]];
+        const V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
+        const double dc = (c - x).squaredNorm();
+        for (int k = 0; k < 2; ++k)
+          if ((k == 1 || face_normal[vf[i]].dot(normal) > 0) && dc < bd[k]) bd[k] = dc, best[k] = c;
+      }
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        const int w = fl.adj[i];
+        if (mark[w] == stamp || (d.p[w] - x).norm() > reach) continue;
+        mark[w] = stamp;
+        queue.push_back(w);
+      }
+    }
+    return bd[0] < INFINITY ? best[0] : best[1];
+  }
+
+  // The point halfway (by length) along the feature chain of the dense mesh from dense vertex a
+  // to dense vertex b, where `is_end(v)` marks the chain's vertices kept by the extraction (the
+  // chain from a towards b meets none before b); a's own position if no such chain is found.
+  template <class IsEnd>
+  bool chain_middle(int a, int b, IsEnd&& is_end, V3& out) const {
+    for (int first : chain[a]) {
+      std::vector<int> path{a, first};
+      while (!is_end(path.back()) && path.size() < d.p.size()) {
+        const int v = path.back(), prev = path[path.size() - 2];
+        int next = -1;
+        for (int w : chain[v])
+          if (w != prev) next = w;
+        if (next < 0 || chain[v].size() != 2) break;
+        path.push_back(next);
+      }
+      if (path.back() != b || !is_end(b)) continue;
+      double total = 0;
+      for (size_t i = 1; i < path.size(); ++i) total += (d.p[path[i]] - d.p[path[i - 1]]).norm();
+      double run = 0;
+      for (size_t i = 1; i < path.size(); ++i) {
+        const double l = (d.p[path[i]] - d.p[path[i - 1]]).norm();
+        if (run + l >= 0.5 * total && l > 0) {
+          out = d.p[path[i - 1]] + (d.p[path[i]] - d.p[path[i - 1]]) * ((0.5 * total - run) / l);
+          return true;
+        }
+        run += l;
+      }
+    }
+    return false;
+  }
+
+  // The old projection onto feature edges (a greedy walk along them, then the closest point on
+  // the feature edges around the vertex reached): the fallback of chain_middle.
+  V3 project_on_feature(const V3& x, int start) const {
     int v = start;
     for (int step = 0; step < 100000; ++step) {
       int best = v;
       double bd = (d.p[v] - x).squaredNorm();
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        int w = fl.adj[i];
-        if (on_feature && !d.feature.count(edge_key(v, w))) continue;
+      for (int w : chain[v]) {
         double dw = (d.p[w] - x).squaredNorm();
         if (dw < bd) bd = dw, best = w;
       }
@@ -754,18 +835,8 @@ struct Projector {
     }
     V3 result = d.p[v];
     double bd = (result - x).squaredNorm();
-    if (on_feature) {
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        int w = fl.adj[i];
-        if (!d.feature.count(edge_key(v, w))) continue;
-        V3 c = closest_on_segment(x, d.p[v], d.p[w]);
-        if ((c - x).squaredNorm() < bd) bd = (c - x).squaredNorm(), result = c;
-      }
-      return result;
-    }
-    for (int i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
-      const Tri& t = d.t[vf[i]];
-      V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
+    for (int w : chain[v]) {
+      V3 c = closest_on_segment(x, d.p[v], d.p[w]);
       if ((c - x).squaredNorm() < bd) bd = (c - x).squaredNorm(), result = c;
     }
     return result;
@@ -1090,14 +1161,36 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
     const V3& x = d.p[dense_of[v]];
     cage.positions.push_back({x.x(), x.y(), x.z()});
   }
+  // Each polygon's normal (Newell's, of its corners) and, per edge, the sum of its polygons':
+  // the side of the surface a point of the split belongs to.
+  std::vector<V3> poly_normal;
+  std::unordered_map<std::uint64_t, V3> edge_normal;
+  for (const auto& poly : polygons) {
+    V3 n = V3::Zero();
+    const int m = static_cast<int>(poly.size());
+    for (int k = 0; k < m; ++k) n += d.p[dense_of[poly[k]]].cross(d.p[dense_of[poly[(k + 1) % m]]]);
+    const double l = n.norm();
+    poly_normal.push_back(l > 0 ? V3(n / l) : V3::Zero());
+    for (int k = 0; k < m; ++k) {
+      auto [it, added] = edge_normal.try_emplace(edge_key(poly[k], poly[(k + 1) % m]), V3::Zero());
+      it->second += poly_normal.back();
+    }
+  }
+  std::vector<char> kept(d.p.size(), 0);  // dense vertices that are coarse vertices
+  for (int v : dense_of) kept[v] = 1;
   std::unordered_map<std::uint64_t, int> midpoint;
   std::vector<std::uint64_t> feature_keys;
   auto mid = [&](int a, int b) {
     auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
     if (!inserted) return it->second;
     bool feat = coarse_feature(a, b);
-    int da = std::min(dense_of[a], dense_of[b]);
-    V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
+    const int da = dense_of[a], db = dense_of[b];
+    const V3 chord_middle = 0.5 * (d.p[da] + d.p[db]);
+    V3 x;
+    if (!feat)
+      x = proj.project(chord_middle, std::min(da, db), edge_normal[edge_key(a, b)]);
+    else if (!proj.chain_middle(std::min(da, db), std::max(da, db), [&](int v) { return kept[v] != 0; }, x))
+      x = proj.project_on_feature(chord_middle, std::min(da, db));
     it->second = static_cast<int>(cage.positions.size());
     cage.positions.push_back({x.x(), x.y(), x.z()});
     if (feat) {
@@ -1106,7 +1199,8 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
     }
     return it->second;
   };
-  for (const auto& poly : polygons) {
+  for (size_t pi = 0; pi < polygons.size(); ++pi) {
+    const auto& poly = polygons[pi];
     int m = static_cast<int>(poly.size());
     V3 centre = V3::Zero();
     int start = dense_of[poly[0]];
@@ -1114,7 +1208,7 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
       centre += d.p[dense_of[v]];
       start = std::min(start, dense_of[v]);
     }
-    V3 x = proj.project(centre / m, start, false);
+    V3 x = proj.project(centre / m, start, poly_normal[pi]);
     int c = static_cast<int>(cage.positions.size());
     cage.positions.push_back({x.x(), x.y(), x.z()});
     std::vector<int> mids(m);
