@@ -728,7 +728,8 @@ struct Projector {
   std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along feature edges
   std::vector<V3> face_normal;          // unit normals of the dense triangles
   double longest_edge = 0;
-  mutable std::vector<int> mark;        // search stamps
+  std::vector<std::array<int, 3>> across;  // per triangle: the triangle across its edge k (-1: none)
+  mutable std::vector<int> mark;        // search stamps (per triangle)
   mutable int stamp = 0;
 
   Projector(const Dense& dense, const Fields& fields) : d(dense), fl(fields) {
@@ -753,36 +754,64 @@ struct Projector {
       double l = fn.norm();
       face_normal.push_back(l > 0 ? V3(fn / l) : V3::Zero());
     }
-    mark.assign(n, -1);
+    mark.assign(d.t.size(), -1);
+    std::unordered_map<std::uint64_t, int> half;
+    for (size_t i = 0; i < d.t.size(); ++i)
+      for (int k = 0; k < 3; ++k) half[half_key(d.t[i][k], d.t[i][(k + 1) % 3])] = int(i);
+    across.assign(d.t.size(), {-1, -1, -1});
+    for (size_t i = 0; i < d.t.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        auto it = half.find(half_key(d.t[i][(k + 1) % 3], d.t[i][k]));
+        if (it != half.end()) across[i][k] = it->second;
+      }
   }
 
-  // The closest point to x on the dense triangles that face within 90 degrees of `normal` (any
-  // triangle if none does, or if `normal` is zero), among those reached from dense vertex `start`
-  // over vertices no farther from x than start is (plus the longest edge): every triangle that
-  // holds a point closer than start is within that ball. (A greedy walk towards x stops in local
-  // minima: across a sharp edge it can end on the wrong face of the part, a quad's centre on the
-  // bottom instead of the wall beside it.)
-  V3 project(const V3& x, int start, const V3& normal) const {
-    const double reach = (d.p[start] - x).norm() + longest_edge;
+  // The closest point to x on the part of the dense mesh that a coarse polygon (or edge) with
+  // the dense vertices `corners` covers: the triangles reached from the triangles around its
+  // corners that are on no feature (or, when all are, from the triangle around them that faces
+  // most like `normal`) across edges that are no feature edges, within the distance of its
+  // farthest corner from x (plus the longest edge); among them those facing within 90 degrees
+  // of `normal` first. Coarse polygons never cross a feature chain (their edges follow the
+  // chains), so the point stays on the polygon's own face of the part: a greedy walk towards x,
+  // or the closest point anywhere, can land across a sharp edge (a wall quad's centre on the
+  // bottom beside it when a coarse feature edge cuts across a tight arc of the rim).
+  V3 project(const V3& x, const std::vector<int>& corners, const V3& normal) const {
+    double reach = 0;
+    for (int c : corners) reach = std::max(reach, (d.p[c] - x).norm());
+    reach += longest_edge;
     ++stamp;
-    std::vector<int> queue{start};
-    mark[start] = stamp;
-    V3 best[2] = {d.p[start], d.p[start]};  // facing `normal`, any
+    std::vector<int> queue;
+    for (int c : corners)
+      if (fl.kind[c] == 0)
+        for (int i = vf_offsets[c]; i < vf_offsets[c + 1]; ++i)
+          if (mark[vf[i]] != stamp) mark[vf[i]] = stamp, queue.push_back(vf[i]);
+    if (queue.empty()) {
+      int best = -1;
+      double bd = -INFINITY;
+      for (int c : corners)
+        for (int i = vf_offsets[c]; i < vf_offsets[c + 1]; ++i)
+          if (face_normal[vf[i]].dot(normal) > bd) bd = face_normal[vf[i]].dot(normal), best = vf[i];
+      if (best < 0) return d.p[corners[0]];
+      mark[best] = stamp;
+      queue.push_back(best);
+    }
+    V3 best[2] = {d.p[corners[0]], d.p[corners[0]]};  // facing `normal`, any
     double bd[2] = {INFINITY, INFINITY};
     for (size_t head = 0; head < queue.size(); ++head) {
-      const int v = queue[head];
-      for (int i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
-        const Tri& t = d.t[vf[i]];
-        const V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
-        const double dc = (c - x).squaredNorm();
-        for (int k = 0; k < 2; ++k)
-          if ((k == 1 || face_normal[vf[i]].dot(normal) > 0) && dc < bd[k]) bd[k] = dc, best[k] = c;
-      }
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        const int w = fl.adj[i];
-        if (mark[w] == stamp || (d.p[w] - x).norm() > reach) continue;
-        mark[w] = stamp;
-        queue.push_back(w);
+      const int f = queue[head];
+      const Tri& t = d.t[f];
+      const V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
+      const double dc = (c - x).squaredNorm();
+      for (int k = 0; k < 2; ++k)
+        if ((k == 1 || face_normal[f].dot(normal) > 0) && dc < bd[k]) bd[k] = dc, best[k] = c;
+      for (int k = 0; k < 3; ++k) {
+        const int g = across[f][k];
+        if (g < 0 || mark[g] == stamp || d.feature.count(edge_key(t[k], t[(k + 1) % 3]))) continue;
+        const int w = d.t[g][0] + d.t[g][1] + d.t[g][2] - t[k] - t[(k + 1) % 3];
+        if ((d.p[w] - x).norm() > reach && (d.p[t[k]] - x).norm() > reach && (d.p[t[(k + 1) % 3]] - x).norm() > reach)
+          continue;
+        mark[g] = stamp;
+        queue.push_back(g);
       }
     }
     return bd[0] < INFINITY ? best[0] : best[1];
@@ -1188,7 +1217,7 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
     const V3 chord_middle = 0.5 * (d.p[da] + d.p[db]);
     V3 x;
     if (!feat)
-      x = proj.project(chord_middle, std::min(da, db), edge_normal[edge_key(a, b)]);
+      x = proj.project(chord_middle, {da, db}, edge_normal[edge_key(a, b)]);
     else if (!proj.chain_middle(std::min(da, db), std::max(da, db), [&](int v) { return kept[v] != 0; }, x))
       x = proj.project_on_feature(chord_middle, std::min(da, db));
     it->second = static_cast<int>(cage.positions.size());
@@ -1203,12 +1232,12 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
     const auto& poly = polygons[pi];
     int m = static_cast<int>(poly.size());
     V3 centre = V3::Zero();
-    int start = dense_of[poly[0]];
+    std::vector<int> corners;
     for (int v : poly) {
       centre += d.p[dense_of[v]];
-      start = std::min(start, dense_of[v]);
+      corners.push_back(dense_of[v]);
     }
-    V3 x = proj.project(centre / m, start, poly_normal[pi]);
+    V3 x = proj.project(centre / m, corners, poly_normal[pi]);
     int c = static_cast<int>(cage.positions.size());
     cage.positions.push_back({x.x(), x.y(), x.z()});
     std::vector<int> mids(m);
