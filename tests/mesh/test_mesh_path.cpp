@@ -320,6 +320,34 @@ TEST(MeshPath, BoxWithFilletedSlot) {
   check_against(exact, mesh, c, 2e-2);
 }
 
+/// Fandisk (12 946 triangles) with the defaults, against the input mesh itself: the report's
+/// two-sided distance (our surface's samples to the mesh's triangles, the mesh's vertices to our
+/// surface) and the normal angle across every kept feature curve against the mesh's dihedral at
+/// the nearest feature edge of the mesh. The goals are <= 300 B-rep faces (met), 1e-3 x
+/// the diagonal and 3 degrees (not met yet: an 18-degree tangent edge below the feature angle and
+/// the tight arcs of its rims leave 1.6e-3 and 11 degrees; docs/meshes.md "Limits"); the bounds
+/// here guard the split's projection (before it: 2.5e-3 and 82 degrees, a quad folded across
+/// the bottom rim).
+TEST(MeshPath, FandiskFollowsTheMesh) {
+  TempDir dir;
+  const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir);
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  EXPECT_TRUE(BRepCheck_Analyzer(c.shape).IsValid());
+  EXPECT_LE(json_number(c.report, {"brep", "faces"}), 300);
+  const double to_mesh = json_number(c.report, {"mesh", "fit", "after", "limit_to_target", "max"});
+  const double from_mesh = json_number(c.report, {"mesh", "fit", "after", "target_to_limit", "max"});
+  const double angle_max = json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"});
+  const double angle_mean = json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"});
+  EXPECT_LT(to_mesh, 2e-3);
+  EXPECT_LT(from_mesh, 2e-3);
+  EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 500);
+  EXPECT_LT(angle_max, 15.0);
+  EXPECT_LT(angle_mean, 1.0);
+  std::printf("  fandisk: %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, feature angles max %.3g "
+              "mean %.3g deg off\n",
+              json_number(c.report, {"brep", "faces"}), to_mesh, from_mesh, angle_max, angle_mean);
+}
+
 /// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says
 /// so, and its conversion equals the OBJ cage's.
 TEST(MeshPath, TriangulatedQuadCageStaysACage) {
