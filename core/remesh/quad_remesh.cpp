@@ -24,6 +24,12 @@ using Tri = std::array<int, 3>;
 
 struct CancelSignal {};
 
+// How far a feature chain may stray from the coarse edge standing for it, relative to the
+// edge's length (Collapser::chord_follows_chain): 0.2 lets an arc turn by up to ~87 degrees per
+// coarse edge (~44 per cage edge). (0.1 crowded the drilled box's rims with chain vertices and
+// folded a quad; 0.3 changes nothing there.)
+constexpr double kChainSag = 0.2;
+
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
@@ -563,6 +569,13 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
   }
 }
 
+V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
+  V3 ab = b - a;
+  double l = ab.squaredNorm();
+  double t = l > 0 ? std::clamp((x - a).dot(ab) / l, 0.0, 1.0) : 0.0;
+  return a + ab * t;
+}
+
 // --- extraction by edge collapses -------------------------------------------------------------
 struct Collapser {
   const std::vector<V3>& p;
@@ -573,8 +586,11 @@ struct Collapser {
   std::unordered_set<std::uint64_t> feature;
   std::vector<double> dist;
   std::vector<int> scratch_u, scratch_v;
+  std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along the input's feature edges
+  double chain_sag = 0;                 // see chord_follows_chain
 
-  Collapser(const Dense& d, const Fields& fields) : p(d.p), fl(fields), f(d.t), feature(d.feature) {
+  Collapser(const Dense& d, const Fields& fields, double max_chain_sag)
+      : p(d.p), fl(fields), f(d.t), feature(d.feature), chain_sag(max_chain_sag) {
     int n = static_cast<int>(p.size());
     face_alive.assign(f.size(), 1);
     alive.assign(n, 1);
@@ -583,6 +599,43 @@ struct Collapser {
       for (int v : f[i]) vf[v].push_back(int(i));
     dist.resize(n);
     for (int v = 0; v < n; ++v) dist[v] = (p[v] - fl.o[v]).norm();
+    chain.assign(n, {});
+    for (int v = 0; v < n; ++v)
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+        if (feature.count(edge_key(v, fl.adj[i]))) chain[v].push_back(fl.adj[i]);
+  }
+
+  // Whether feature vertex u may collapse into its chain neighbour v without the coarse edge
+  // that results, v - w (w: u's other coarse chain neighbour), cutting across a curved feature:
+  // every dense chain vertex between v and w must lie within chain_sag x |vw| of the chord vw.
+  // A feature arc tighter than the lattice spacing (a hole's rim, a rounded corner of a rim)
+  // keeps chain vertices on it, so that the cage's crease curve can follow it.
+  bool chord_follows_chain(int u, int v) const {
+    if (chain_sag <= 0) return true;
+    int w = -1;
+    for (int g : vf[u])
+      for (int x : f[g])
+        if (x != u && x != v && feature.count(edge_key(u, x))) w = x;
+    if (w < 0) return true;
+    for (int first : chain[v]) {
+      std::vector<int> path{v, first};
+      int passed_u = path.back() == u;
+      while (path.size() < p.size()) {
+        const int x = path.back();
+        if (alive[x] && x != u) break;
+        if (chain[x].size() != 2) break;
+        const int next = chain[x][0] == path[path.size() - 2] ? chain[x][1] : chain[x][0];
+        path.push_back(next);
+        passed_u |= next == u;
+      }
+      if (path.back() != w || !passed_u) continue;
+      const V3 a = p[v], b = p[w];
+      const double limit = chain_sag * (b - a).norm();
+      for (int x : path)
+        if ((closest_on_segment(p[x], a, b) - p[x]).norm() > limit) return false;
+      return true;
+    }
+    return true;
   }
 
   bool higher(int a, int b) const {  // priority of a above b
@@ -632,6 +685,7 @@ struct Collapser {
       if (!is_feature(u, v)) return false;
       for (int w : nu)
         if (w != v && is_feature(u, w) && is_feature(v, w)) return false;
+      if (!chord_follows_chain(u, v)) return false;
     }
     neighbours(v, nv);
     std::vector<int> common, opposite;
@@ -711,13 +765,6 @@ V3 closest_on_triangle(const V3& x, const V3& a, const V3& b, const V3& c) {
   if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
   double denom = 1 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
-V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
-  V3 ab = b - a;
-  double l = ab.squaredNorm();
-  double t = l > 0 ? std::clamp((x - a).dot(ab) / l, 0.0, 1.0) : 0.0;
-  return a + ab * t;
 }
 
 // Points of the split (edge midpoints, polygon centres) placed on the dense mesh.
@@ -1354,7 +1401,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
 
-      Collapser col(d, fl);
+      Collapser col(d, fl, kChainSag);
       collapse_to_lattice(d, fl, s, col, check);
       std::vector<int> dense_of;
       std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);

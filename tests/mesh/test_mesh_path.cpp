@@ -270,12 +270,16 @@ TEST(MeshPath, BoxWithDrilledHole) {
   const std::string stl = dir.file("part.stl");
   write_stl(mesh, stl);
   const Converted c = convert(stl, dir, "--target-faces 300");
-  check_against(exact, mesh, c, 2e-2);
+  // Within 2e-3 x the diagonal both ways (the hole's rims, circles of radius 6 against a cage
+  // spacing of ~7, are followed by chain vertices of their own: docs/remesh.md step 4; before
+  // that, 3e-3).
+  check_against(exact, mesh, c, 2e-3);
   // The sharp edges kept: the normal jump across the cage's feature curves is the mesh's
-  // dihedral there (90 degrees at the box's and the hole's rims), on average within 3 degrees.
-  // (The goal, every point within 3 degrees, is not met yet: the largest is printed.)
+  // dihedral there (90 degrees at the box's and the hole's rims), everywhere within 3 degrees
+  // (the goal; before the rims were followed, 14 degrees at a rim).
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 0);
-  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}), 3.0);
+  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"}), 3.0);
+  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}), 1.0);
 }
 
 TEST(MeshPath, CylinderSideStaysOnTheCylinder) {
