@@ -1360,15 +1360,21 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
   try {
     auto t0 = Clock::now();
     check(0);
-    result.features = detect_features(mesh, options.features);
+    double area = 0;
+    make_dense(mesh, FeatureSet{}, area);
+    if (!(area > 0)) throw Error(ErrorKind::Input, "quad remesh: the mesh has zero area");
+    double h = options.target_faces > 0 ? std::sqrt(area / options.target_faces) : options.edge_length;
+    FeatureOptions feature_options = options.features;
+    if (feature_options.soft_angle_degrees == 0 && feature_options.soft_reach == 0 && options.soft_features > 0) {
+      feature_options.soft_angle_degrees = options.soft_features * feature_options.angle_degrees;
+      feature_options.soft_reach = h;
+    }
+    result.features = detect_features(mesh, feature_options);
     QuadRemeshStats& st = result.stats;
     st.input_vertices = mesh.num_vertices();
     st.input_faces = mesh.num_faces();
 
-    double area = 0;
     Dense d = make_dense(mesh, result.features, area);
-    if (!(area > 0)) throw Error(ErrorKind::Input, "quad remesh: the mesh has zero area");
-    double h = options.target_faces > 0 ? std::sqrt(area / options.target_faces) : options.edge_length;
     double s = 2 * h;  // extraction lattice; the final split halves it
     double lmax = s / 4;
     if (area / (lmax * lmax) > 8e6)

@@ -327,11 +327,12 @@ TEST(MeshPath, BoxWithFilletedSlot) {
 /// Fandisk (12 946 triangles) with the defaults, against the input mesh itself: the report's
 /// two-sided distance (our surface's samples to the mesh's triangles, the mesh's vertices to our
 /// surface) and the normal angle across every kept feature curve against the mesh's dihedral at
-/// the nearest feature edge of the mesh. The goals are <= 300 B-rep faces (met), 1e-3 x
-/// the diagonal and 3 degrees (not met yet: an 18-degree tangent edge below the feature angle and
-/// the tight arcs of its rims leave 1.6e-3 and 11 degrees; docs/meshes.md "Limits"); the bounds
-/// here guard the split's projection (before it: 2.5e-3 and 82 degrees, a quad folded across
-/// the bottom rim).
+/// the nearest feature edge of the mesh. The goals: <= 300 B-rep faces and the mesh's
+/// vertices within 1e-3 x the diagonal of our surface (met); our surface within 1e-3 of the mesh
+/// and 3 degrees (not met yet: 1.15e-3 and 6.7 degrees, at the fan's tip where two feature
+/// curves meet at 19 degrees; docs/meshes.md "Limits"), so those bounds guard what is reached
+/// (before the split's projection fix and the soft features: 2.5e-3 from the mesh, 82 degrees,
+/// a quad folded across the bottom rim).
 TEST(MeshPath, FandiskFollowsTheMesh) {
   TempDir dir;
   const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir);
@@ -342,10 +343,10 @@ TEST(MeshPath, FandiskFollowsTheMesh) {
   const double from_mesh = json_number(c.report, {"mesh", "fit", "after", "target_to_limit", "max"});
   const double angle_max = json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"});
   const double angle_mean = json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"});
-  EXPECT_LT(to_mesh, 2e-3);
-  EXPECT_LT(from_mesh, 2e-3);
+  EXPECT_LT(to_mesh, 1.5e-3);
+  EXPECT_LT(from_mesh, 1e-3);
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 500);
-  EXPECT_LT(angle_max, 15.0);
+  EXPECT_LT(angle_max, 10.0);
   EXPECT_LT(angle_mean, 1.0);
   std::printf("  fandisk: %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, feature angles max %.3g "
               "mean %.3g deg off\n",
