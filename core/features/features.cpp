@@ -102,6 +102,123 @@ std::vector<std::vector<int>> walk_chains(const std::vector<std::vector<int>>& a
   return chains;
 }
 
+double segment_distance(const Vec& x, const Vec& a, const Vec& b) {
+  const Vec ab = sub(b, a);
+  const double l = dot(ab, ab);
+  const double t = l > 0 ? std::clamp(dot(sub(x, a), ab) / l, 0.0, 1.0) : 0.0;
+  return norm(sub(x, Vec{a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]}));
+}
+
+struct BentEdge {
+  int a, b;
+  double angle;  // degrees
+};
+
+// The soft features (FeatureOptions::soft_angle_degrees): from `bent` (interior edges that are not
+// sharp, bending by at least half the soft angle), added to the sorted `edges` (protect: 0).
+void add_soft_features(const MeshInput& mesh, const FeatureOptions& options, const std::vector<BentEdge>& bent,
+                       std::vector<std::array<int, 2>>& edges, std::vector<char>& protect) {
+  const int n = mesh.num_vertices();
+  const auto& p = mesh.positions;
+  const double reach = options.soft_reach;
+  std::vector<std::vector<int>> at(n);  // bent edges per vertex
+  for (int i = 0; i < static_cast<int>(bent.size()); ++i) at[bent[i].a].push_back(i), at[bent[i].b].push_back(i);
+  // vertex neighbours (all edges) for the search within reach
+  std::vector<std::vector<int>> nb(n);
+  int begin = 0;
+  for (int size : mesh.face_sizes) {
+    for (int k = 0; k < size; ++k) {
+      const int a = mesh.face_indices[begin + k], b = mesh.face_indices[begin + (k + 1) % size];
+      nb[a].push_back(b);
+      nb[b].push_back(a);
+    }
+    begin += size;
+  }
+  auto direction = [&](const BentEdge& e) {
+    Vec d = sub(p[e.b], p[e.a]);
+    const double l = norm(d);
+    return l > 0 ? Vec{d[0] / l, d[1] / l, d[2] / l} : Vec{0, 0, 0};
+  };
+  auto middle = [&](const BentEdge& e) {
+    return Vec{0.5 * (p[e.a][0] + p[e.b][0]), 0.5 * (p[e.a][1] + p[e.b][1]), 0.5 * (p[e.a][2] + p[e.b][2])};
+  };
+  std::vector<int> stamp(n, -1);
+  std::vector<char> accepted(bent.size(), 0);
+  std::vector<int> queue;
+  for (int i = 0; i < static_cast<int>(bent.size()); ++i) {
+    const BentEdge& e = bent[i];
+    if (e.angle < options.soft_angle_degrees) continue;
+    const Vec d = direction(e), m = middle(e);
+    bool concentrated = true;
+    std::vector<int> visit{e.a, e.b};
+    stamp[e.a] = stamp[e.b] = i;
+    for (size_t h = 0; h < visit.size() && concentrated; ++h) {
+      for (int g : at[visit[h]]) {
+        const BentEdge& o = bent[g];
+        if (g == i || o.angle < 0.5 * e.angle) continue;
+        if (segment_distance(m, p[o.a], p[o.b]) > reach) continue;
+        const Vec r = sub(middle(o), m);
+        const double along = dot(r, d);
+        const Vec off{r[0] - along * d[0], r[1] - along * d[1], r[2] - along * d[2]};
+        if (std::abs(dot(direction(o), d)) > 0.9 && norm(off) < 0.1 * reach) continue;  // continues it
+        concentrated = false;
+        break;
+      }
+      for (int w : nb[visit[h]])  // over the edges that pass within reach (long slivers too)
+        if (stamp[w] != i && segment_distance(m, p[visit[h]], p[w]) <= reach) stamp[w] = i, visit.push_back(w);
+    }
+    if (concentrated) accepted[i] = 1, queue.push_back(i);
+  }
+  // grown along their lines through edges above the soft angle
+  for (size_t h = 0; h < queue.size(); ++h) {
+    const BentEdge& e = bent[queue[h]];
+    const Vec d = direction(e);
+    for (int v : {e.a, e.b})
+      for (int g : at[v]) {
+        if (accepted[g] || bent[g].angle < options.soft_angle_degrees) continue;
+        if (std::abs(dot(direction(bent[g]), d)) < 0.9) continue;
+        accepted[g] = 1;
+        queue.push_back(g);
+      }
+  }
+  // A soft line that continues a sharp feature curve (a crease fading out below the feature
+  // angle) is dropped whole: an infinitely sharp crease cannot follow a fading one.
+  std::vector<std::vector<Vec>> sharp_at(n);  // directions of the sharp edges at each vertex
+  for (const auto& e : edges) {
+    Vec d = sub(p[e[1]], p[e[0]]);
+    const double l = norm(d);
+    if (!(l > 0)) continue;
+    d = {d[0] / l, d[1] / l, d[2] / l};
+    sharp_at[e[0]].push_back(d);
+    sharp_at[e[1]].push_back(d);
+  }
+  std::vector<int> component(bent.size(), -1);
+  for (int i = 0; i < static_cast<int>(bent.size()); ++i) {
+    if (!accepted[i] || component[i] >= 0) continue;
+    std::vector<int> members{i};
+    component[i] = i;
+    bool continues = false;
+    for (size_t h = 0; h < members.size(); ++h) {
+      const BentEdge& e = bent[members[h]];
+      const Vec d = direction(e);
+      for (int v : {e.a, e.b}) {
+        for (const Vec& sd : sharp_at[v]) continues |= std::abs(dot(sd, d)) > 0.9;
+        for (int g : at[v])
+          if (accepted[g] && component[g] < 0) component[g] = i, members.push_back(g);
+      }
+    }
+    if (continues)
+      for (int g : members) accepted[g] = 0;
+  }
+  for (int i = 0; i < static_cast<int>(bent.size()); ++i)
+    if (accepted[i]) {
+      const std::array<int, 2> e{std::min(bent[i].a, bent[i].b), std::max(bent[i].a, bent[i].b)};
+      const auto it = std::lower_bound(edges.begin(), edges.end(), e);
+      protect.insert(protect.begin() + (it - edges.begin()), 0);
+      edges.insert(it, e);
+    }
+}
+
 }  // namespace
 
 FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options) {
@@ -133,6 +250,9 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   std::sort(tagged.begin(), tagged.end());
 
   double cos_limit = std::cos(options.angle_degrees * kPi / 180.0);
+  const bool soft = options.soft_angle_degrees > 0 && options.soft_reach > 0 &&
+                    options.soft_angle_degrees < options.angle_degrees;
+  std::vector<BentEdge> bent;  // interior edges that are not sharp, bending by half the soft angle or more
   std::vector<std::array<int, 2>> edges;
   std::vector<char> protect;  // boundary or tagged: never dropped
   for (size_t i = 0; i < ef.size();) {
@@ -152,9 +272,16 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
     if (sharp) {
       edges.push_back({int(ef[i].key / n), int(ef[i].key % n)});
       protect.push_back(j - i == 1 || is_tagged);
+    } else if (soft) {
+      const Vec& a = normals[ef[i].face];
+      const Vec& b = normals[ef[i + 1].face];
+      const double l = norm(a) * norm(b);
+      const double angle = l > 0 ? std::acos(std::clamp(dot(a, b) / l, -1.0, 1.0)) * 180.0 / kPi : 0.0;
+      if (angle >= 0.5 * options.soft_angle_degrees) bent.push_back({int(ef[i].key / n), int(ef[i].key % n), angle});
     }
     i = j;
   }
+  if (soft) add_soft_features(mesh, options, bent, edges, protect);
 
   std::vector<std::vector<int>> adjacent;
   std::vector<char> corner = find_corners(mesh, edges, options.corner_angle_degrees, adjacent);

@@ -14,6 +14,15 @@ struct FeatureOptions {
   double angle_degrees = 30.0;   ///< an edge is sharp when the angle between its faces' normals exceeds this
   int min_chain_edges = 3;       ///< open feature chains with fewer edges, not touching other features or the boundary, are dropped as noise
   double corner_angle_degrees = 60.0;  ///< a chain vertex where the chain turns more than this is a corner
+  /// Soft features: an edge whose dihedral angle exceeds soft_angle_degrees (but not
+  /// angle_degrees) is sharp too when the bend is concentrated on it at the scale soft_reach
+  /// (model units): no other edge within soft_reach of its midpoint, other than features and the
+  /// edges continuing it along its line, bends by half its angle or more. (A tangent edge of a
+  /// part, where a plane meets a surface at a small angle; not the facets of a coarse cylinder,
+  /// whose neighbouring edges bend alike.) Grown along its line through edges above
+  /// soft_angle_degrees. Off when either is 0 (quad_remesh sets soft_reach to its edge length).
+  double soft_angle_degrees = 0.0;
+  double soft_reach = 0.0;
 };
 
 struct FeatureSet {

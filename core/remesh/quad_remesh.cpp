@@ -24,6 +24,12 @@ using Tri = std::array<int, 3>;
 
 struct CancelSignal {};
 
+// How far a feature chain may stray from the coarse edge standing for it, relative to the
+// edge's length (Collapser::chord_follows_chain): 0.2 lets an arc turn by up to ~87 degrees per
+// coarse edge (~44 per cage edge). (0.1 crowded the drilled box's rims with chain vertices and
+// folded a quad; 0.3 changes nothing there.)
+constexpr double kChainSag = 0.2;
+
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
@@ -563,6 +569,13 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
   }
 }
 
+V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
+  V3 ab = b - a;
+  double l = ab.squaredNorm();
+  double t = l > 0 ? std::clamp((x - a).dot(ab) / l, 0.0, 1.0) : 0.0;
+  return a + ab * t;
+}
+
 // --- extraction by edge collapses -------------------------------------------------------------
 struct Collapser {
   const std::vector<V3>& p;
@@ -573,8 +586,11 @@ struct Collapser {
   std::unordered_set<std::uint64_t> feature;
   std::vector<double> dist;
   std::vector<int> scratch_u, scratch_v;
+  std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along the input's feature edges
+  double chain_sag = 0;                 // see chord_follows_chain
 
-  Collapser(const Dense& d, const Fields& fields) : p(d.p), fl(fields), f(d.t), feature(d.feature) {
+  Collapser(const Dense& d, const Fields& fields, double max_chain_sag)
+      : p(d.p), fl(fields), f(d.t), feature(d.feature), chain_sag(max_chain_sag) {
     int n = static_cast<int>(p.size());
     face_alive.assign(f.size(), 1);
     alive.assign(n, 1);
@@ -583,6 +599,43 @@ struct Collapser {
       for (int v : f[i]) vf[v].push_back(int(i));
     dist.resize(n);
     for (int v = 0; v < n; ++v) dist[v] = (p[v] - fl.o[v]).norm();
+    chain.assign(n, {});
+    for (int v = 0; v < n; ++v)
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+        if (feature.count(edge_key(v, fl.adj[i]))) chain[v].push_back(fl.adj[i]);
+  }
+
+  // Whether feature vertex u may collapse into its chain neighbour v without the coarse edge
+  // that results, v - w (w: u's other coarse chain neighbour), cutting across a curved feature:
+  // every dense chain vertex between v and w must lie within chain_sag x |vw| of the chord vw.
+  // A feature arc tighter than the lattice spacing (a hole's rim, a rounded corner of a rim)
+  // keeps chain vertices on it, so that the cage's crease curve can follow it.
+  bool chord_follows_chain(int u, int v) const {
+    if (chain_sag <= 0) return true;
+    int w = -1;
+    for (int g : vf[u])
+      for (int x : f[g])
+        if (x != u && x != v && feature.count(edge_key(u, x))) w = x;
+    if (w < 0) return true;
+    for (int first : chain[v]) {
+      std::vector<int> path{v, first};
+      int passed_u = path.back() == u;
+      while (path.size() < p.size()) {
+        const int x = path.back();
+        if (alive[x] && x != u) break;
+        if (chain[x].size() != 2) break;
+        const int next = chain[x][0] == path[path.size() - 2] ? chain[x][1] : chain[x][0];
+        path.push_back(next);
+        passed_u |= next == u;
+      }
+      if (path.back() != w || !passed_u) continue;
+      const V3 a = p[v], b = p[w];
+      const double limit = chain_sag * (b - a).norm();
+      for (int x : path)
+        if ((closest_on_segment(p[x], a, b) - p[x]).norm() > limit) return false;
+      return true;
+    }
+    return true;
   }
 
   bool higher(int a, int b) const {  // priority of a above b
@@ -632,6 +685,7 @@ struct Collapser {
       if (!is_feature(u, v)) return false;
       for (int w : nu)
         if (w != v && is_feature(u, w) && is_feature(v, w)) return false;
+      if (!chord_follows_chain(u, v)) return false;
     }
     neighbours(v, nv);
     std::vector<int> common, opposite;
@@ -713,17 +767,17 @@ V3 closest_on_triangle(const V3& x, const V3& a, const V3& b, const V3& c) {
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
-  V3 ab = b - a;
-  double l = ab.squaredNorm();
-  double t = l > 0 ? std::clamp((x - a).dot(ab) / l, 0.0, 1.0) : 0.0;
-  return a + ab * t;
-}
-
+// Points of the split (edge midpoints, polygon centres) placed on the dense mesh.
 struct Projector {
   const Dense& d;
   const Fields& fl;
   std::vector<int> vf_offsets, vf;
+  std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along feature edges
+  std::vector<V3> face_normal;          // unit normals of the dense triangles
+  double longest_edge = 0;
+  std::vector<std::array<int, 3>> across;  // per triangle: the triangle across its edge k (-1: none)
+  mutable std::vector<int> mark;        // search stamps (per triangle)
+  mutable int stamp = 0;
 
   Projector(const Dense& dense, const Fields& fields) : d(dense), fl(fields) {
     int n = static_cast<int>(d.p.size());
@@ -735,17 +789,120 @@ struct Projector {
     std::vector<int> fill(vf_offsets.begin(), vf_offsets.end() - 1);
     for (size_t i = 0; i < d.t.size(); ++i)
       for (int v : d.t[i]) vf[fill[v]++] = int(i);
+    chain.assign(n, {});
+    for (int v = 0; v < n; ++v)
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+        const int w = fl.adj[i];
+        longest_edge = std::max(longest_edge, (d.p[v] - d.p[w]).norm());
+        if (d.feature.count(edge_key(v, w))) chain[v].push_back(w);
+      }
+    for (const Tri& t : d.t) {
+      V3 fn = (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]);
+      double l = fn.norm();
+      face_normal.push_back(l > 0 ? V3(fn / l) : V3::Zero());
+    }
+    mark.assign(d.t.size(), -1);
+    std::unordered_map<std::uint64_t, int> half;
+    for (size_t i = 0; i < d.t.size(); ++i)
+      for (int k = 0; k < 3; ++k) half[half_key(d.t[i][k], d.t[i][(k + 1) % 3])] = int(i);
+    across.assign(d.t.size(), {-1, -1, -1});
+    for (size_t i = 0; i < d.t.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        auto it = half.find(half_key(d.t[i][(k + 1) % 3], d.t[i][k]));
+        if (it != half.end()) across[i][k] = it->second;
+      }
   }
-  // Walks from dense vertex `start` towards x (over feature edges only when `on_feature`), then
-  // projects onto the faces (or feature edges) around the vertex reached.
-  V3 project(const V3& x, int start, bool on_feature) const {
+
+  // The closest point to x on the part of the dense mesh that a coarse polygon (or edge) with
+  // the dense vertices `corners` covers: the triangles reached from the triangles around its
+  // corners that are on no feature (or, when all are, from the triangle around them that faces
+  // most like `normal`) across edges that are no feature edges, within the distance of its
+  // farthest corner from x (plus the longest edge); among them those facing within 90 degrees
+  // of `normal` first. Coarse polygons never cross a feature chain (their edges follow the
+  // chains), so the point stays on the polygon's own face of the part: a greedy walk towards x,
+  // or the closest point anywhere, can land across a sharp edge (a wall quad's centre on the
+  // bottom beside it when a coarse feature edge cuts across a tight arc of the rim).
+  V3 project(const V3& x, const std::vector<int>& corners, const V3& normal) const {
+    double reach = 0;
+    for (int c : corners) reach = std::max(reach, (d.p[c] - x).norm());
+    reach += longest_edge;
+    ++stamp;
+    std::vector<int> queue;
+    for (int c : corners)
+      if (fl.kind[c] == 0)
+        for (int i = vf_offsets[c]; i < vf_offsets[c + 1]; ++i)
+          if (mark[vf[i]] != stamp) mark[vf[i]] = stamp, queue.push_back(vf[i]);
+    if (queue.empty()) {
+      int best = -1;
+      double bd = -INFINITY;
+      for (int c : corners)
+        for (int i = vf_offsets[c]; i < vf_offsets[c + 1]; ++i)
+          if (face_normal[vf[i]].dot(normal) > bd) bd = face_normal[vf[i]].dot(normal), best = vf[i];
+      if (best < 0) return d.p[corners[0]];
+      mark[best] = stamp;
+      queue.push_back(best);
+    }
+    V3 best[2] = {d.p[corners[0]], d.p[corners[0]]};  // facing `normal`, any
+    double bd[2] = {INFINITY, INFINITY};
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const int f = queue[head];
+      const Tri& t = d.t[f];
+      const V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
+      const double dc = (c - x).squaredNorm();
+      for (int k = 0; k < 2; ++k)
+        if ((k == 1 || face_normal[f].dot(normal) > 0) && dc < bd[k]) bd[k] = dc, best[k] = c;
+      for (int k = 0; k < 3; ++k) {
+        const int g = across[f][k];
+        if (g < 0 || mark[g] == stamp || d.feature.count(edge_key(t[k], t[(k + 1) % 3]))) continue;
+        const int w = d.t[g][0] + d.t[g][1] + d.t[g][2] - t[k] - t[(k + 1) % 3];
+        if ((d.p[w] - x).norm() > reach && (d.p[t[k]] - x).norm() > reach && (d.p[t[(k + 1) % 3]] - x).norm() > reach)
+          continue;
+        mark[g] = stamp;
+        queue.push_back(g);
+      }
+    }
+    return bd[0] < INFINITY ? best[0] : best[1];
+  }
+
+  // The point halfway (by length) along the feature chain of the dense mesh from dense vertex a
+  // to dense vertex b, where `is_end(v)` marks the chain's vertices kept by the extraction (the
+  // chain from a towards b meets none before b); a's own position if no such chain is found.
+  template <class IsEnd>
+  bool chain_middle(int a, int b, IsEnd&& is_end, V3& out) const {
+    for (int first : chain[a]) {
+      std::vector<int> path{a, first};
+      while (!is_end(path.back()) && path.size() < d.p.size()) {
+        const int v = path.back(), prev = path[path.size() - 2];
+        int next = -1;
+        for (int w : chain[v])
+          if (w != prev) next = w;
+        if (next < 0 || chain[v].size() != 2) break;
+        path.push_back(next);
+      }
+      if (path.back() != b || !is_end(b)) continue;
+      double total = 0;
+      for (size_t i = 1; i < path.size(); ++i) total += (d.p[path[i]] - d.p[path[i - 1]]).norm();
+      double run = 0;
+      for (size_t i = 1; i < path.size(); ++i) {
+        const double l = (d.p[path[i]] - d.p[path[i - 1]]).norm();
+        if (run + l >= 0.5 * total && l > 0) {
+          out = d.p[path[i - 1]] + (d.p[path[i]] - d.p[path[i - 1]]) * ((0.5 * total - run) / l);
+          return true;
+        }
+        run += l;
+      }
+    }
+    return false;
+  }
+
+  // The old projection onto feature edges (a greedy walk along them, then the closest point on
+  // the feature edges around the vertex reached): the fallback of chain_middle.
+  V3 project_on_feature(const V3& x, int start) const {
     int v = start;
     for (int step = 0; step < 100000; ++step) {
       int best = v;
       double bd = (d.p[v] - x).squaredNorm();
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        int w = fl.adj[i];
-        if (on_feature && !d.feature.count(edge_key(v, w))) continue;
+      for (int w : chain[v]) {
         double dw = (d.p[w] - x).squaredNorm();
         if (dw < bd) bd = dw, best = w;
       }
@@ -754,18 +911,8 @@ struct Projector {
     }
     V3 result = d.p[v];
     double bd = (result - x).squaredNorm();
-    if (on_feature) {
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        int w = fl.adj[i];
-        if (!d.feature.count(edge_key(v, w))) continue;
-        V3 c = closest_on_segment(x, d.p[v], d.p[w]);
-        if ((c - x).squaredNorm() < bd) bd = (c - x).squaredNorm(), result = c;
-      }
-      return result;
-    }
-    for (int i = vf_offsets[v]; i < vf_offsets[v + 1]; ++i) {
-      const Tri& t = d.t[vf[i]];
-      V3 c = closest_on_triangle(x, d.p[t[0]], d.p[t[1]], d.p[t[2]]);
+    for (int w : chain[v]) {
+      V3 c = closest_on_segment(x, d.p[v], d.p[w]);
       if ((c - x).squaredNorm() < bd) bd = (c - x).squaredNorm(), result = c;
     }
     return result;
@@ -1090,14 +1237,36 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
     const V3& x = d.p[dense_of[v]];
     cage.positions.push_back({x.x(), x.y(), x.z()});
   }
+  // Each polygon's normal (Newell's, of its corners) and, per edge, the sum of its polygons':
+  // the side of the surface a point of the split belongs to.
+  std::vector<V3> poly_normal;
+  std::unordered_map<std::uint64_t, V3> edge_normal;
+  for (const auto& poly : polygons) {
+    V3 n = V3::Zero();
+    const int m = static_cast<int>(poly.size());
+    for (int k = 0; k < m; ++k) n += d.p[dense_of[poly[k]]].cross(d.p[dense_of[poly[(k + 1) % m]]]);
+    const double l = n.norm();
+    poly_normal.push_back(l > 0 ? V3(n / l) : V3::Zero());
+    for (int k = 0; k < m; ++k) {
+      auto [it, added] = edge_normal.try_emplace(edge_key(poly[k], poly[(k + 1) % m]), V3::Zero());
+      it->second += poly_normal.back();
+    }
+  }
+  std::vector<char> kept(d.p.size(), 0);  // dense vertices that are coarse vertices
+  for (int v : dense_of) kept[v] = 1;
   std::unordered_map<std::uint64_t, int> midpoint;
   std::vector<std::uint64_t> feature_keys;
   auto mid = [&](int a, int b) {
     auto [it, inserted] = midpoint.try_emplace(edge_key(a, b), 0);
     if (!inserted) return it->second;
     bool feat = coarse_feature(a, b);
-    int da = std::min(dense_of[a], dense_of[b]);
-    V3 x = proj.project(0.5 * (d.p[dense_of[a]] + d.p[dense_of[b]]), da, feat);
+    const int da = dense_of[a], db = dense_of[b];
+    const V3 chord_middle = 0.5 * (d.p[da] + d.p[db]);
+    V3 x;
+    if (!feat)
+      x = proj.project(chord_middle, {da, db}, edge_normal[edge_key(a, b)]);
+    else if (!proj.chain_middle(std::min(da, db), std::max(da, db), [&](int v) { return kept[v] != 0; }, x))
+      x = proj.project_on_feature(chord_middle, std::min(da, db));
     it->second = static_cast<int>(cage.positions.size());
     cage.positions.push_back({x.x(), x.y(), x.z()});
     if (feat) {
@@ -1106,15 +1275,16 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
     }
     return it->second;
   };
-  for (const auto& poly : polygons) {
+  for (size_t pi = 0; pi < polygons.size(); ++pi) {
+    const auto& poly = polygons[pi];
     int m = static_cast<int>(poly.size());
     V3 centre = V3::Zero();
-    int start = dense_of[poly[0]];
+    std::vector<int> corners;
     for (int v : poly) {
       centre += d.p[dense_of[v]];
-      start = std::min(start, dense_of[v]);
+      corners.push_back(dense_of[v]);
     }
-    V3 x = proj.project(centre / m, start, false);
+    V3 x = proj.project(centre / m, corners, poly_normal[pi]);
     int c = static_cast<int>(cage.positions.size());
     cage.positions.push_back({x.x(), x.y(), x.z()});
     std::vector<int> mids(m);
@@ -1190,15 +1360,21 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
   try {
     auto t0 = Clock::now();
     check(0);
-    result.features = detect_features(mesh, options.features);
+    double area = 0;
+    make_dense(mesh, FeatureSet{}, area);
+    if (!(area > 0)) throw Error(ErrorKind::Input, "quad remesh: the mesh has zero area");
+    double h = options.target_faces > 0 ? std::sqrt(area / options.target_faces) : options.edge_length;
+    FeatureOptions feature_options = options.features;
+    if (feature_options.soft_angle_degrees == 0 && feature_options.soft_reach == 0 && options.soft_features > 0) {
+      feature_options.soft_angle_degrees = options.soft_features * feature_options.angle_degrees;
+      feature_options.soft_reach = h;
+    }
+    result.features = detect_features(mesh, feature_options);
     QuadRemeshStats& st = result.stats;
     st.input_vertices = mesh.num_vertices();
     st.input_faces = mesh.num_faces();
 
-    double area = 0;
     Dense d = make_dense(mesh, result.features, area);
-    if (!(area > 0)) throw Error(ErrorKind::Input, "quad remesh: the mesh has zero area");
-    double h = options.target_faces > 0 ? std::sqrt(area / options.target_faces) : options.edge_length;
     double s = 2 * h;  // extraction lattice; the final split halves it
     double lmax = s / 4;
     if (area / (lmax * lmax) > 8e6)
@@ -1231,7 +1407,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
 
-      Collapser col(d, fl);
+      Collapser col(d, fl, kChainSag);
       collapse_to_lattice(d, fl, s, col, check);
       std::vector<int> dense_of;
       std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);

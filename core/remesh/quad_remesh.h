@@ -20,6 +20,10 @@ struct QuadRemeshOptions {
   double curvature_alignment = 1.0;  ///< weight of principal-curvature alignment of the cross field (0 = off)
   int smoothing_iterations = 0;      ///< 0 = automatic
   bool regularize_valence = true;    ///< edge flips on the coarse triangles before pairing (fewer extraordinary vertices)
+  /// Soft features (FeatureOptions::soft_angle_degrees): edges bending by more than this fraction
+  /// of the feature angle, with the bend concentrated within the cage's edge length, are
+  /// features too (used when features.soft_angle_degrees and soft_reach are 0; 0 = off).
+  double soft_features = 0.5;
 };
 
 struct QuadRemeshStats {

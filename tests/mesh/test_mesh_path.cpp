@@ -312,12 +312,16 @@ TEST(MeshPath, BoxWithDrilledHole) {
   const std::string stl = dir.file("part.stl");
   write_stl(mesh, stl);
   const Converted c = convert(stl, dir, "--target-faces 300");
-  check_against(exact, mesh, c, 2e-2);
+  // Within 2e-3 x the diagonal both ways (the hole's rims, circles of radius 6 against a cage
+  // spacing of ~7, are followed by chain vertices of their own: docs/remesh.md step 4; before
+  // that, 3e-3).
+  check_against(exact, mesh, c, 2e-3);
   // The sharp edges kept: the normal jump across the cage's feature curves is the mesh's
-  // dihedral there (90 degrees at the box's and the hole's rims), on average within 3 degrees.
-  // (The goal, every point within 3 degrees, is not met yet: the largest is printed.)
+  // dihedral there (90 degrees at the box's and the hole's rims), everywhere within 3 degrees
+  // (the goal; before the rims were followed, 14 degrees at a rim).
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 0);
-  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}), 3.0);
+  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"}), 3.0);
+  EXPECT_LT(json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"}), 1.0);
   // The box's planar faces (with the hole's rims) are flat.
   check_planar_faces(exact, c.shape, diagonal(mesh), 0.3);
   EXPECT_LT(json_number(c.report, {"mesh", "planar", "flatness_after"}), 1e-12);
@@ -381,6 +385,35 @@ TEST(MeshPath, BoxWithFilletedSlot) {
   write_stl(mesh, stl);
   const Converted c = convert(stl, dir, "--target-faces 400");
   check_against(exact, mesh, c, 2e-2);
+}
+
+/// Fandisk (12 946 triangles) with the defaults, against the input mesh itself: the report's
+/// two-sided distance (our surface's samples to the mesh's triangles, the mesh's vertices to our
+/// surface) and the normal angle across every kept feature curve against the mesh's dihedral at
+/// the nearest feature edge of the mesh. The goals: <= 300 B-rep faces and the mesh's
+/// vertices within 1e-3 x the diagonal of our surface (met); our surface within 1e-3 of the mesh
+/// and 3 degrees (not met yet: 1.15e-3 and 6.7 degrees, at the fan's tip where two feature
+/// curves meet at 19 degrees; docs/meshes.md "Limits"), so those bounds guard what is reached
+/// (before the split's projection fix and the soft features: 2.5e-3 from the mesh, 82 degrees,
+/// a quad folded across the bottom rim).
+TEST(MeshPath, FandiskFollowsTheMesh) {
+  TempDir dir;
+  const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir);
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  EXPECT_TRUE(BRepCheck_Analyzer(c.shape).IsValid());
+  EXPECT_LE(json_number(c.report, {"brep", "faces"}), 300);
+  const double to_mesh = json_number(c.report, {"mesh", "fit", "after", "limit_to_target", "max"});
+  const double from_mesh = json_number(c.report, {"mesh", "fit", "after", "target_to_limit", "max"});
+  const double angle_max = json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"});
+  const double angle_mean = json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"});
+  EXPECT_LT(to_mesh, 1.5e-3);
+  EXPECT_LT(from_mesh, 1e-3);
+  EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 500);
+  EXPECT_LT(angle_max, 10.0);
+  EXPECT_LT(angle_mean, 1.0);
+  std::printf("  fandisk: %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, feature angles max %.3g "
+              "mean %.3g deg off\n",
+              json_number(c.report, {"brep", "faces"}), to_mesh, from_mesh, angle_max, angle_mean);
 }
 
 /// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says

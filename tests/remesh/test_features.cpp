@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <utility>
 
 #include "core/features/features.h"
 #include "core/util/error.h"
@@ -133,6 +135,56 @@ TEST(Features, TaggedCreaseOnSmoothSurfaceIsKept) {
   FeatureSet one = detect_features(sphere, blunt);
   EXPECT_EQ(one.chains, 1);
   EXPECT_EQ(one.corners, (std::vector<int>{std::min(a, c), std::max(a, c)}));
+}
+
+// Soft features: a roof of two planes meeting at 18 degrees (below the 30-degree feature angle)
+// along the line x = 0 is a feature when the bend is concentrated there at the scale asked for,
+// every ridge edge and nothing else inside; an 18-sided open cylinder (20 degrees at every
+// facet edge, facets 0.35 wide) is not at a scale of 0.5 (its neighbouring edges bend alike),
+// but its facet edges are at a scale of 0.1 (finer than the facets). Off by default.
+TEST(Features, SoftFeaturesWhereTheBendIsConcentrated) {
+  const double slope = std::tan(9.0 * test::kTestPi / 180.0);  // each side 9 degrees: dihedral 18
+  test::MeshBuilder roof;
+  roof.patch([&](double u, double v) { return P3{2 * u - 1, 2 * v - 1, -slope * std::abs(2 * u - 1)}; }, 10, 10);
+  const MeshInput ridge = roof.mesh();
+  auto interior = [](const MeshInput& m, const FeatureSet& fs, const std::function<bool(const P3&, const P3&)>& expected) {
+    int found = 0, wrong = 0;
+    for (const auto& e : fs.edges) {
+      const P3 &a = m.positions[e[0]], &b = m.positions[e[1]];
+      bool boundary = false;
+      for (int k = 0; k < 2; ++k) boundary |= std::abs(std::abs(a[k]) - 1) < 1e-12 && a[k] == b[k];
+      if (boundary) continue;  // the open boundary
+      (expected(a, b) ? found : wrong) += 1;
+    }
+    return std::pair<int, int>{found, wrong};
+  };
+  auto on_ridge = [](const P3& a, const P3& b) { return std::abs(a[0]) < 1e-12 && std::abs(b[0]) < 1e-12; };
+  FeatureOptions o;
+  EXPECT_EQ(interior(ridge, detect_features(ridge, o), on_ridge), (std::pair<int, int>{0, 0}));  // off
+  o.soft_angle_degrees = 15;
+  o.soft_reach = 0.5;
+  EXPECT_EQ(interior(ridge, detect_features(ridge, o), on_ridge), (std::pair<int, int>{10, 0}));
+  o.soft_angle_degrees = 20;  // above the ridge's 18 degrees
+  EXPECT_EQ(interior(ridge, detect_features(ridge, o), on_ridge), (std::pair<int, int>{0, 0}));
+
+  const MeshInput facets = test::open_cylinder(1, 2, 18, 4);
+  auto none = [](const P3&, const P3&) { return false; };
+  auto vertical = [](const P3& a, const P3& b) { return std::abs(a[0] - b[0]) < 1e-12 && std::abs(a[1] - b[1]) < 1e-12; };
+  auto cylinder = [&](const FeatureSet& fs, const std::function<bool(const P3&, const P3&)>& expected) {
+    int found = 0, wrong = 0;
+    for (const auto& e : fs.edges) {
+      const P3 &a = facets.positions[e[0]], &b = facets.positions[e[1]];
+      if ((std::abs(a[2]) < 1e-12 && std::abs(b[2]) < 1e-12) || (std::abs(a[2] - 2) < 1e-12 && std::abs(b[2] - 2) < 1e-12))
+        continue;  // the boundary loops
+      (expected(a, b) ? found : wrong) += 1;
+    }
+    return std::pair<int, int>{found, wrong};
+  };
+  o.soft_angle_degrees = 15;
+  o.soft_reach = 0.5;
+  EXPECT_EQ(cylinder(detect_features(facets, o), none), (std::pair<int, int>{0, 0}));
+  o.soft_reach = 0.1;
+  EXPECT_EQ(cylinder(detect_features(facets, o), vertical), (std::pair<int, int>{18 * 4, 0}));
 }
 
 TEST(Features, NonManifoldEdgeIsRefused) {

@@ -200,6 +200,42 @@ inline MeshInput drilled_box(double r, int m, int k, int nz) {
   return b.mesh();
 }
 
+/// The point at fraction u (by length, counter-clockwise from (1, -(1 - rho))) of the outline of
+/// the square [-1, 1]^2 with its corners rounded by radius rho.
+inline std::array<double, 2> rounded_square(double rho, double u) {
+  const double straight = 2 * (1 - rho), arc = kTestPi * rho / 2, side = straight + arc;
+  double t = (u - std::floor(u)) * 4 * side;
+  const int i = std::min(3, static_cast<int>(t / side));
+  t -= i * side;
+  double x, y;  // on the side x = 1, then its arc, in the frame of side 0
+  if (t <= straight) {
+    x = 1, y = -(1 - rho) + t;
+  } else {
+    const double a = (t - straight) / rho;
+    x = (1 - rho) + rho * std::cos(a), y = (1 - rho) + rho * std::sin(a);
+  }
+  const double c = std::cos(i * kTestPi / 2), s = std::sin(i * kTestPi / 2);
+  return {c * x - s * y, s * x + c * y};
+}
+
+/// A slab: the rounded square (rounded_square) times z in [-h, h]. Its rims (top and bottom
+/// outlines) are sharp 90-degree edges with tight arcs (radius rho) at the corners; its wall is
+/// smooth (planes tangent to quarter cylinders). m samples around the outline, k rings on the
+/// caps, nz layers on the wall.
+inline MeshInput rounded_slab(double rho, double h, int m, int k, int nz) {
+  MeshBuilder b;
+  for (int side = -1; side <= 1; side += 2)
+    b.patch([&](double u, double v) {
+      const auto q = rounded_square(rho, u);
+      return P3{v * q[0], v * q[1], side * h};
+    }, m, k);
+  b.patch([&](double u, double v) {
+    const auto q = rounded_square(rho, u);
+    return P3{q[0], q[1], h * (2 * v - 1)};
+  }, m, nz);
+  return b.mesh();
+}
+
 inline MeshInput open_cylinder(double radius, double height, int nu, int nv) {
   MeshBuilder b;
   b.patch([&](double u, double v) {

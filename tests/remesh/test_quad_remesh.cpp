@@ -247,6 +247,58 @@ TEST(QuadRemesh, DrilledBoxKeepsGenusEdgesAndCircles) {
   EXPECT_EQ(corners.size(), 8u);
 }
 
+// A rim with tight arcs (fandisk's situation): the slab's rounded corners (radius 0.1) are far
+// tighter than the lattice spacing (~0.45), so a coarse feature edge cuts across an arc and the
+// quad beside it spans the arc's wall. Every point of the split (edge midpoints, quad centres)
+// must land on the face of the part its quad belongs to: each cage quad's four vertices lie on
+// one same analytic face (top, bottom or the smooth wall; a rim vertex lies on two). A greedy
+// walk towards a wall quad's centre used to stop on the bottom beside it (a quad straddling the
+// sharp rim, which the fit then folds). Tagged edges lie on the rims.
+TEST(QuadRemesh, QuadsBesideTightArcsStayOnTheirFace) {
+  const double rho = 0.1, h = 0.5, tol = 2e-3;
+  MeshInput m = test::rounded_slab(rho, h, 256, 12, 16);
+  QuadRemeshResult r = remesh(m, 300);
+  check_cage(m, r, 300);
+  EXPECT_TRUE(r.features.corners.empty());
+  EXPECT_EQ(r.features.chains, 2);
+  // distance of (x, y) to the rounded square's outline, signed (negative inside)
+  auto outline = [&](const P3& p) {
+    const double qx = std::abs(p[0]) - (1 - rho), qy = std::abs(p[1]) - (1 - rho);
+    return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0) - rho;
+  };
+  auto faces = [&](const P3& p) {  // bit 0 top, 1 bottom, 2 wall
+    const double d = outline(p);
+    int f = 0;
+    if (std::abs(p[2] - h) < tol && d < tol) f |= 1;
+    if (std::abs(p[2] + h) < tol && d < tol) f |= 2;
+    if (std::abs(d) < tol && std::abs(p[2]) < h + tol) f |= 4;
+    return f;
+  };
+  int straddling = 0;
+  for (int q = 0; q < r.cage.num_faces(); ++q) {
+    int common = 7;
+    for (int k = 0; k < 4; ++k) {
+      const P3& p = r.cage.positions[r.cage.face_indices[4 * q + k]];
+      EXPECT_NE(faces(p), 0) << "cage vertex off the slab: " << p[0] << " " << p[1] << " " << p[2];
+      common &= faces(p);
+    }
+    if (common == 0) {
+      ++straddling;
+      for (int k = 0; k < 4; ++k) {  // the quad, for the log
+        const P3& p = r.cage.positions[r.cage.face_indices[4 * q + k]];
+        std::printf("    quad %d v%d (%.4f %.4f %.4f) faces %d outline %.4g\n", q, r.cage.face_indices[4 * q + k], p[0], p[1], p[2], faces(p), outline(p));
+      }
+    }
+  }
+  EXPECT_EQ(straddling, 0) << "cage quads whose vertices lie on no one face of the slab";
+  for (const auto& c : r.cage.creases)
+    for (int v : {c.v0, c.v1}) {
+      const P3& p = r.cage.positions[v];
+      EXPECT_TRUE(std::abs(std::abs(p[2]) - h) < 1e-12 && std::abs(outline(p)) < tol)
+          << "tagged vertex off the rims: " << p[0] << " " << p[1] << " " << p[2];
+    }
+}
+
 // The coarse edge flips (regularize_valence) keep the topology and the features, and do not add
 // irregular vertices: on the torus (Euler characteristic 0: a cage without extraordinary
 // vertices exists) and on the drilled box (8 corners, 14 feature curves), with flips the cage has
