@@ -161,8 +161,9 @@ def beyond_limit():
 #   open     STEP and BREP written, valid, no solid, `faces` > 0
 #   heavy    as solid, or the resource guard's refusal (exit 1); timeout: the time class
 #   refused  convert exits `exit` with `message` (a regular expression); `info` too when given
-# timeout: the ctest TIMEOUT (seconds); label slow for the heavy ones. heavy: minutes and
-# gigabytes each, registered only with -DSUBD2NURBS_HEAVY_TESTS=ON (docs/hardening.md).
+# timeout: the ctest TIMEOUT (seconds); label slow for the heavy ones. heavy: registered only
+# with -DSUBD2NURBS_HEAVY_TESTS=ON (docs/hardening.md): capsule_1024, whose STEP OCCT takes
+# more than 20 minutes to read back.
 CASES = {
     "scale_1e-9": dict(cage=lambda: cube(1e-9), kind="brep", warning="tiny_part", sides=(1e-9,) * 3, timeout=60),
     "scale_1e-3": dict(cage=lambda: cube(1e-3), kind="solid", sides=(1e-3,) * 3, timeout=60),
@@ -180,10 +181,10 @@ CASES = {
                        timeout=60),
     "valence_16": dict(cage=lambda: bipyramid(16), kind="solid", timeout=120),
     "valence_64": dict(cage=lambda: bipyramid(64), kind="heavy", timeout=600, slow=True),
-    "valence_256": dict(cage=lambda: bipyramid(256), kind="heavy", timeout=900, slow=True, heavy=True),
-    "valence_1024": dict(cage=lambda: bipyramid(1024), kind="heavy", timeout=1800, slow=True, heavy=True),
+    "valence_256": dict(cage=lambda: bipyramid(256), kind="heavy", timeout=900, slow=True),
+    "valence_1024": dict(cage=lambda: bipyramid(1024), kind="heavy", timeout=1800, slow=True),
     "ngon_1000": dict(cage=lambda: ngon(1000), kind="heavy", open=True, timeout=600, slow=True),
-    "prism_1000": dict(cage=lambda: prism(1000), kind="heavy", timeout=1800, slow=True, heavy=True),
+    "prism_1000": dict(cage=lambda: prism(1000), kind="heavy", timeout=1800, slow=True),
     "capsule_1024": dict(cage=lambda: capsule(1024), kind="heavy", timeout=1800, slow=True, heavy=True),
     "prism_12": dict(cage=lambda: prism(12), kind="solid", timeout=120),
     "moebius": dict(cage=moebius, kind="refused", exit=2, info_exit=2,
