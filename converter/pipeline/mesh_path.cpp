@@ -14,6 +14,7 @@
 #include "core/limit/limit_evaluator.h"
 #include "core/mesh/quad_recovery.h"
 #include "core/util/error.h"
+#include "core/util/vec3.h"
 #include "io/cage_reader.h"
 #include "io/input_file.h"
 #include "io/target_reader.h"
@@ -22,15 +23,14 @@ namespace subd2nurbs::pipeline {
 
 namespace {
 
+using vec3::sub;
+using vec3::dot;
+using vec3::cross;
+using vec3::norm;
+
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
-Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Point3 cross(const Point3& a, const Point3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
 
 /// Angle between two vectors, degrees (0 for a zero vector).
 double angle_deg(const Point3& a, const Point3& b) {

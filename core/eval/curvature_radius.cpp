@@ -5,15 +5,14 @@
 #include <vector>
 
 #include "core/nurbs/nurbs_eval.h"
+#include "core/util/vec3.h"
 
 namespace subd2nurbs {
 
 namespace {
 
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Point3 cross(const Point3& a, const Point3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
+using vec3::dot;
+using vec3::cross;
 
 /// The distinct knots of a knot vector refined n times per span.
 std::vector<double> grid(const KnotVector& kv, int n) {

@@ -9,14 +9,15 @@
 #include "core/util/constants.h"
 #include "core/util/parallel.h"
 #include "core/util/tolerances.h"
+#include "core/util/vec3.h"
 
 namespace subd2nurbs {
 
 namespace {
 
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
+using vec3::dot;
+using vec3::sub;
+using vec3::norm;
 
 double angle_deg(const Point3& a, const Point3& b) {
   const double na = norm(a), nb = norm(b);

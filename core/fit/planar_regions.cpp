@@ -7,16 +7,15 @@
 
 #include "core/fit/shape_target.h"
 #include "core/limit/limit_evaluator.h"
+#include "core/util/vec3.h"
 
 namespace subd2nurbs {
 namespace {
 
-Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Point3 cross(const Point3& a, const Point3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
+using vec3::sub;
+using vec3::dot;
+using vec3::cross;
+using vec3::norm;
 
 struct Plane {
   Point3 point{}, normal{};

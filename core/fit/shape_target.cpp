@@ -6,16 +6,16 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "core/util/vec3.h"
+
 namespace subd2nurbs {
 namespace {
 
-Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Point3 cross(const Point3& a, const Point3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Point3 axpy(const Point3& a, double s, const Point3& d) { return {a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2]}; }
-double dist2(const Point3& a, const Point3& b) { const Point3 d = sub(a, b); return dot(d, d); }
+using vec3::sub;
+using vec3::dot;
+using vec3::cross;
+using vec3::axpy;
+using vec3::dist2;
 
 double box_distance2(const Point3& q, const Point3& lo, const Point3& hi) {
   double d2 = 0;
