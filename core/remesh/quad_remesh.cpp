@@ -579,6 +579,30 @@ V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
   return a + ab * t;
 }
 
+// Per dense vertex: its neighbours along the input's feature edges (`feature`: their edge_keys).
+std::vector<std::vector<int>> chain_neighbours(const Fields& fl, const std::unordered_set<std::uint64_t>& feature) {
+  const int n = static_cast<int>(fl.offsets.size()) - 1;
+  std::vector<std::vector<int>> chain(n);
+  for (int v = 0; v < n; ++v)
+    for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+      if (feature.count(edge_key(v, fl.adj[i]))) chain[v].push_back(fl.adj[i]);
+  return chain;
+}
+
+// The dense feature chain from `start` through its neighbour `first`, followed through vertices
+// of exactly two chain neighbours until `stop(v)` holds for the last one (or the chain forks,
+// ends, or has gone round as many steps as there are vertices): the vertices passed, in order.
+template <class Stop>
+std::vector<int> follow_chain(const std::vector<std::vector<int>>& chain, int start, int first, Stop&& stop) {
+  std::vector<int> path{start, first};
+  while (!stop(path.back()) && path.size() < chain.size()) {
+    const int x = path.back();
+    if (chain[x].size() != 2) break;
+    path.push_back(chain[x][0] == path[path.size() - 2] ? chain[x][1] : chain[x][0]);
+  }
+  return path;
+}
+
 // --- extraction by edge collapses -------------------------------------------------------------
 struct Collapser {
   const std::vector<V3>& p;
@@ -602,10 +626,7 @@ struct Collapser {
       for (int v : f[i]) vf[v].push_back(int(i));
     dist.resize(n);
     for (int v = 0; v < n; ++v) dist[v] = (p[v] - fl.o[v]).norm();
-    chain.assign(n, {});
-    for (int v = 0; v < n; ++v)
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
-        if (feature.count(edge_key(v, fl.adj[i]))) chain[v].push_back(fl.adj[i]);
+    chain = chain_neighbours(fl, feature);
   }
 
   // Whether feature vertex u may collapse into its chain neighbour v without the coarse edge
@@ -621,17 +642,8 @@ struct Collapser {
         if (x != u && x != v && feature.count(edge_key(u, x))) w = x;
     if (w < 0) return true;
     for (int first : chain[v]) {
-      std::vector<int> path{v, first};
-      int passed_u = path.back() == u;
-      while (path.size() < p.size()) {
-        const int x = path.back();
-        if (alive[x] && x != u) break;
-        if (chain[x].size() != 2) break;
-        const int next = chain[x][0] == path[path.size() - 2] ? chain[x][1] : chain[x][0];
-        path.push_back(next);
-        passed_u |= next == u;
-      }
-      if (path.back() != w || !passed_u) continue;
+      const std::vector<int> path = follow_chain(chain, v, first, [&](int x) { return alive[x] && x != u; });
+      if (path.back() != w || std::find(path.begin(), path.end(), u) == path.end()) continue;
       const V3 a = p[v], b = p[w];
       const double limit = chain_sag * (b - a).norm();
       for (int x : path)
@@ -792,13 +804,10 @@ struct Projector {
     std::vector<int> fill(vf_offsets.begin(), vf_offsets.end() - 1);
     for (size_t i = 0; i < d.t.size(); ++i)
       for (int v : d.t[i]) vf[fill[v]++] = int(i);
-    chain.assign(n, {});
+    chain = chain_neighbours(fl, d.feature);
     for (int v = 0; v < n; ++v)
-      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
-        const int w = fl.adj[i];
-        longest_edge = std::max(longest_edge, (d.p[v] - d.p[w]).norm());
-        if (d.feature.count(edge_key(v, w))) chain[v].push_back(w);
-      }
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+        longest_edge = std::max(longest_edge, (d.p[v] - d.p[fl.adj[i]]).norm());
     for (const Tri& t : d.t) {
       V3 fn = (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]);
       double l = fn.norm();
@@ -873,15 +882,7 @@ struct Projector {
   template <class IsEnd>
   bool chain_middle(int a, int b, IsEnd&& is_end, V3& out) const {
     for (int first : chain[a]) {
-      std::vector<int> path{a, first};
-      while (!is_end(path.back()) && path.size() < d.p.size()) {
-        const int v = path.back(), prev = path[path.size() - 2];
-        int next = -1;
-        for (int w : chain[v])
-          if (w != prev) next = w;
-        if (next < 0 || chain[v].size() != 2) break;
-        path.push_back(next);
-      }
+      const std::vector<int> path = follow_chain(chain, a, first, is_end);
       if (path.back() != b || !is_end(b)) continue;
       double total = 0;
       for (size_t i = 1; i < path.size(); ++i) total += (d.p[path[i]] - d.p[path[i - 1]]).norm();
