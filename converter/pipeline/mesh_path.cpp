@@ -441,18 +441,16 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
     fit_progress = [&](int iteration, double) {
       return progress.fraction(std::min(1.0, (iteration + 1.0) / rep.fit_options.max_iterations));
     };
-  rep.fit = run_shape_fit(out.cage.level, start, target, rep.fit_options, fit_progress);
+  // The planar regions' faces made exactly planar (the held vertices onto their planes) before
+  // the fitted cage is measured.
+  const ShapeFitAdjust flatten = [&](std::vector<Point3>& positions) {
+    rep.planar = flatten_planar_regions(out.cage.level, planar.constraints, positions, planar.regions, target.diagonal());
+  };
+  rep.fit = run_shape_fit(out.cage.level, start, target, rep.fit_options, fit_progress, flatten);
   if (rep.fit.fit.stop == ShapeFitStop::Cancelled) throw Error(ErrorKind::Usage, "cancelled");
   out.positions = rep.fit.fit.positions;
   rep.fit_ms = rep.fit.fit_ms;
   rep.measure_ms = rep.fit.measure_ms;
-
-  // The planar regions' faces made exactly planar (the held vertices onto their planes); measured again.
-  t = Clock::now();
-  rep.planar = flatten_planar_regions(out.cage.level, planar.constraints, out.positions, planar.regions, target.diagonal());
-  if (rep.planar.vertices_moved > 0)
-    rep.fit.after = measure_target_distance(LimitEvaluator(out.cage.level, out.positions), target);
-  rep.measure_ms += ms_since(t);
 
   // The kept features' normal angles against the mesh's dihedrals.
   Diagnostics ignore;

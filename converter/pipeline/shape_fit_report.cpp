@@ -50,7 +50,8 @@ ShapeTarget make_target(TargetShape shape, const std::string& name) {
 }
 
 ShapeFitRun run_shape_fit(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target,
-                          const ShapeFitOptions& options, const ShapeFitProgress& progress) {
+                          const ShapeFitOptions& options, const ShapeFitProgress& progress,
+                          const ShapeFitAdjust& adjust) {
   validate_shape_fit(options);
   ShapeFitRun run;
   auto t = std::chrono::steady_clock::now();
@@ -60,6 +61,7 @@ ShapeFitRun run_shape_fit(const SubdivLevel& cage, const std::vector<Point3>& st
   run.fit = fit_to_shape(cage, start, target, options, progress);
   run.fit_ms = ms_since(t);
   t = std::chrono::steady_clock::now();
+  if (adjust && run.fit.stop != ShapeFitStop::Cancelled) adjust(run.fit.positions);
   run.after = measure_target_distance(LimitEvaluator(cage, run.fit.positions), target);
   run.measure_ms += ms_since(t);
   return run;

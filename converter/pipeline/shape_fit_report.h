@@ -4,6 +4,7 @@
 // (subd2nurbs-fit v1, docs/formats.md). The two-sided distance's JSON is also check's "target".
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,10 +31,14 @@ struct ShapeFitRun {
   int tagged_edges = -1;         ///< cage edges tagged along the target's features (-1: not asked)
 };
 
-/// Validates the options, fits `cage` from `start` to `target`, and measures both cages.
-/// \throw SettingsError, FitError
+/// Changes the fitted positions before they are measured (the mesh path's planar flattening).
+using ShapeFitAdjust = std::function<void(std::vector<Point3>& positions)>;
+
+/// Validates the options, fits `cage` from `start` to `target`, applies `adjust` (if any) to the
+/// fitted positions, and measures both cages. \throw SettingsError, FitError
 ShapeFitRun run_shape_fit(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target,
-                          const ShapeFitOptions& options, const ShapeFitProgress& progress = {});
+                          const ShapeFitOptions& options, const ShapeFitProgress& progress = {},
+                          const ShapeFitAdjust& adjust = {});
 
 /// The two-sided distance as a JSON object: diagonal, limit_to_target and target_to_limit, each
 /// max / rms / p95 (relative to the diagonal), count and where {ptex, u, v, target}.
