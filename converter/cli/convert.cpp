@@ -160,6 +160,9 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
     err << "  B-rep      " << (c.brep.is_solid ? "solid" : "shell") << ", " << c.brep.num_faces << " faces, "
         << c.brep.num_edges << " edges, " << c.brep.num_vertices << " vertices, "
         << (c.brep.valid ? "valid" : "NOT valid") << "\n";
+  if (c.has_brep && c.brep.planar_faces > 0)
+    err << "  planes     " << c.brep.planar_faces << " planar faces in place of " << c.brep.merged_patches
+        << " coplanar faces\n";
   const ContinuityReport& k = c.continuity;
   err << "  gaps       max " << short_number(k.max_gap) << " (" << short_number(k.max_gap / size)
       << " of the model size)\n";

@@ -2,10 +2,12 @@
 
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
+#include <BRepCheck_Analyzer.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Line.hxx>
 #include <Geom_BSplineCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_Plane.hxx>
 #include <GeomAdaptor_Surface.hxx>
 #include <Precision.hxx>
 #include <TColStd_Array1OfInteger.hxx>
@@ -25,6 +27,7 @@
 #include <TopoDS_Solid.hxx>
 #include <TopoDS_Vertex.hxx>
 #include <TopoDS_Wire.hxx>
+#include <gp_Ax3.hxx>
 
 #include <algorithm>
 #include <array>
@@ -32,6 +35,8 @@
 #include <utility>
 
 #include "converter/occt/occt_util.h"
+#include "core/patch/planar_faces.h"
+#include "core/util/tolerances.h"
 
 namespace subd2nurbs::occt {
 
@@ -438,6 +443,42 @@ void make_face(const PatchSet& ps, int p, const Handle(Geom_BSplineSurface)& sur
   builder.NaturalRestriction(face, Standard_True);
 }
 
+/// The planar face of a set of coplanar patches (core/patch/planar_faces.h): a Geom_Plane with
+/// the set's boundary loops of the shared edges. Each edge's pcurve on the plane is its 3D
+/// B-spline with the poles projected onto the plane's axes: the curve lies in the plane, so the
+/// projection is the curve itself, with its own parameter (SameParameter by construction).
+void make_planar_face(const PlanarFace& f, SharedTopology& shared, BRep_Builder& builder, double tol,
+                      TopoDS_Face& face) {
+  const gp_Ax3 axes(to_pnt(f.origin), gp_Dir(f.normal[0], f.normal[1], f.normal[2]),
+                    gp_Dir(f.x_axis[0], f.x_axis[1], f.x_axis[2]));
+  const gp_XYZ origin = axes.Location().XYZ(), x = axes.XDirection().XYZ(), y = axes.YDirection().XYZ();
+  builder.MakeFace(face, new Geom_Plane(axes), tol);
+  for (const std::vector<LoopCurve>& loop : f.loops) {
+    TopoDS_Wire wire;
+    builder.MakeWire(wire);
+    for (const LoopCurve& c : loop) {
+      TopoDS_Edge& edge = shared.edges[c.curve];
+      double first = 0, last = 0;
+      Handle(Geom_BSplineCurve) curve = Handle(Geom_BSplineCurve)::DownCast(BRep_Tool::Curve(edge, first, last));
+      if (curve.IsNull()) throw ExportError("planar face", f.patches.front(), "curve " + std::to_string(c.curve) +
+                                                                              " has no B-spline curve");
+      TColgp_Array1OfPnt2d poles(1, curve->NbPoles());
+      for (int i = 1; i <= curve->NbPoles(); ++i) {
+        const gp_XYZ d = curve->Pole(i).XYZ() - origin;
+        poles(i) = gp_Pnt2d(d.Dot(x), d.Dot(y));
+      }
+      TColStd_Array1OfReal knots(1, curve->NbKnots());
+      TColStd_Array1OfInteger mults(1, curve->NbKnots());
+      curve->Knots(knots);
+      curve->Multiplicities(mults);
+      builder.UpdateEdge(edge, new Geom2d_BSplineCurve(poles, knots, mults, curve->Degree()), face, tol);
+      builder.Add(wire, edge.Oriented(c.reversed ? TopAbs_REVERSED : TopAbs_FORWARD));
+    }
+    wire.Closed(Standard_True);
+    builder.Add(face, wire);
+  }
+}
+
 /// One shell per connected component of the faces, a solid (outward) where the component has
 /// no open boundary curve; several components as a compound. Fills result.shape and its counts.
 void assemble(const PatchSet& ps, const std::vector<TopoDS_Face>& faces,
@@ -468,7 +509,8 @@ void assemble(const PatchSet& ps, const std::vector<TopoDS_Face>& faces,
     TopoDS_Shell shell;
     guarded("shell", members[r].front(), [&] {
       builder.MakeShell(shell);
-      for (int p : members[r]) builder.Add(shell, faces[p]);
+      for (int p : members[r])
+        if (!faces[p].IsNull()) builder.Add(shell, faces[p]);  // null: inside a planar face
       shell.Closed(BRep_Tool::IsClosed(shell));
     });
     if (open_component[r]) {
@@ -531,7 +573,8 @@ void count_and_check(const std::vector<TopoDS_Face>& faces, const std::vector<To
 
     // Name faces and edges by patch and curve index in BRepCheck's messages.
     TopTools_DataMapOfShapeInteger face_patch, edge_curve;
-    for (int p = 0; p < num_patches; ++p) face_patch.Bind(faces[p], p);
+    for (int p = 0; p < num_patches; ++p)
+      if (!faces[p].IsNull()) face_patch.Bind(faces[p], p);
     for (int k = 0; k < num_curves; ++k)
       if (!edges[k].IsNull()) edge_curve.Bind(edges[k], k);
     auto namer = [&](const TopoDS_Shape& s) -> std::string {
@@ -547,7 +590,7 @@ void count_and_check(const std::vector<TopoDS_Face>& faces, const std::vector<To
 
 }  // namespace
 
-BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress) {
+BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress, const BrepOptions& options) {
   BrepResult result;
   const double tol = brep_tolerance(ps.model_size);
   result.tolerance = tol;
@@ -560,12 +603,50 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
   SharedTopology shared = make_vertices_and_edges(ps, builder, tol);
   std::vector<TopoDS_Face> faces(num_patches);
   std::vector<Handle(Geom_BSplineSurface)> surfaces(num_patches);
+  // Coplanar patches become one planar face each (exactly: their poles lie on the plane).
+  PlanarFaces planar;
+  if (options.merge_planar) planar = find_planar_faces(ps, tolerances::kSameSurface);
+  else planar.face_of_patch.assign(num_patches, -1);
+  // A planar face stands in the face list at its lowest patch; its other patches have none.
+  // It is made first and checked alone (BRepCheck): where the set's boundary crosses itself in
+  // the plane (a surface folded over itself), its patches are written as they are instead.
+  std::vector<char> on_loop(num_curves, 0);
+  for (PlanarFace& f : planar.faces) {
+    TopoDS_Face& face = faces[f.patches.front()];
+    bool ok = false;
+    guarded("planar face", f.patches.front(), [&] {
+      make_planar_face(f, shared, builder, tol, face);
+      ok = BRepCheck_Analyzer(face).IsValid();
+      if (ok) return;
+      for (const auto& loop : f.loops)  // take the pcurves on the plane off the edges again
+        for (const LoopCurve& c : loop) builder.UpdateEdge(shared.edges[c.curve], Handle(Geom2d_Curve)(), face, tol);
+      face.Nullify();
+    });
+    if (!ok) {
+      for (int p : f.patches) planar.face_of_patch[p] = -1;
+      ++result.rejected_planar_faces;
+      continue;
+    }
+    for (const auto& loop : f.loops)
+      for (const LoopCurve& c : loop) on_loop[c.curve] = 1;
+    result.merged_patches += static_cast<int>(f.patches.size());
+    ++result.planar_faces;
+  }
   const int step = std::max(1, num_patches / 100);
   for (int p = 0; p < num_patches; ++p) {
     surfaces[p] = make_surface(ps.patches[p], p);
-    guarded("face", p, [&] { make_face(ps, p, surfaces[p], shared, builder, tol, faces[p]); });
+    if (planar.face_of_patch[p] < 0)
+      guarded("face", p, [&] { make_face(ps, p, surfaces[p], shared, builder, tol, faces[p]); });
     if (progress && ((p + 1) % step == 0 || p + 1 == num_patches))
       progress(static_cast<double>(p + 1) / num_patches);
+  }
+
+  // Curves inside a planar face bound no face any more: no edge of the shape.
+  for (int k = 0; k < num_curves; ++k) {
+    if (shared.edges[k].IsNull() || on_loop[k]) continue;
+    bool inside = !ps.curves[k].uses.empty();
+    for (const CurveUse& u : ps.curves[k].uses) inside = inside && planar.face_of_patch[u.patch] >= 0;
+    if (inside) shared.edges[k].Nullify();
   }
 
   // Every pcurve was made with the curve's own parameter, so all representations share one

@@ -27,9 +27,22 @@ struct BrepResult {
   /// can measure chosen edges, e.g. only the smooth ones, with summarize(shape, edges).
   std::vector<TopoDS_Shape> curve_edges;
   double tolerance = 0;    ///< vertex / edge / face tolerance used (model units)
+  int planar_faces = 0;    ///< planar faces made of coplanar patches (BrepOptions::merge_planar)
+  int merged_patches = 0;  ///< patches inside those planar faces
+  int rejected_planar_faces = 0;  ///< coplanar sets whose planar face BRepCheck rejected (a boundary
+                                  ///< crossing itself): written one face per patch instead
 };
 
-/// Builds the faces of `ps` with shared edges and vertices, then a shell, and a solid when
+struct BrepOptions {
+  /// Each connected set of coplanar patches (a single planar patch too) (poles on one plane within
+  /// tolerances::kSameSurface of the model size) becomes one face on a Geom_Plane, bounded by
+  /// the set's outer curves (core/patch/planar_faces.h); false: one face per patch. The
+  /// pipeline turns it on for packed faces (setting planar_faces).
+  bool merge_planar = false;
+};
+
+/// Builds the faces of `ps` with shared edges and vertices (coplanar patches merged into planar
+/// faces, see BrepOptions), then a shell, and a solid when
 /// ps.closed. Checks the result with BRepCheck_Analyzer (see BrepResult::valid).
 ///
 /// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given), each
@@ -48,7 +61,8 @@ struct BrepResult {
 /// \throw ExportError naming the stage and the patch when the PatchSet is inconsistent or an
 ///        OCCT call fails. A result that OCCT builds but BRepCheck rejects is not an error:
 ///        it comes back with valid == false.
-BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress = {});
+BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& progress = {},
+                      const BrepOptions& options = {});
 
 /// The tolerance build_brep gives vertices, edges and faces for a model of this size:
 /// 1e-9 * model_size, but never below OCCT's Precision::Confusion() (1e-7).

@@ -8,6 +8,7 @@
 #include <Geom2d_Curve.hxx>
 #include <Geom_Curve.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_Plane.hxx>
 #include <Geom_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESControl_Reader.hxx>
@@ -290,27 +291,47 @@ ShapeSummary summarize_impl(const TopoDS_Shape& shape, const std::vector<TopoDS_
     }
 
     // Area and volume: Gauss rules per knot span on the faces that are whole B-spline
-    // surfaces (span_properties); the others by OCCT's adaptive integrators, with a relative
-    // error bound (its fixed-order ones use the same number of Gauss points per face whatever
-    // its number of knot spans: 5e-5 relative error on the 1-face B-spline torus). Every
-    // occurrence of a face counts, as in BRepGProp.
+    // surfaces (span_properties); planar faces in closed form from their area; the others by
+    // OCCT's adaptive integrators, with a relative error bound (its fixed-order ones use the
+    // same number of Gauss points per face whatever its number of knot spans: 5e-5 relative
+    // error on the 1-face B-spline torus). Every occurrence of a face counts, as in BRepGProp.
+    // The volume of a single face is only defined against a reference point: ours is the
+    // origin, while BRepGProp takes the shape's rough barycentre. So BRepGProp's volume is used
+    // only when it covers the whole shape (or no part of the shape is measured by our rules).
     if (mass_properties) {
       double area = 0, volume = 0;
       TopoDS_Compound rest;
       BRep_Builder builder;
       builder.MakeCompound(rest);
-      bool any_rest = false;
-      for (TopExp_Explorer it(shape, TopAbs_FACE); it.More(); it.Next())
-        if (span_properties(TopoDS::Face(it.Current()), area, volume)) ++s.span_faces;
-        else builder.Add(rest, it.Current()), any_rest = true;
+      bool any_rest = false, curved_rest = false;
+      for (TopExp_Explorer it(shape, TopAbs_FACE); it.More(); it.Next()) {
+        const TopoDS_Face& face = TopoDS::Face(it.Current());
+        if (span_properties(face, area, volume)) {
+          ++s.span_faces;
+          continue;
+        }
+        builder.Add(rest, face);
+        any_rest = true;
+        const Handle(Geom_Plane) plane = Handle(Geom_Plane)::DownCast(BRep_Tool::Surface(face));
+        if (plane.IsNull() || !face.Location().IsIdentity()) {
+          curved_rest = true;
+          continue;
+        }
+        // On a plane X . n is constant: the face's volume (1/3) int X . n dA is (1/3) (o . n) A.
+        GProp_GProps a;
+        BRepGProp::SurfaceProperties(face, a, kIntegrationEps);
+        const gp_Ax3 axes = plane->Position();
+        const double side = axes.Direct() == (face.Orientation() != TopAbs_REVERSED) ? 1.0 : -1.0;
+        volume += side * axes.Location().XYZ().Dot(axes.Direction().XYZ()) * a.Mass() / 3;
+      }
       if (any_rest) {
         GProp_GProps a;
         BRepGProp::SurfaceProperties(rest, a, kIntegrationEps);
         area += a.Mass();
-        if (s.solids > 0) {
+        if (s.solids > 0 && curved_rest) {
           GProp_GProps v;
-          BRepGProp::VolumeProperties(rest, v, kIntegrationEps);
-          volume += v.Mass();
+          BRepGProp::VolumeProperties(s.span_faces > 0 ? shape : TopoDS_Shape(rest), v, kIntegrationEps);
+          volume = v.Mass();
         }
       }
       s.area = area;

@@ -72,6 +72,8 @@ std::string index_list(const std::vector<int>& v) {
 
 const char* to_string(FaceMode mode) { return mode == FaceMode::Packed ? "packed" : "per-quad"; }
 
+const char* to_string(PlanarMode mode) { return mode == PlanarMode::Merge ? "merge" : "keep"; }
+
 const char* to_string(FitMode mode) { return mode == FitMode::Interpolate ? "interpolate" : "approximate"; }
 
 const char* to_string(Stage stage) {
@@ -121,6 +123,7 @@ constexpr std::array kCreaseMethods{CreaseMethod::Uniform, CreaseMethod::Chaikin
 constexpr std::array kTriangleRules{TriangleRule::Catmark, TriangleRule::Smooth};
 constexpr std::array kFitModes{FitMode::Approximate, FitMode::Interpolate};
 constexpr std::array kFaceModes{FaceMode::Packed, FaceMode::PerQuad};
+constexpr std::array kPlanarModes{PlanarMode::Merge, PlanarMode::Keep};
 constexpr std::array kPreviewColors{PreviewColor::Deviation, PreviewColor::Curvature, PreviewColor::Zebra};
 
 template <class E, size_t N>
@@ -148,6 +151,7 @@ CreaseMethod crease_method(const std::string& name) { return named("crease_metho
 TriangleRule triangle_rule(const std::string& name) { return named("triangles", kTriangleRules, name); }
 FitMode fit_mode(const std::string& name) { return named("fit", kFitModes, name); }
 FaceMode face_mode(const std::string& name) { return named("faces", kFaceModes, name); }
+PlanarMode planar_mode(const std::string& name) { return named("planar_faces", kPlanarModes, name); }
 PreviewColor preview_color(const std::string& name) { return named("preview", kPreviewColors, name); }
 
 std::vector<std::string> setting_names(const std::string& setting) {
@@ -156,6 +160,7 @@ std::vector<std::string> setting_names(const std::string& setting) {
   if (setting == "triangles") return names_of(kTriangleRules);
   if (setting == "fit") return names_of(kFitModes);
   if (setting == "faces") return names_of(kFaceModes);
+  if (setting == "planar_faces") return names_of(kPlanarModes);
   if (setting == "preview") return names_of(kPreviewColors);
   throw std::out_of_range("setting_names: '" + setting + "' is not a setting of named values");
 }
@@ -750,7 +755,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   if (settings.build_brep) {
     t = Clock::now();
     run.stage(Stage::Brep, "building the B-rep");
-    c.brep = occt::build_brep(c.exported.set, progress.brep_fraction);
+    occt::BrepOptions brep_options;
+    brep_options.merge_planar = settings.planar == PlanarMode::Merge && settings.faces == FaceMode::Packed;
+    c.brep = occt::build_brep(c.exported.set, progress.brep_fraction, brep_options);
     c.has_brep = true;
     c.ms.brep = ms_since(t);
   }

@@ -69,6 +69,13 @@ const char* to_string(FaceMode mode);
 /// "packed" or "per-quad". \throw SettingsError (setting "faces")
 FaceMode face_mode(const std::string& name);
 
+/// Whether coplanar patches become one planar B-rep face (occt::BrepOptions::merge_planar) or
+/// stay one B-spline face each. Per-quad faces are never merged.
+enum class PlanarMode { Merge, Keep };
+const char* to_string(PlanarMode mode);
+/// "merge" or "keep". \throw SettingsError (setting "planar_faces")
+PlanarMode planar_mode(const std::string& name);
+
 /// Most extra levels a level setting pins (as many as a tolerance adds at one fan).
 constexpr int kMaxLevel = kMaxFanExtraLevels;
 /// The radial pre-steps of a polar cap the front ends offer: the joins and the B-rep are
@@ -95,6 +102,7 @@ struct ConversionSettings {
   bool absolute = false;        ///< tolerance in model units, else relative to the bbox diagonal
   bool build_brep = true;       ///< false: patches and measures only (e.g. for patch JSON)
   FaceMode faces = FaceMode::Packed;
+  PlanarMode planar = PlanarMode::Merge;
   FitSettings fit;
   /// Refused before any work when estimate_conversion exceeds them (resources.h); with a
   /// tolerance, the extra levels are capped to stay within them.

@@ -189,6 +189,19 @@ void add_output_rows(std::vector<SettingRow>& t) {
     r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.conversion.faces)); };
   }
   {
+    SettingRow& r = add_row(t, "planar_faces", SettingType::Word, std::string(to_string(PlanarMode::Merge)));
+    r.help = "merge (coplanar packed faces become one planar face, exactly) or keep (one B-spline face each); "
+             "per-quad faces are never merged";
+    r.cli = "--planar-faces";
+    r.choices = setting_names("planar_faces");
+    r.property = {"PlanarFaces", "Conversion",
+                  "Merge: coplanar faces become one planar face (exactly: their poles lie on the plane); Keep: one "
+                  "B-spline face each",
+                  {{"Merge", "merge"}, {"Keep", "keep"}}};
+    r.set = [](Settings& s, const SettingValue& v) { s.conversion.planar = planar_mode(word(v)); };
+    r.get = [](const Settings& s) -> SettingValue { return std::string(to_string(s.conversion.planar)); };
+  }
+  {
     SettingRow& r = add_row(t, "brep", SettingType::Flag, true);
     r.help = "Build the B-rep (checked by OCCT); false: the patches and their measures only";
     r.set = [](Settings& s, const SettingValue& v) { s.conversion.build_brep = flag(v); };

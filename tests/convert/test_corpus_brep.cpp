@@ -99,6 +99,27 @@ TEST_P(CorpusBrepTest, ValidWatertightAndSmooth) { check(GetParam()); }
 TEST_P(CorpusBrepTest, PackedValidWatertightAndSmooth) { check(GetParam(), true); }
 TEST_P(CorpusBrepSlowTest, ValidWatertightAndSmooth) { check(GetParam()); }
 
+// Coplanar packed faces merged into planar faces (what `convert` writes by default): the same
+// solid as the faces it replaces, with as many fewer faces as were merged.
+TEST_P(CorpusBrepTest, PlanarFacesMergedSameSolid) {
+  const CorpusBrep r = corpus_brep(GetParam(), 8, true);
+  occt::BrepOptions merge;
+  merge.merge_planar = true;
+  const occt::BrepResult m = occt::build_brep(r.packed.set, {}, merge);
+  EXPECT_TRUE(m.valid) << m.check_message;
+  const occt::ShapeSummary sm = occt::summarize(m.shape, 8), sp = occt::summarize(r.brep.shape, 8);
+  std::printf("%-26s faces %d -> %d (%d planar faces of %d, %d rejected)\n", GetParam().c_str(), sp.faces, sm.faces,
+              m.planar_faces, m.merged_patches, m.rejected_planar_faces);
+  EXPECT_EQ(sm.faces, sp.faces - m.merged_patches + m.planar_faces);
+  EXPECT_EQ(m.is_solid, r.brep.is_solid);
+  EXPECT_EQ(sm.solids, sp.solids);
+  EXPECT_EQ(sm.shells, sp.shells);
+  EXPECT_LE(sm.free_edges, sp.free_edges);
+  EXPECT_NEAR(sm.area, sp.area, 1e-9 * sp.area);
+  EXPECT_NEAR(sm.volume, sp.volume, 1e-9 * std::abs(sp.volume) + 1e-12);
+  EXPECT_LE(sm.max_gap, kMaxRelativeGap * r.expected.diagonal);
+}
+
 std::string param_name(const ::testing::TestParamInfo<std::string>& info) { return info.param; }
 
 INSTANTIATE_TEST_SUITE_P(Corpus, CorpusBrepTest, ::testing::ValuesIn(shapes(false)), param_name);

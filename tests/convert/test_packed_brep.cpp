@@ -4,13 +4,21 @@
 // per-quad B-rep of the same patches, and the crease lines packs must not cross.
 #include <gtest/gtest.h>
 
+#include <BRep_Tool.hxx>
+#include <Geom_Plane.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+
 #include <cmath>
+#include <map>
 #include <set>
 
 #include "common/shapes.h"
 #include "converter/occt/brep_builder.h"
 #include "converter/occt/shape_check.h"
 #include "core/patch/packing.h"
+#include "core/patch/planar_faces.h"
+#include "core/util/tolerances.h"
 #include "core/patch/patch_builder.h"
 
 using namespace subd2nurbs;
@@ -118,6 +126,137 @@ TEST(PackedBrep, PackNextToPolarCaps) {
   EXPECT_EQ(s.solids, 1);
   EXPECT_EQ(s.free_edges, 0);
   EXPECT_LT(s.faces, static_cast<int>(b.set.patches.size()));
+}
+
+// --- planar faces (BrepOptions::merge_planar, core/patch/planar_faces.h) ----------------------
+
+/// The box [0, a] x [0, b] x [0, c] with n x n quads on each side, outward, its 12 edges
+/// infinitely sharp and its 8 corners sharp: its limit surface is exactly the box.
+MeshInput creased_box(int n, double a, double b, double c) {
+  MeshInput m;
+  std::map<std::array<int, 3>, int> id;
+  auto vertex = [&](std::array<int, 3> g) {
+    auto [it, added] = id.emplace(g, static_cast<int>(m.positions.size()));
+    if (added) m.positions.push_back({a * g[0] / n, b * g[1] / n, c * g[2] / n});
+    return it->second;
+  };
+  for (int d = 0; d < 3; ++d)
+    for (int side : {0, n}) {
+      const int u = (d + 1) % 3, w = (d + 2) % 3;  // e_u x e_w = e_d
+      for (int p = 0; p < n; ++p)
+        for (int q = 0; q < n; ++q) {
+          std::array<int, 4> f;
+          const int pu[4] = {p, p + 1, p + 1, p}, qw[4] = {q, q, q + 1, q + 1};
+          for (int k = 0; k < 4; ++k) {
+            std::array<int, 3> g{};
+            g[d] = side;
+            g[u] = pu[k];
+            g[w] = qw[k];
+            f[k] = vertex(g);
+          }
+          if (side == 0) add_face(m, {f[0], f[3], f[2], f[1]});
+          else add_face(m, {f[0], f[1], f[2], f[3]});
+        }
+    }
+  auto on_edge = [&](const std::array<int, 3>& g, int axis) {
+    for (int e = 0; e < 3; ++e)
+      if (e != axis && g[e] != 0 && g[e] != n) return false;
+    return true;
+  };
+  for (const auto& [g, v] : id) {
+    int ends = 0;
+    for (int e = 0; e < 3; ++e) ends += g[e] == 0 || g[e] == n;
+    if (ends == 3) m.corners.push_back({v, kInfiniteSharpness});
+    for (int axis = 0; axis < 3; ++axis) {
+      if (!on_edge(g, axis) || g[axis] == n) continue;
+      std::array<int, 3> h = g;
+      ++h[axis];
+      m.creases.push_back({v, id.at(h), kInfiniteSharpness});
+    }
+  }
+  return m;
+}
+
+int plane_faces(const TopoDS_Shape& shape) {
+  int planes = 0;
+  for (TopExp_Explorer x(shape, TopAbs_FACE); x.More(); x.Next())
+    planes += !Handle(Geom_Plane)::DownCast(BRep_Tool::Surface(TopoDS::Face(x.Current()))).IsNull();
+  return planes;
+}
+
+TEST(PlanarFaces, CreasedBoxIsSixPlanes) {
+  const double a = 2, b = 3, c = 5;
+  const PatchBuild build_ = build(creased_box(4, a, b, c));
+  const PackedSet packed = pack_patches(build_);
+  const PlanarFaces planar = find_planar_faces(packed.set, tolerances::kSameSurface);
+  ASSERT_EQ(planar.faces.size(), 6u);
+  EXPECT_EQ(planar.skipped, 0);
+  for (const PlanarFace& f : planar.faces) {
+    EXPECT_EQ(f.loops.size(), 1u);
+    // Its normal is an axis, pointing out of the box, and its origin on that side.
+    int axis = 0;
+    for (int d = 1; d < 3; ++d)
+      if (std::abs(f.normal[d]) > std::abs(f.normal[axis])) axis = d;
+    EXPECT_NEAR(std::abs(f.normal[axis]), 1.0, 1e-14);
+    const double side = f.normal[axis] > 0 ? std::array<double, 3>{a, b, c}[axis] : 0.0;
+    EXPECT_NEAR(f.origin[axis], side, 1e-13);
+  }
+  occt::BrepOptions merge;
+  merge.merge_planar = true;
+  const occt::BrepResult r = occt::build_brep(packed.set, {}, merge);
+  ASSERT_TRUE(r.valid) << r.check_message;
+  EXPECT_TRUE(r.is_solid);
+  EXPECT_EQ(r.num_faces, 6);
+  EXPECT_EQ(r.planar_faces, 6);
+  EXPECT_EQ(r.merged_patches, static_cast<int>(packed.set.patches.size()));
+  EXPECT_EQ(plane_faces(r.shape), 6);
+  const occt::ShapeSummary s = occt::summarize(r.shape, 8);
+  EXPECT_EQ(s.free_edges, 0);
+  EXPECT_NEAR(s.volume, a * b * c, 1e-12 * a * b * c);               // the box, exactly
+  EXPECT_NEAR(s.area, 2 * (a * b + b * c + c * a), 1e-12 * a * b * c);
+  EXPECT_NEAR(s.max_normal_angle_deg, 90.0, 1e-9);
+}
+
+TEST(PlanarFaces, FlatSheetWithAHoleIsOneFaceWithTwoWires) {
+  // A flat 8 x 8 grid with its middle 2 x 2 quads removed: one planar face, outer loop and hole.
+  MeshInput in = grid(8, 8);
+  for (Point3& p : in.positions) p[2] = 0.25 * p[0] - 0.5 * p[1] + 1;  // a tilted plane
+  for (int j = 3; j < 5; ++j)
+    for (int i = 3; i < 5; ++i) in.holes.push_back(j * 8 + i);
+  const PatchBuild b = build(in);
+  const PackedSet packed = pack_patches(b);
+  const PlanarFaces planar = find_planar_faces(packed.set, tolerances::kSameSurface);
+  ASSERT_EQ(planar.faces.size(), 1u);
+  EXPECT_EQ(planar.faces[0].loops.size(), 2u);
+  const Point3 n = planar.faces[0].normal;  // (-0.25, 0.5, 1) normalized, the grid's side
+  const double len = std::sqrt(0.25 * 0.25 + 0.5 * 0.5 + 1);
+  EXPECT_NEAR(n[0], -0.25 / len, 1e-14);
+  EXPECT_NEAR(n[1], 0.5 / len, 1e-14);
+  EXPECT_NEAR(n[2], 1 / len, 1e-14);
+  occt::BrepOptions merge;
+  merge.merge_planar = true;
+  const occt::BrepResult r = occt::build_brep(packed.set, {}, merge), q = occt::build_brep(packed.set);
+  ASSERT_TRUE(r.valid) << r.check_message;
+  EXPECT_EQ(r.num_faces, 1);
+  EXPECT_EQ(plane_faces(r.shape), 1);
+  int wires = 0;
+  for (TopExp_Explorer x(r.shape, TopAbs_WIRE); x.More(); x.Next()) ++wires;
+  EXPECT_EQ(wires, 2);
+  // The same region of the plane as the B-spline faces it replaces.
+  const occt::ShapeSummary s = occt::summarize(r.shape, 8), sq = occt::summarize(q.shape, 8);
+  EXPECT_NEAR(s.area, sq.area, 1e-9 * sq.area);
+  EXPECT_EQ(s.free_edges, sq.free_edges);
+}
+
+TEST(PlanarFaces, CurvedSurfacesAreNotMerged) {
+  // The grid's sin-bumps and a torus: no patch is planar, nothing changes.
+  for (const MeshInput& in : {grid(6, 5), torus(12, 8)}) {
+    const PatchBuild b = build(in);
+    const PackedSet packed = pack_patches(b);
+    const PlanarFaces planar = find_planar_faces(packed.set, tolerances::kSameSurface);
+    EXPECT_EQ(planar.faces.size(), 0u);
+    EXPECT_EQ(planar.planar_patches, 0);
+  }
 }
 
 }  // namespace

@@ -323,7 +323,8 @@ class Workbench(unittest.TestCase):
                 self.assertEqual(features.PROPERTY_OF_SETTING[row["name"]], p["name"])
         # Defaults: nothing given, so the converter's defaults apply.
         self.assertEqual(features.object_settings(nurbs), {"polar": "on", "fit": "approximate", "faces": "packed",
-                                                           "input": "auto", "feature_angle": 30.0})
+                                                           "planar_faces": "merge", "input": "auto",
+                                                           "feature_angle": 30.0})
         dummy = {"name": "dummy_setting", "type": "number", "default": None, "default_text": "", "help": "a test row",
                  "choices": [], "cli": None, "python": True,
                  "property": {"name": "DummySetting", "group": "Conversion", "tooltip": "only this test has it",

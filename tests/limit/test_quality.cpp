@@ -43,6 +43,9 @@ Converted convert_shape(const std::string& name) {
   c.pos = positions_of(cage.input);
   pipeline::ConversionSettings settings;
   settings.level = 0;
+  // Each read-back face is matched to its patch by its parametrisation: coplanar faces stay
+  // B-splines (merged, they would be planes with parameters of their own).
+  settings.planar = pipeline::PlanarMode::Keep;
   c.result = pipeline::convert(c.base, c.pos, settings);
   return c;
 }
