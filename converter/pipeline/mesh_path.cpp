@@ -261,19 +261,21 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
   return s;
 }
 
-/// The planar regions of the target's triangles (at least a cage edge wide: the mean edge of
-/// the cage `start`, on the mesh) and the cage's faces and vertices held in them.
+/// The planar regions of the target's triangles, however narrow and down to 1e-4 of the mesh's
+/// area, and the cage's faces and vertices held in them. No width limit: a face is held only
+/// when its whole limit support lies on the plane, so a strip narrower than a cage edge holds
+/// faces only between two infinitely sharp creases (a wall one quad high, whose faces' limit
+/// depends on the crease vertices alone); a faceted cylinder's strips, bounded by soft edges,
+/// hold none. The area limit (1e-3 by default) lowered for the same reason: small walls (a boss
+/// 0.27 wide and 0.2 high on featuretype, 0.9e-3 of its area) are flat faces too.
 struct PlanarSetup {
   std::vector<PlanarRegion> regions;
   PlanarConstraints constraints;
 };
 PlanarSetup planar_setup(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target) {
-  const PolyMesh& m = cage.mesh;
-  double length = 0;
-  for (int e = 0; e < m.num_edges(); ++e) length += norm(sub(start[m.edge_vertex(e, 1)], start[m.edge_vertex(e, 0)]));
-  PlanarRegionOptions po;
-  po.min_width = m.num_edges() > 0 ? length / m.num_edges() : 0;
   PlanarSetup s;
+  PlanarRegionOptions po;
+  po.min_area = 1e-4;
   s.regions = detect_planar_regions(target.points(), target.triangles(), po);
   s.constraints = planar_constraints(cage, start, target.points(), target.triangles(), s.regions, target.diagonal());
   return s;

@@ -5,7 +5,8 @@
 //   within `flatness` x the mesh's diagonal of one plane (grown from the largest triangles,
 //   the plane refitted by least squares over the region's vertices and the region grown again).
 //   Regions below `min_area` x the mesh's area, or narrower than `min_width` (2 area / perimeter,
-//   model units: a faceted cylinder's strips are planar but narrow) are dropped.
+//   model units; 0 by default and on the mesh path: a narrow strip holds a face only between two
+//   infinitely sharp creases, see flatten_planar_regions) are dropped.
 // * flatten_planar_regions: after a fit, every cage face whose four cage vertices (`on_mesh`:
 //   positions on the mesh, e.g. the remesher's) lie on one region's plane and whose centroid's
 //   closest triangle is in that region is that region's face, when all the vertices of its

@@ -32,6 +32,9 @@
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <Geom_Plane.hxx>
+#include <GeomLProp_SLProps.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Pln.hxx>
 #include <gp_Pnt.hxx>
@@ -358,6 +361,87 @@ TEST(MeshPath, SteppedBlockStaysPlanar) {
   check_against(exact, mesh, c, 2e-2);
   check_planar_faces(exact, c.shape, diagonal(mesh), 0.5);
   EXPECT_GE(json_number(c.report, {"mesh", "planar", "regions_used"}), 8);
+}
+
+/// Walls narrower than a cage edge (issue #28; docs/fitting.md "Planar regions"): a 60 x 40 x 3
+/// slab with a hole of radius 5 drilled through, converted with ~6-unit quads, so its four side
+/// walls (3 high) are one quad between the sharp top and bottom rims. Such a wall's faces depend
+/// only on the rims' crease vertices; held on the wall's plane (and the rim vertices on both
+/// planes: on their line), every B-rep face on a side wall must be exactly planar: all its poles
+/// within 1e-12 x the diagonal of the exact wall plane, the flat faces together covering the
+/// walls' area. The drilled hole's wall (3 high, a faceted cylinder) stays on the cylinder.
+TEST(MeshPath, ThinSlabWallsAreExactlyPlanar) {
+  TempDir dir;
+  const double a = 30, b = 20, h = 3;
+  const TopoDS_Shape slab = BRepPrimAPI_MakeBox(gp_Pnt(-a, -b, 0), 2 * a, 2 * b, h).Shape();
+  const TopoDS_Shape drill = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(8, 0, -1), gp::DZ()), 5, h + 2).Shape();
+  const TopoDS_Shape exact = BRepAlgoAPI_Cut(slab, drill).Shape();
+  const Triangles mesh = tessellate(exact, 0.01);
+  ASSERT_EQ(euler_characteristic(mesh), 0);  // genus 1
+  const std::string stl = dir.file("slab.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir, "--target-faces 150");
+  check_against(exact, mesh, c, 1e-2);
+  const double diag = diagonal(mesh);
+  // The cage's edges are longer than the walls are high (else the test would not test narrow walls).
+  const MeshInput& cage = c.cage.input;
+  double length = 0;
+  int edges = 0, off = 0;
+  for (int n : cage.face_sizes) {
+    for (int k = 0; k < n; ++k) {
+      const auto& p = cage.positions[cage.face_indices[off + k]];
+      const auto& q = cage.positions[cage.face_indices[off + (k + 1) % n]];
+      length += std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+      ++edges;
+    }
+    off += n;
+  }
+  ASSERT_GT(length / edges, 1.3 * h);
+  // The walls: x = +-a, y = +-b. A B-rep face of ours on one of them: its points all within
+  // 1e-3 x the diagonal of the wall's plane and its normal at its middle within 10 degrees of the
+  // wall's (not a strip of the top or the bottom along a rim).
+  const gp_Pln walls[4] = {gp_Pln(gp_Pnt(a, 0, 0), gp::DX()), gp_Pln(gp_Pnt(-a, 0, 0), gp::DX()),
+                           gp_Pln(gp_Pnt(0, b, 0), gp::DY()), gp_Pln(gp_Pnt(0, -b, 0), gp::DY())};
+  double flat_area = 0, worst = 0;
+  int wall_faces = 0;
+  for (TopExp_Explorer ex(c.shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    const TopoDS_Face face = TopoDS::Face(ex.Current());
+    const std::vector<gp_Pnt> pts = grid_points(face, 5);
+    for (const gp_Pln& wall : walls) {
+      double far = 0;
+      for (const gp_Pnt& q : pts) far = std::max(far, wall.Distance(q));
+      if (far > 1e-3 * diag) continue;
+      const Handle(Geom_Surface) surface = BRep_Tool::Surface(face);
+      const BRepAdaptor_Surface ad(face);
+      GeomLProp_SLProps props(surface, 0.5 * (ad.FirstUParameter() + ad.LastUParameter()),
+                              0.5 * (ad.FirstVParameter() + ad.LastVParameter()), 1, 1e-9);
+      if (!props.IsNormalDefined() || std::abs(props.Normal().Dot(wall.Axis().Direction())) < std::cos(10 * M_PI / 180))
+        continue;
+      ++wall_faces;
+      double pole_far = 0;
+      if (const Handle(Geom_BSplineSurface) bs = Handle(Geom_BSplineSurface)::DownCast(surface)) {
+        for (int i = 1; i <= bs->NbUPoles(); ++i)
+          for (int j = 1; j <= bs->NbVPoles(); ++j) pole_far = std::max(pole_far, wall.Distance(bs->Pole(i, j)));
+      } else if (const Handle(Geom_Plane) pl = Handle(Geom_Plane)::DownCast(surface)) {
+        // A merged planar face: its plane's origin and normal against the wall's.
+        pole_far = std::max(wall.Distance(pl->Location()), (1 - std::abs(pl->Axis().Direction().Dot(wall.Axis().Direction()))) * diag);
+      } else {
+        pole_far = INFINITY;
+      }
+      worst = std::max(worst, pole_far);
+      GProp_GProps g;
+      BRepGProp::SurfaceProperties(face, g);
+      if (pole_far <= 1e-12 * diag) flat_area += g.Mass();
+      break;
+    }
+  }
+  EXPECT_GE(wall_faces, 4);
+  EXPECT_LT(worst, 1e-12 * diag) << "relative " << worst / diag;
+  const double wall_area = 2 * (2 * a + 2 * b) * h;
+  EXPECT_NEAR(flat_area, wall_area, 0.02 * wall_area);
+  std::printf("  %d B-rep faces on the side walls, poles within %.3g of the diagonal of the walls' planes; flat area "
+              "%.4g of %.4g\n",
+              wall_faces, worst / diag, flat_area, wall_area);
 }
 
 TEST(MeshPath, CylinderSideStaysOnTheCylinder) {

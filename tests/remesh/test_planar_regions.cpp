@@ -211,5 +211,12 @@ TEST(PlanarRegions, DrilledBoxCageFlattenedOntoItsPlanes) {
   check_flattened(test::drilled_box(0.4, 32, 4, 8), 300, 0.2, 0.4);
 }
 
+/// The mesh path's setting: regions of any width (docs/fitting.md "Planar regions"). The hole's
+/// 32 facet strips (0.08 wide, a cage edge ~0.3) are regions now, yet none holds a face: a face
+/// is flattened exactly when its support lies on a box plane, as with the width limit.
+TEST(PlanarRegions, DrilledBoxNarrowFacetsHoldNoFace) {
+  check_flattened(test::drilled_box(0.4, 32, 4, 8), 300, 0, 0.4);
+}
+
 }  // namespace
 }  // namespace subd2nurbs
