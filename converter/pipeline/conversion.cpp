@@ -271,8 +271,29 @@ struct Run {
 /// The fans of a build as the estimate costs them, with their levels below the coarse level.
 std::vector<FanCost> fan_costs(const PatchBuild& build) {
   std::vector<FanCost> costs;
+  // The irregular vertices sharing a coarse face with each fan's vertex (resources.h, nearby).
+  const PolyMesh& m = build.refinement.levels[build.info.coarse_level].mesh;
+  std::vector<int> valence_of(m.num_vertices(), 0);
   for (const IrregularFan& f : build.info.fans)
-    costs.push_back({f.valence, f.sectors, std::max(1, f.level - build.info.coarse_level)});
+    if (f.vertex >= 0 && f.vertex < m.num_vertices()) valence_of[f.vertex] = f.valence;
+  std::vector<int> near;
+  for (const IrregularFan& f : build.info.fans) {
+    FanCost cost{f.valence, f.sectors, std::max(1, f.level - build.info.coarse_level), 0};
+    if (f.vertex >= 0 && f.vertex < m.num_vertices()) {
+      near.clear();
+      for (int i = 0; i < m.vertex_face_count(f.vertex); ++i) {
+        const int F = m.corner_face(m.vertex_corners(f.vertex)[i]);
+        for (int g = m.face_begin(F); g < m.face_end(F); ++g) {
+          const int w = m.corner_vertex(g);
+          if (w != f.vertex && valence_of[w] > 0) near.push_back(w);
+        }
+      }
+      std::sort(near.begin(), near.end());
+      near.erase(std::unique(near.begin(), near.end()), near.end());
+      for (int w : near) cost.nearby += valence_of[w];
+    }
+    costs.push_back(cost);
+  }
   return costs;
 }
 
@@ -404,7 +425,9 @@ void tolerance_stage(const Run& r) {
   std::vector<int> extra(c.build.refinement.levels.back().mesh.num_vertices(), 0);
   // The estimate with the fans as built, updated as fans deepen: each deepening is checked
   // against the limits before the deeper build (the fans of one vertex deepen together).
-  const EstimateOptions eo = r.estimate_options();
+  // A deeper build is a rebuild (the first build held meanwhile): costed as such.
+  EstimateOptions eo = r.estimate_options();
+  eo.rebuilt = true;
   std::vector<FanCost> costs = fan_costs(c.build);
   ResourceEstimate total = estimate_conversion(r.base, costs, eo);
   std::vector<std::vector<int>> fans_of_vertex(extra.size());
@@ -691,7 +714,24 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   c.tolerance_absolute = settings.absolute;
   const int level = settings.level.value_or(0);
   check_has_surface(base, positions);
-  c.estimate_before = estimate_conversion(base, level, run.estimate_options());
+  EstimateOptions before = run.estimate_options();
+  if (tolerance_given) {  // predict the deepening of curved high-valence fans (resources.h)
+    // An absolute tolerance is taken relative to the cage's diagonal (the model size, near enough).
+    double tolerance = settings.tolerance.value_or(kDefaultTolerance);
+    if (settings.absolute) {
+      const PolyMesh& m = base.mesh;
+      Point3 lo = positions[m.corner_vertex(0)], hi = lo;
+      for (int h = 0; h < m.num_corners(); ++h)
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], positions[m.corner_vertex(h)][k]);
+          hi[k] = std::max(hi[k], positions[m.corner_vertex(h)][k]);
+        }
+      tolerance /= std::max(std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-300);
+    }
+    before.tolerance = tolerance;
+    before.positions = &positions;
+  }
+  c.estimate_before = estimate_conversion(base, level, before);
   check_resources(c.estimate_before, settings.limits, kDefaultMaxConvertFaces,
                   "converting " + std::to_string(base.mesh.num_faces()) + " cage faces at level " +
                       std::to_string(level),
@@ -702,7 +742,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   patches_stage(run, level);
   if (tolerance_given) tolerance_stage(run);
   // The estimate with the fans as built (their levels known now), before the B-rep.
-  c.estimate = estimate_conversion(base, fan_costs(c.build), run.estimate_options());
+  EstimateOptions built = run.estimate_options();
+  built.rebuilt = std::any_of(c.build.vertex_extra.begin(), c.build.vertex_extra.end(), [](int x) { return x > 0; });
+  c.estimate = estimate_conversion(base, fan_costs(c.build), built);
 
   // The optional quality stage runs on a thread of its own from here on, beside the other
   // stages: first what depends on the cage alone (the exact limit, the quadric fits at the

@@ -11,7 +11,9 @@
 #include <utility>
 
 #include "converter/pipeline/text.h"
+#include "core/eval/deviation.h"
 #include "core/polar/polar_structure.h"
+#include "core/util/vec3.h"
 #include "io/input_file.h"
 
 namespace subd2nurbs::pipeline {
@@ -76,6 +78,7 @@ struct CageCost {
   double irregular_quads = 0;  ///< of those, the quads with an irregular corner (a patch and a face each)
   double semi_pieces = 0, semi_poles = 0;
   double caps = 0, cap_poles = 0;  ///< polar caps: one face each
+  double cap_valence2 = 0;         ///< sum of the caps' valence^2
   std::vector<FanCost> fans;   ///< valence and quads at each irregular vertex; levels 2
 };
 
@@ -87,7 +90,45 @@ bool irregular_vertex(const PolyMesh& m, int v) {
   return m.is_boundary_vertex(v) ? f > 2 : f != 4;
 }
 
-CageCost cage_cost(const SubdivLevel& base, bool polar) {
+/// Are the points of these faces on one plane (within 1e-9 of their spread)? The plane's normal
+/// is the sum of the faces' Newell normals.
+bool flat_faces(const PolyMesh& m, const std::vector<Point3>& x, const std::vector<int>& faces) {
+  using namespace vec3;
+  Point3 normal{0, 0, 0}, centre{0, 0, 0};
+  int count = 0;
+  for (int f : faces)
+    for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
+      const int next = h + 1 < m.face_end(f) ? h + 1 : m.face_begin(f);
+      normal = axpy(normal, 1.0, cross(x[m.corner_vertex(h)], x[m.corner_vertex(next)]));
+      centre = axpy(centre, 1.0, x[m.corner_vertex(h)]);
+      ++count;
+    }
+  if (count == 0) return true;
+  centre = {centre[0] / count, centre[1] / count, centre[2] / count};
+  const double nn = norm(normal);
+  double spread = 0, off = 0;
+  for (int f : faces)
+    for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
+      const Point3 d = sub(x[m.corner_vertex(h)], centre);
+      spread = std::max(spread, norm(d));
+      if (nn > 0) off = std::max(off, std::abs(dot(d, normal)) / nn);
+    }
+  return nn > 0 && off <= 1e-9 * spread;
+}
+
+/// The faces touching any corner of `faces` (the faces and their ring): a fan is flat when its
+/// limit is, which its ring's faces decide too (a prism's flat 1000-gon cap is curved near the rim).
+std::vector<int> with_ring(const PolyMesh& m, const std::vector<int>& faces) {
+  std::set<int> out(faces.begin(), faces.end());
+  for (int f : faces)
+    for (int h = m.face_begin(f); h < m.face_end(f); ++h) {
+      const int v = m.corner_vertex(h);
+      for (int i = 0; i < m.vertex_face_count(v); ++i) out.insert(m.corner_face(m.vertex_corners(v)[i]));
+    }
+  return {out.begin(), out.end()};
+}
+
+CageCost cage_cost(const SubdivLevel& base, bool polar, const std::vector<Point3>* x) {
   const PolyMesh& m = base.mesh;
   CageCost c;
   std::vector<char> irregular(m.num_vertices(), 0), pole(m.num_vertices(), 0), in_cap(m.num_faces(), 0);
@@ -99,6 +140,7 @@ CageCost cage_cost(const SubdivLevel& base, bool polar) {
       for (int f : s.cap_faces) in_cap[f] = 1;
       c.caps += 1;
       c.cap_poles += 16.0 * s.valence;
+      c.cap_valence2 += static_cast<double>(s.valence) * s.valence;
     }
   // The coarse level: the cage when every face outside the caps is a quad, else level 1.
   bool quads = true;
@@ -111,17 +153,49 @@ CageCost cage_cost(const SubdivLevel& base, bool polar) {
     }
   c.quads = quads ? quad_faces : corners;
   for (int v = 0; v < m.num_vertices(); ++v)
-    if (!pole[v] && irregular_vertex(m, v)) {
-      irregular[v] = 1;
-      c.fans.push_back({m.valence(v), m.vertex_face_count(v), 2});
+    if (!pole[v] && irregular_vertex(m, v)) irregular[v] = 1;
+  // The fans, with the valences of the irregular vertices next to them at the coarse level:
+  // on an all-quad cage the irregular vertices sharing a face; at level 1 a cage vertex is next
+  // to the face points of its n-gons (n) and a face point to the n-gon's irregular corners.
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    if (!irregular[v]) continue;
+    FanCost fan{m.valence(v), m.vertex_face_count(v), 2, 0};
+    if (x && m.valence(v) > kSharedPieceValence) {
+      std::vector<int> star;
+      for (int i = 0; i < m.vertex_face_count(v); ++i) star.push_back(m.corner_face(m.vertex_corners(v)[i]));
+      fan.curved = !flat_faces(m, *x, with_ring(m, star));
     }
+    if (quads) {
+      std::set<int> near;
+      for (int i = 0; i < m.vertex_face_count(v); ++i) {
+        const int f = m.corner_face(m.vertex_corners(v)[i]);
+        for (int g = m.face_begin(f); g < m.face_end(f); ++g)
+          if (m.corner_vertex(g) != v && irregular[m.corner_vertex(g)]) near.insert(m.corner_vertex(g));
+      }
+      for (int w : near) fan.nearby += m.valence(w);
+    } else {
+      for (int i = 0; i < m.vertex_face_count(v); ++i) {
+        const int f = m.corner_face(m.vertex_corners(v)[i]);
+        if (!in_cap[f] && m.face_size(f) != 4) fan.nearby += m.face_size(f);
+      }
+    }
+    c.fans.push_back(fan);
+  }
   for (int f = 0; f < m.num_faces(); ++f) {
     const int n = m.face_size(f);
-    if (n != 4 && !in_cap[f]) c.fans.push_back({n, n, 2});  // the face point: a level-1 vertex of valence n
+    if (n != 4 && !in_cap[f]) {  // the face point: a level-1 vertex of valence n
+      FanCost fan{n, n, 2, 0};
+      if (x && n > kSharedPieceValence) fan.curved = !flat_faces(m, *x, with_ring(m, {f}));
+      for (int h = m.face_begin(f); h < m.face_end(f); ++h)
+        if (irregular[m.corner_vertex(h)]) fan.nearby += m.valence(m.corner_vertex(h));
+      c.fans.push_back(fan);
+    }
     if (n == 4) {
-      bool any = false;
-      for (int h = m.face_begin(f); h < m.face_end(f); ++h) any = any || irregular[m.corner_vertex(h)];
-      c.irregular_quads += any ? 1 : 0;
+      // All quads: the quad is irregular when a corner is. At level 1 each of its 4 children
+      // has one cage corner: one irregular child per irregular corner.
+      int at = 0;
+      for (int h = m.face_begin(f); h < m.face_end(f); ++h) at += irregular[m.corner_vertex(h)];
+      c.irregular_quads += quads ? (at > 0 ? 1 : 0) : at;
     } else if (!in_cap[f]) {
       c.irregular_quads += n;  // each child quad has the face point at a corner
     }
@@ -166,6 +240,7 @@ ResourceEstimate estimate(const CageCost& c, const std::vector<FanCost>& fans, c
     e.bytes += kBytesPerFacePoleNoBrep * e.exported_poles;
   e.seconds = kStartSeconds + kSecondsPerPiece * e.faces + kSecondsPerPole * e.exported_poles +
               (o.build_brep ? kSecondsPerFace * e.exported_faces : 0.0);
+  e.seconds += kSecondsPerCapValence2 * c.cap_valence2;
   std::set<int> valences;
   for (const FanCost& f : fans) {
     e = e + fan_estimate(f, o);
@@ -220,18 +295,30 @@ ResourceEstimate fan_estimate(const FanCost& f, const EstimateOptions& o) {
   e.faces = pieces;
   e.poles = poles;
   e.exported_poles = poles;
-  e.bytes = kBytesPerPiece * pieces + kBytesPerPatchPole * poles + kBytesPerFanValence * f.valence +
+  // The piece: the fan's own star and the stars next to it; held twice during a rebuild.
+  const double piece = kBytesPerFanValence * f.valence + kBytesPerNearbyValence * f.nearby;
+  e.bytes = kBytesPerPiece * pieces + kBytesPerPatchPole * poles + piece * (o.rebuilt ? 2 : 1) +
             (o.build_brep ? kBytesPerFacePole : kBytesPerFacePoleNoBrep) * poles;
   e.seconds = kSecondsPerPiece * pieces + kSecondsPerPole * poles + kSecondsPerFanValenceLevel * f.valence * L +
               (f.corners > kSharedPieceValence ? 0.0 : kSecondsPerFanValence2Level * f.valence * f.corners * L) +
-              kSecondsPerFanValence2Intersections * f.valence * f.corners;
+              kSecondsPerFanValence2Intersections * f.valence * f.corners +
+              kSecondsPerNearbyValence * f.nearby * (o.rebuilt ? 2 : 1);
   return e;
 }
 
 ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, const EstimateOptions& options) {
-  const CageCost c = cage_cost(base, options.polar);
+  const bool predict = options.tolerance > 0 && options.positions &&
+                       options.positions->size() == static_cast<size_t>(base.mesh.num_vertices());
+  const CageCost c = cage_cost(base, options.polar, predict ? options.positions : nullptr);
   std::vector<FanCost> fans = c.fans;
-  for (FanCost& f : fans) f.levels = 2 + std::max(0, extra_levels);
+  for (FanCost& f : fans) {
+    f.levels = 2 + std::max(0, extra_levels);
+    if (predict && f.curved && f.valence > kSharedPieceValence) {
+      // The levels that take kPredictedDeviation down to the tolerance at this valence's rate.
+      const double need = std::log(kPredictedDeviation / options.tolerance) / std::log(deviation_rate(f.valence));
+      if (need > 0) f.levels = std::max(f.levels, 2 + std::min(static_cast<int>(std::ceil(need)), 12)  /* kMaxFanExtraLevels */);
+    }
+  }
   return estimate(c, fans, options);
 }
 
@@ -243,7 +330,7 @@ ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, 
 
 ResourceEstimate estimate_conversion(const SubdivLevel& base, const std::vector<FanCost>& fans,
                                      const EstimateOptions& options) {
-  return estimate(cage_cost(base, options.polar), fans, options);
+  return estimate(cage_cost(base, options.polar, nullptr), fans, options);
 }
 
 ResourceEstimate estimate_refinement(const SubdivLevel& base, int levels) {

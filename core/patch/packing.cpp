@@ -623,8 +623,12 @@ PackedSet unpacked(const PatchSet& quads) {
 
 namespace {
 
+PackedSet assemble(const PatchSet& quads, const std::vector<Rect>& rects, const std::vector<NurbsPatch>& surfaces,
+                   const std::vector<char>& ok, const std::vector<long long>& removed,
+                   const std::vector<int>& coarse_face, std::vector<int>& rect_of_patch);
+
 PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, const std::vector<char>& curve_ok,
-                    const std::vector<int>& coarse_face, double knot_tolerance, double check) {
+                    const std::vector<int>& coarse_face, double knot_tolerance, double check, int max_edges) {
   const int np = static_cast<int>(quads.patches.size());
   // The grid: packable neighbours across packable curves.
   Grid g;
@@ -665,16 +669,86 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
     if (area >= 2) rects.push_back(std::move(r));
   }
 
-  PackedSet out;
-  // Surfaces; a rectangle that does not reproduce its quads stays per quad.
+  // Surfaces; a rectangle that does not reproduce its quads stays per quad. A pack with more
+  // than max_edges edges on its boundary is cut into strips across its sides with the most
+  // edges, and the output made again, until every pack has at most max_edges.
   std::vector<NurbsPatch> surfaces(rects.size());
-  std::vector<char> ok(rects.size(), 0);
+  std::vector<char> ok(rects.size(), 0), built(rects.size(), 0);
   std::vector<long long> removed(rects.size(), 0);
-  for (size_t i = 0; i < rects.size(); ++i) {
-    ok[i] = pack_surface(quads, rects[i], knot_tolerance, check, surfaces[i], removed[i]);
-    if (!ok[i]) ++out.rejected_packs;
+  int rejected = 0;
+  for (;;) {
+    for (size_t i = 0; i < rects.size(); ++i) {
+      if (built[i]) continue;
+      built[i] = 1;
+      ok[i] = pack_surface(quads, rects[i], knot_tolerance, check, surfaces[i], removed[i]);
+      if (!ok[i]) ++rejected;
+    }
+    std::vector<int> rect_of_patch;
+    PackedSet out = assemble(quads, rects, surfaces, ok, removed, coarse_face, rect_of_patch);
+    out.rejected_packs = rejected;
+    std::vector<std::pair<int, std::array<int, 4>>> over;  // (rect, edges per side)
+    for (size_t pi = 0; pi < out.set.patches.size(); ++pi) {
+      const NurbsPatch& p = out.set.patches[pi];
+      if (p.cells.empty()) continue;
+      std::array<int, 4> edges{};
+      for (int s = 0; s < 4; ++s)
+        edges[s] = p.split_sides[s].empty() ? (p.curves[s] >= 0 ? 1 : 0) : static_cast<int>(p.split_sides[s].size());
+      if (edges[0] + edges[1] + edges[2] + edges[3] > max_edges) over.push_back({rect_of_patch[pi], edges});
+    }
+    if (over.empty()) return out;
+    std::vector<char> drop(rects.size(), 0);
+    for (const auto& [ri, edges] : over) {
+      const Rect r = rects[ri];  // a copy: rects grows below
+      drop[ri] = 1;
+      // Across u (cutting the width) when the sides along u (0 and 2) hold more edges.
+      const bool cut_u = r.h < 2 || (r.w >= 2 && edges[0] + edges[2] >= edges[1] + edges[3]);
+      const int n = cut_u ? r.w : r.h, along = cut_u ? edges[0] + edges[2] : edges[1] + edges[3];
+      const int room = std::max(1, max_edges - 4 - (cut_u ? edges[1] + edges[3] : edges[0] + edges[2]));
+      const int parts = std::clamp((along + room - 1) / room, 2, n);
+      for (int k = 0; k < parts; ++k) {
+        const int a = static_cast<int>(static_cast<long long>(n) * k / parts);
+        const int b = static_cast<int>(static_cast<long long>(n) * (k + 1) / parts);
+        Rect part;
+        part.w = cut_u ? b - a : r.w;
+        part.h = cut_u ? r.h : b - a;
+        if (part.w * part.h < 2) continue;  // a single quad stays alone
+        for (int j = 0; j < part.h; ++j)
+          for (int i = 0; i < part.w; ++i)
+            part.cells.push_back(r.cells[static_cast<size_t>(cut_u ? j : a + j) * r.w + (cut_u ? a + i : i)]);
+        rects.push_back(std::move(part));
+      }
+    }
+    // Drop the rectangles that were cut (their surfaces with them).
+    size_t kept = 0;
+    for (size_t i = 0; i < drop.size(); ++i) {
+      if (drop[i]) {
+        if (!ok[i]) --rejected;
+        continue;
+      }
+      if (kept != i) {
+        rects[kept] = std::move(rects[i]);
+        surfaces[kept] = std::move(surfaces[i]);
+        ok[kept] = ok[i];
+        built[kept] = built[i];
+        removed[kept] = removed[i];
+      }
+      ++kept;
+    }
+    rects.erase(rects.begin() + kept, rects.begin() + drop.size());
+    surfaces.resize(rects.size());
+    ok.resize(rects.size(), 0);
+    built.assign(rects.size(), 0);  // (re-set below for the kept ones)
+    for (size_t i = 0; i < kept; ++i) built[i] = 1;
+    removed.resize(rects.size(), 0);
   }
+}
 
+/// The output set of the chosen rectangles (those with ok[r] packed, with surfaces[r]).
+PackedSet assemble(const PatchSet& quads, const std::vector<Rect>& rects, const std::vector<NurbsPatch>& surfaces,
+                   const std::vector<char>& ok, const std::vector<long long>& removed,
+                   const std::vector<int>& coarse_face, std::vector<int>& rect_of_patch) {
+  const int np = static_cast<int>(quads.patches.size());
+  PackedSet out;
   // Output patches in the order of each one's first quad.
   struct Member {
     int rect = -1, i = 0, j = 0, rotation = 0;
@@ -704,7 +778,7 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
     if (output_of_rect[m.rect] < 0) {
       output_of_rect[m.rect] = static_cast<int>(ps.patches.size());
       const Rect& r = rects[m.rect];
-      NurbsPatch pack = std::move(surfaces[m.rect]);
+      NurbsPatch pack = surfaces[m.rect];
       for (int j = 0; j < r.h; ++j)
         for (int i = 0; i < r.w; ++i) {
           const int s = r.cells[static_cast<size_t>(j) * r.w + i];
@@ -727,6 +801,8 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
       pack.corners = {corner_of(0, 0, 0), corner_of(r.w - 1, 0, 1), corner_of(r.w - 1, r.h - 1, 2), corner_of(0, r.h - 1, 3)};
       pack.curves = {-1, -1, -1, -1};
       ps.patches.push_back(std::move(pack));
+      rect_of_patch.resize(ps.patches.size(), -1);
+      rect_of_patch.back() = m.rect;
       ++out.packs;
       out.packed_quads += r.w * r.h;
       out.removed_knots += removed[m.rect];
@@ -827,7 +903,7 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
 
 }  // namespace
 
-PackedSet pack_patches(const PatchBuild& b) {
+PackedSet pack_patches(const PatchBuild& b, int max_edges) {
   const PatchSet& ps = b.set;
   const SubdivLevel& la = b.refinement.levels[b.info.coarse_level];
   std::vector<char> patch_ok(ps.patches.size(), 0), curve_ok(ps.curves.size(), 0);
@@ -850,7 +926,7 @@ PackedSet pack_patches(const PatchBuild& b) {
     curve_ok[k] = la.edge_sharpness[e] == 0.0f;
   }
   return pack_impl(ps, patch_ok, curve_ok, b.coarse_face, tolerances::kKnotRemoval * ps.model_size,
-                   tolerances::kSameSurface * ps.model_size);
+                   tolerances::kSameSurface * ps.model_size, max_edges);
 }
 
 }  // namespace subd2nurbs

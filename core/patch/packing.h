@@ -51,11 +51,18 @@ struct PackedSet {
   long long removed_knots = 0;      ///< knot lines dropped inside packs
 };
 
+/// The most edges on a packed face's boundary (docs/patches.md, "Packed faces"): a pack with
+/// more (a ring of quads whose sides meet a fan's faces one by one) is cut into strips. OCCT's
+/// STEP reader projects every edge onto its face's whole surface, so a face of E edges and
+/// about E spans costs it E^2 (a 1024-sided capsule's side: 2 x 2048 edges, > 20 minutes).
+constexpr int kMaxPackEdges = 64;
+
 /// Packs a build: a patch may join a pack when it is a one-span regular patch of a coarse quad,
 /// across a curve claimed C2 whose coarse edge has no sharpness at all. Knot lines whose
 /// third-derivative jump is at most tolerances::kKnotRemoval of the model size are dropped; a
 /// pack must reproduce each quad within tolerances::kSameSurface, else its quads stay alone.
-PackedSet pack_patches(const PatchBuild& build);
+/// No pack has more than `max_edges` edges on its boundary (a seam counted twice).
+PackedSet pack_patches(const PatchBuild& build, int max_edges = kMaxPackEdges);
 
 /// The per-quad set unchanged, with the identity places (what `--faces per-quad` exports).
 PackedSet unpacked(const PatchSet& quads);

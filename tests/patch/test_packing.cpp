@@ -160,6 +160,51 @@ TEST(Packing, PerQuadIsTheSourceUnchanged) {
   EXPECT_EQ(max_packed_difference(b, out), 0.0);
 }
 
+/// Edges on the boundary of each packed face (a seam counted twice): per side its pieces, or one.
+std::vector<int> pack_edge_counts(const PackedSet& out) {
+  std::vector<int> counts;
+  for (const NurbsPatch& p : out.set.patches) {
+    if (p.cells.empty()) continue;
+    int e = 0;
+    for (int s = 0; s < 4; ++s) e += p.split_sides[s].empty() ? (p.curves[s] >= 0 ? 1 : 0) : static_cast<int>(p.split_sides[s].size());
+    counts.push_back(e);
+  }
+  return counts;
+}
+
+// A capsule (docs/patches.md "Packed faces"): the side ring meets every fan quad of both caps
+// one by one, so the one pack of the ring has 2 x 2n edges. With a cap of K edges it is cut
+// into strips of at most K edges, which are still exactly the per-quad surface and cover the
+// same quads; a torus (2 seams) is one face at any cap of at least 4.
+TEST(Packing, PacksWithManyEdgesAreCutIntoStrips) {
+  const int n = 24;
+  const PatchBuild b = build_with(revolved(n, {{0, 1.7}, {0.7, 1.4}, {1, 1}, {1, -1}, {0.7, -1.4}, {0, -1.7}}));
+  const PackedSet whole = pack_patches(b, 1 << 30);
+  expect_consistent(b, whole);
+  ASSERT_EQ(whole.packs, 1);
+  const std::vector<int> whole_edges = pack_edge_counts(whole);
+  ASSERT_EQ(whole_edges.size(), 1u);
+  EXPECT_GE(whole_edges[0], 4 * n);  // the case is present: 2n fan quads on each side, + the seam
+  for (int cap : {64, 16, 8}) {
+    SCOPED_TRACE("cap " + std::to_string(cap));
+    const PackedSet out = pack_patches(b, cap);
+    expect_consistent(b, out);
+    EXPECT_LT(max_packed_difference(b, out), 1e-12 * b.set.model_size);
+    EXPECT_EQ(out.packed_quads, whole.packed_quads);  // the same quads, in strips
+    EXPECT_GE(out.packs, (whole_edges[0] + cap - 1) / cap);
+    for (int e : pack_edge_counts(out)) EXPECT_LE(e, cap);
+    const ContinuityReport r = measure_continuity(out.set);
+    EXPECT_LT(r.max_gap, 1e-12 * b.set.model_size);
+    EXPECT_LT(r.max_normal_angle_deg, 1e-6);
+  }
+  const PatchBuild t = build_with(torus(12, 8));
+  for (int cap : {4, 64}) {
+    const PackedSet out = pack_patches(t, cap);
+    EXPECT_EQ(out.set.patches.size(), 1u);
+    EXPECT_EQ(pack_edge_counts(out), std::vector<int>{4});
+  }
+}
+
 /// The largest rectangle of free cells (brute force).
 int largest_free_rectangle(const std::vector<std::vector<char>>& free) {
   const int nx = static_cast<int>(free.size()), ny = static_cast<int>(free[0].size());
