@@ -55,7 +55,7 @@ struct PackedSet {
 /// more (a ring of quads whose sides meet a fan's faces one by one) is cut into strips. OCCT's
 /// STEP reader projects every edge onto its face's whole surface, so a face of E edges and
 /// about E spans costs it E^2 (a 1024-sided capsule's side: 2 x 2048 edges, > 20 minutes).
-constexpr int kMaxPackEdges = 64;
+constexpr int kMaxPackEdges = 128;
 
 /// Packs a build: a patch may join a pack when it is a one-span regular patch of a coarse quad,
 /// across a curve claimed C2 whose coarse edge has no sharpness at all. Knot lines whose
