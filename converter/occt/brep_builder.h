@@ -34,10 +34,10 @@ struct BrepResult {
 };
 
 struct BrepOptions {
-  /// Each connected set of coplanar patches (a single planar patch too) (poles on one plane within
-  /// tolerances::kSameSurface of the model size) becomes one face on a Geom_Plane, bounded by
-  /// the set's outer curves (core/patch/planar_faces.h); false: one face per patch. The
-  /// pipeline turns it on for packed faces (setting planar_faces).
+  /// Each connected set of coplanar patches, a single planar patch too (poles on one plane to
+  /// rounding: find_planar_faces with tolerances::kSameSurface), becomes one face on a
+  /// Geom_Plane, bounded by the set's outer curves (core/patch/planar_faces.h); false: one face
+  /// per patch. The pipeline turns it on for packed faces (setting planar_faces).
   bool merge_planar = false;
 };
 

@@ -276,22 +276,9 @@ std::vector<FanCost> fan_costs(const PatchBuild& build) {
   std::vector<int> valence_of(m.num_vertices(), 0);
   for (const IrregularFan& f : build.info.fans)
     if (f.vertex >= 0 && f.vertex < m.num_vertices()) valence_of[f.vertex] = f.valence;
-  std::vector<int> near;
   for (const IrregularFan& f : build.info.fans) {
     FanCost cost{f.valence, f.sectors, std::max(1, f.level - build.info.coarse_level), 0};
-    if (f.vertex >= 0 && f.vertex < m.num_vertices()) {
-      near.clear();
-      for (int i = 0; i < m.vertex_face_count(f.vertex); ++i) {
-        const int F = m.corner_face(m.vertex_corners(f.vertex)[i]);
-        for (int g = m.face_begin(F); g < m.face_end(F); ++g) {
-          const int w = m.corner_vertex(g);
-          if (w != f.vertex && valence_of[w] > 0) near.push_back(w);
-        }
-      }
-      std::sort(near.begin(), near.end());
-      near.erase(std::unique(near.begin(), near.end()), near.end());
-      for (int w : near) cost.nearby += valence_of[w];
-    }
+    if (f.vertex >= 0 && f.vertex < m.num_vertices()) cost.nearby = nearby_valence(m, f.vertex, valence_of);
     costs.push_back(cost);
   }
   return costs;
@@ -716,18 +703,9 @@ ConversionResult convert(const SubdivLevel& base, const std::vector<Point3>& pos
   check_has_surface(base, positions);
   EstimateOptions before = run.estimate_options();
   if (tolerance_given) {  // predict the deepening of curved high-valence fans (resources.h)
-    // An absolute tolerance is taken relative to the cage's diagonal (the model size, near enough).
+    // An absolute tolerance is taken relative to the model size (check_has_surface: not 0).
     double tolerance = settings.tolerance.value_or(kDefaultTolerance);
-    if (settings.absolute) {
-      const PolyMesh& m = base.mesh;
-      Point3 lo = positions[m.corner_vertex(0)], hi = lo;
-      for (int h = 0; h < m.num_corners(); ++h)
-        for (int k = 0; k < 3; ++k) {
-          lo[k] = std::min(lo[k], positions[m.corner_vertex(h)][k]);
-          hi[k] = std::max(hi[k], positions[m.corner_vertex(h)][k]);
-        }
-      tolerance /= std::max(std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-300);
-    }
+    if (settings.absolute) tolerance /= bounding_diagonal(base.mesh, positions);
     before.tolerance = tolerance;
     before.positions = &positions;
   }

@@ -36,9 +36,6 @@ namespace subd2nurbs::pipeline {
 /// The deviation tolerance used when neither a level nor a tolerance is given (relative to the
 /// bounding-box diagonal).
 constexpr double kDefaultTolerance = 1e-4;
-/// Most extra levels a tolerance adds at one fan (each costs a few knots in the patches at that
-/// vertex); a tolerance needing more is reported as capped.
-constexpr int kMaxFanExtraLevels = 12;
 /// Rebuilds a tolerance may take (the per-valence rates are asymptotic, so a fan may need a
 /// second look; each round rebuilds and measures only the fans it deepens).
 constexpr int kToleranceRounds = 8;

@@ -152,8 +152,9 @@ CageCost cage_cost(const SubdivLevel& base, bool polar, const std::vector<Point3
       quad_faces += 1;
     }
   c.quads = quads ? quad_faces : corners;
+  std::vector<int> irregular_valence(m.num_vertices(), 0);
   for (int v = 0; v < m.num_vertices(); ++v)
-    if (!pole[v] && irregular_vertex(m, v)) irregular[v] = 1;
+    if (!pole[v] && irregular_vertex(m, v)) irregular[v] = 1, irregular_valence[v] = m.valence(v);
   // The fans, with the valences of the irregular vertices next to them at the coarse level:
   // on an all-quad cage the irregular vertices sharing a face; at level 1 a cage vertex is next
   // to the face points of its n-gons (n) and a face point to the n-gon's irregular corners.
@@ -166,13 +167,7 @@ CageCost cage_cost(const SubdivLevel& base, bool polar, const std::vector<Point3
       fan.curved = !flat_faces(m, *x, with_ring(m, star));
     }
     if (quads) {
-      std::set<int> near;
-      for (int i = 0; i < m.vertex_face_count(v); ++i) {
-        const int f = m.corner_face(m.vertex_corners(v)[i]);
-        for (int g = m.face_begin(f); g < m.face_end(f); ++g)
-          if (m.corner_vertex(g) != v && irregular[m.corner_vertex(g)]) near.insert(m.corner_vertex(g));
-      }
-      for (int w : near) fan.nearby += m.valence(w);
+      fan.nearby = nearby_valence(m, v, irregular_valence);
     } else {
       for (int i = 0; i < m.vertex_face_count(v); ++i) {
         const int f = m.corner_face(m.vertex_corners(v)[i]);
@@ -285,6 +280,20 @@ ResourceEstimate operator-(const ResourceEstimate& a, const ResourceEstimate& b)
   return e;
 }
 
+int nearby_valence(const PolyMesh& m, int v, const std::vector<int>& valence_of) {
+  std::vector<int> near;
+  for (int i = 0; i < m.vertex_face_count(v); ++i) {
+    const int f = m.corner_face(m.vertex_corners(v)[i]);
+    for (int g = m.face_begin(f); g < m.face_end(f); ++g)
+      if (m.corner_vertex(g) != v && valence_of[m.corner_vertex(g)] > 0) near.push_back(m.corner_vertex(g));
+  }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  int sum = 0;
+  for (int w : near) sum += valence_of[w];
+  return sum;
+}
+
 ResourceEstimate fan_estimate(const FanCost& f, const EstimateOptions& o) {
   // Per quad at the vertex: 3 pieces per level down to the zone and the zone's 4 and 1, a patch
   // whose knots halve towards the corner, (levels + 7)^2 poles instead of 16.
@@ -316,7 +325,7 @@ ResourceEstimate estimate_conversion(const SubdivLevel& base, int extra_levels, 
     if (predict && f.curved && f.valence > kSharedPieceValence) {
       // The levels that take kPredictedDeviation down to the tolerance at this valence's rate.
       const double need = std::log(kPredictedDeviation / options.tolerance) / std::log(deviation_rate(f.valence));
-      if (need > 0) f.levels = std::max(f.levels, 2 + std::min(static_cast<int>(std::ceil(need)), 12)  /* kMaxFanExtraLevels */);
+      if (need > 0) f.levels = std::max(f.levels, 2 + std::min(static_cast<int>(std::ceil(need)), kMaxFanExtraLevels));
     }
   }
   return estimate(c, fans, options);

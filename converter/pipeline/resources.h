@@ -70,6 +70,10 @@ constexpr double kSecondsPerNearbyValence = 4e-6;  ///< per build of the fan's p
 constexpr double kSecondsPerCapValence2 = 1e-6;
 /// PatchOptions::shared_piece_valence's default (core/patch/patch_builder.h).
 constexpr int kSharedPieceValence = 8;
+/// Most extra levels a tolerance adds at one fan (each costs a few knots in the patches at that
+/// vertex); a tolerance needing more is reported as capped. The estimate before any work
+/// predicts a curved fan's levels up to it.
+constexpr int kMaxFanExtraLevels = 12;
 
 /// Most levels a uniform refinement takes: beyond the face limit for any cage, and 4^levels
 /// stays far from overflowing.
@@ -121,6 +125,11 @@ struct FanCost {
   int nearby = 0;  ///< the valences of the irregular vertices sharing a coarse face with it, summed
   bool curved = true;  ///< its star is not flat (known before any work only with positions)
 };
+
+/// FanCost::nearby of the fan at vertex v of mesh m: the valences of the other irregular
+/// vertices sharing a face with v, summed once each; valence_of[w] is w's valence where w is
+/// irregular, else 0.
+int nearby_valence(const PolyMesh& m, int v, const std::vector<int>& valence_of);
 
 /// What the output is: a B-rep (STEP / IGES / BREP) or not (patch JSON, check); packed faces
 /// or one per quad.

@@ -673,16 +673,16 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
   // than max_edges edges on its boundary is cut into strips across its sides with the most
   // edges, and the output made again, until every pack has at most max_edges.
   std::vector<NurbsPatch> surfaces(rects.size());
-  std::vector<char> ok(rects.size(), 0), built(rects.size(), 0);
+  std::vector<char> ok(rects.size(), 0);
   std::vector<long long> removed(rects.size(), 0);
   int rejected = 0;
+  size_t built = 0;  // rects[0, built) have their surfaces; strips cut from a pack come after them
   for (;;) {
-    for (size_t i = 0; i < rects.size(); ++i) {
-      if (built[i]) continue;
-      built[i] = 1;
+    for (size_t i = built; i < rects.size(); ++i) {
       ok[i] = pack_surface(quads, rects[i], knot_tolerance, check, surfaces[i], removed[i]);
       if (!ok[i]) ++rejected;
     }
+    built = rects.size();
     std::vector<int> rect_of_patch;
     PackedSet out = assemble(quads, rects, surfaces, ok, removed, coarse_face, rect_of_patch);
     out.rejected_packs = rejected;
@@ -729,7 +729,6 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
         rects[kept] = std::move(rects[i]);
         surfaces[kept] = std::move(surfaces[i]);
         ok[kept] = ok[i];
-        built[kept] = built[i];
         removed[kept] = removed[i];
       }
       ++kept;
@@ -737,9 +736,8 @@ PackedSet pack_impl(const PatchSet& quads, const std::vector<char>& patch_ok, co
     rects.erase(rects.begin() + kept, rects.begin() + drop.size());
     surfaces.resize(rects.size());
     ok.resize(rects.size(), 0);
-    built.assign(rects.size(), 0);  // (re-set below for the kept ones)
-    for (size_t i = 0; i < kept; ++i) built[i] = 1;
     removed.resize(rects.size(), 0);
+    built = kept;
   }
 }
 

@@ -374,20 +374,6 @@ KnotVector reversed(const KnotVector& kv) {
   return r;
 }
 
-/// The model size: the bounding-box diagonal of the cage's points that at least one face uses
-/// (an unused vertex far away must not set the tolerances, #32 item 2); 1 for a cage without
-/// faces.
-double bounding_diagonal(const PolyMesh& m, const std::vector<Point3>& positions) {
-  if (m.num_corners() == 0) return 1.0;
-  Eigen::Vector3d lo = to_eigen(positions[m.corner_vertex(0)]), hi = lo;
-  for (int h = 0; h < m.num_corners(); ++h) {
-    const Eigen::Vector3d q = to_eigen(positions[m.corner_vertex(h)]);
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
-  }
-  return (hi - lo).norm();
-}
-
 /// PatchOptions::separate_poles: the separating first step at the poles that need it, then
 /// the ordinary build of that level-1 cage. False (and `out` untouched) if no pole needs it.
 bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point3>& positions,
@@ -423,7 +409,6 @@ bool build_with_separated_poles(const SubdivLevel& base, const std::vector<Point
   out.set.model_size = bounding_diagonal(base.mesh, positions);  // of the cage, not of its level 1
   return true;
 }
-
 
 /// The fans of every coarse vertex that stays irregular for some quad once its semi-sharp tags
 /// have decayed (those tags count as smooth in this view; infinitely sharp ones stay), built in
@@ -652,6 +637,20 @@ void claim_continuity(const SubdivLevel& la, const FanResults& fans, const std::
 }
 
 }  // namespace
+
+// The model size: the bounding-box diagonal of the cage's points that at least one face uses
+// (an unused vertex far away must not set the tolerances, #32 item 2); 1 for a cage without
+// faces.
+double bounding_diagonal(const PolyMesh& m, const std::vector<Point3>& positions) {
+  if (m.num_corners() == 0) return 1.0;
+  Eigen::Vector3d lo = to_eigen(positions[m.corner_vertex(0)]), hi = lo;
+  for (int h = 0; h < m.num_corners(); ++h) {
+    const Eigen::Vector3d q = to_eigen(positions[m.corner_vertex(h)]);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  return (hi - lo).norm();
+}
 
 PatchBuild build_patches(const SubdivLevel& base, const std::vector<Point3>& positions,
                          const PatchOptions& options) {

@@ -158,6 +158,10 @@ struct PatchBuild {
   std::vector<int> patch_removed_knots;  ///< per patch: simple knots removed (0 for a cap)
 };
 
+/// The model size: the bounding-box diagonal of the cage's points that at least one face uses
+/// (an unused vertex far away must not set the tolerances); 1 for a cage without faces.
+double bounding_diagonal(const PolyMesh& m, const std::vector<Point3>& positions);
+
 /// Builds the patches of a validated cage. Positions are the cage's vertex positions.
 /// \throw std::invalid_argument if the topology is outside what the builder supports
 ///        (non-manifold input is rejected earlier, by validation).

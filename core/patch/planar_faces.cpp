@@ -185,11 +185,9 @@ bool make_loops(const PatchSet& ps, PlanarFace& f, double tolerance) {  // model
     loops.push_back(std::move(loop));
   }
   // Exactly one loop turns counter-clockwise about the normal (the outer one), the others are holes.
-  std::vector<double> area(loops.size());
   int outer = -1;
   for (size_t i = 0; i < loops.size(); ++i) {
-    area[i] = signed_area(ps, loops[i], f);
-    if (area[i] > 0) {
+    if (signed_area(ps, loops[i], f) > 0) {
       if (outer >= 0) return false;
       outer = static_cast<int>(i);
     }
@@ -213,15 +211,15 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
       for (int i = 0; i < 3; ++i) tolerance.scale[i] = std::max(tolerance.scale[i], std::abs(q[i]));
   out.face_of_patch.assign(n, -1);
   // Per patch: its plane, when its poles lie on one.
-  std::vector<Point3> origin(n), normal(n);
+  std::vector<Point3> origin(n), net(n), normal(n);
   std::vector<char> planar(n, 0);
   for (int p = 0; p < n; ++p) {
     const NurbsPatch& patch = ps.patches[p];
-    const Point3 nn = net_normal(patch);
-    const double len = norm(nn);
+    net[p] = net_normal(patch);
+    const double len = norm(net[p]);
     if (!(len > 0)) continue;
     origin[p] = pole_mean(patch);
-    normal[p] = scaled(nn, 1 / len);
+    normal[p] = scaled(net[p], 1 / len);
     planar[p] = on_plane(patch, origin[p], normal[p], tolerance) && unfolded(patch, normal[p]);
     out.planar_patches += planar[p];
   }
@@ -255,7 +253,7 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
     for (int p : f.patches) {
       for (const Point3& q : ps.patches[p].poles) sum = add(sum, q);
       count += ps.patches[p].poles.size();
-      nsum = add(nsum, net_normal(ps.patches[p]));
+      nsum = add(nsum, net[p]);
     }
     f.origin = scaled(sum, 1.0 / static_cast<double>(count));
     f.normal = scaled(nsum, 1 / norm(nsum));
