@@ -256,6 +256,22 @@ void gather_grid(const SubdivLevel& L, const std::vector<Point3>& P, int f, cons
 // ---------------------------------------------------------------------------------------------
 // Per-face evaluation data (cached for base faces)
 
+/// The 16 B-spline points of each of the 3 tiles of one level of a Stam face (level m - 1's
+/// configuration: stam_eval).
+using StamTiles = std::array<std::array<Point3, 16>, 3>;
+
+/// A Stam face's tiles level by level, filled as samples ask for deeper levels (faces at a
+/// vertex of high valence: a sample costs O(K) per level to go down, K = 2n + 1, and the same
+/// levels are gone down again for every sample of the face; at valence 1024 that made the
+/// quality stage's exact limit O(n^2) per fan). The table is computed by the same operations
+/// in the same order as stam_eval's walk, so its values are the same to the bit.
+struct StamLevelTable {
+  std::mutex mutex;
+  std::vector<double> cj;    ///< ring in the eigenbasis at the next level to add (cj[3 i + c])
+  double o[7][3] = {};       ///< outer points at that level
+  std::vector<StamTiles> tiles;  ///< per level m - 1 = 0, 1, ...
+};
+
 /// A Stam face's data (prepare: one extraordinary corner).
 struct StamData {
   std::shared_ptr<const StamEigen> eig;
@@ -263,6 +279,10 @@ struct StamData {
   Eigen::Matrix<double, Eigen::Dynamic, 3> chat;  // V^-1 ring
   Eigen::Matrix<double, 7, 3> outer = Eigen::Matrix<double, 7, 3>::Zero();  // outer points
   Point3 limit{};  // limit position of the EV; ring, chat and outer are relative to it
+  /// Above this valence the tiles are kept level by level (StamLevelTable); below it a
+  /// sample's walk is cheap and a table per face would cost more memory than it saves time.
+  static constexpr int kTableValence = 16;
+  std::unique_ptr<StamLevelTable> table;  ///< set by prepare (kept) when eig->n > kTableValence
 };
 
 struct Prepared {
@@ -341,7 +361,9 @@ void grid_bases(const Prepared& pr, double s, double t, double Ns[4], double Ds[
   axis_basis(pr, 1, t, Nt, Dt, DDt);
 }
 
-Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
+/// `kept`: the result is kept for many samples (the evaluator's caches), so a Stam face of high
+/// valence gets its table of levels (StamLevelTable); a fresh one for a single sample does not.
+Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f, bool kept = false) {
   Prepared out;
   const PolyMesh& m = L.mesh;
   if (m.face_size(f) != 4) return out;
@@ -408,65 +430,47 @@ Prepared prepare(const SubdivLevel& L, const std::vector<Point3>& P, int f) {
   }
   st.chat = st.eig->Vinv * st.ring;
   st.chat.row(0).setZero();  // stam_eigen puts eigenvalue 1 first
+  if (kept && n > StamData::kTableValence) st.table = std::make_unique<StamLevelTable>();
   out.stam = std::move(stam);
   return out;
 }
 
-/// Stam evaluation at corner-frame (a, b) != (0, 0); derivatives w.r.t. (a, b).
-Derivs stam_eval(const Prepared& pr, double a, double b) {
-  const StamEigen& E = *pr.stam->eig;
-  const double mx = std::max(a, b);
-  int e;
-  std::frexp(mx, &e);
-  const int mlev = std::max(1, 1 - e);  // 2^m max(a, b) in [1, 2)
-  const double X = std::ldexp(a, mlev), Y = std::ldexp(b, mlev);
-  int tile;
-  double x, y;
-  if (Y < 1) { tile = 0; x = X - 1; y = Y; }
-  else if (X < 1) { tile = 2; x = X; y = Y - 1; }
-  else { tile = 1; x = X - 1; y = Y - 1; }
-  // Level m-1 configuration: ring in the eigenbasis (c_j = Lambda^j c^), outer points by the
-  // recurrence o_{j+1} = W c_j + S12 o_j. Plain loops over a per-thread buffer: no allocation
-  // per query (Eigen's dynamic products allocate temporaries).
+/// One level down the Stam walk: o <- W cj + S12 o, then cj <- Lambda cj.
+void stam_step(const StamEigen& E, double* cj, double (&o)[7][3]) {
   const int K = E.K;
-  thread_local std::vector<double> buffer;
-  buffer.resize(static_cast<size_t>(3) * K);
-  double* cj = buffer.data();  // cj[3 * i + c]
-  for (int i = 0; i < K; ++i)
-    for (int c = 0; c < 3; ++c) cj[3 * i + c] = pr.stam->chat(i, c);
-  double o[7][3], next[7][3];
-  for (int r = 0; r < 7; ++r)
-    for (int c = 0; c < 3; ++c) o[r][c] = pr.stam->outer(r, c);
-  for (int j = 0; j + 1 < mlev; ++j) {
-    for (int r = 0; r < 7; ++r) {
-      double acc[3] = {0, 0, 0};
-      for (int i = 0; i < K; ++i) {
-        const double w = E.W(r, i);
-        acc[0] += w * cj[3 * i];
-        acc[1] += w * cj[3 * i + 1];
-        acc[2] += w * cj[3 * i + 2];
-      }
-      for (int q = 0; q < 7; ++q) {
-        const double w = E.S12(r, q);
-        acc[0] += w * o[q][0];
-        acc[1] += w * o[q][1];
-        acc[2] += w * o[q][2];
-      }
-      next[r][0] = acc[0];
-      next[r][1] = acc[1];
-      next[r][2] = acc[2];
-    }
-    std::copy(&next[0][0], &next[0][0] + 21, &o[0][0]);
+  double next[7][3];
+  for (int r = 0; r < 7; ++r) {
+    double acc[3] = {0, 0, 0};
     for (int i = 0; i < K; ++i) {
-      const double l = E.lambda(i);
-      cj[3 * i] *= l;
-      cj[3 * i + 1] *= l;
-      cj[3 * i + 2] *= l;
+      const double w = E.W(r, i);
+      acc[0] += w * cj[3 * i];
+      acc[1] += w * cj[3 * i + 1];
+      acc[2] += w * cj[3 * i + 2];
     }
+    for (int q = 0; q < 7; ++q) {
+      const double w = E.S12(r, q);
+      acc[0] += w * o[q][0];
+      acc[1] += w * o[q][1];
+      acc[2] += w * o[q][2];
+    }
+    next[r][0] = acc[0];
+    next[r][1] = acc[1];
+    next[r][2] = acc[2];
   }
+  std::copy(&next[0][0], &next[0][0] + 21, &o[0][0]);
+  for (int i = 0; i < K; ++i) {
+    const double l = E.lambda(i);
+    cj[3 * i] *= l;
+    cj[3 * i + 1] *= l;
+    cj[3 * i + 2] *= l;
+  }
+}
+
+/// The 16 B-spline points of `tile` from a level's configuration (cj, o).
+void stam_tile(const StamEigen& E, int tile, const double* cj, const double (&o)[7][3], std::array<Point3, 16>& Pt) {
+  const int K = E.K;
   const Eigen::MatrixXd& TR = E.tile_ring_V[tile];
   const Eigen::MatrixXd& TO = E.tile_outer[tile];
-  std::array<Point3, 16> Pt;
   for (int r = 0; r < 16; ++r) {
     double acc[3] = {0, 0, 0};
     for (int i = 0; i < K; ++i) {
@@ -483,8 +487,59 @@ Derivs stam_eval(const Prepared& pr, double a, double b) {
     }
     Pt[r] = {acc[0], acc[1], acc[2]};
   }
+}
+
+/// The level's start: ring in the eigenbasis and outer points of the face (level 0).
+void stam_start(const StamData& st, double* cj, double (&o)[7][3]) {
+  for (int i = 0; i < st.eig->K; ++i)
+    for (int c = 0; c < 3; ++c) cj[3 * i + c] = st.chat(i, c);
+  for (int r = 0; r < 7; ++r)
+    for (int c = 0; c < 3; ++c) o[r][c] = st.outer(r, c);
+}
+
+/// Stam evaluation at corner-frame (a, b) != (0, 0); derivatives w.r.t. (a, b).
+Derivs stam_eval(const Prepared& pr, double a, double b) {
+  const StamData& st = *pr.stam;
+  const StamEigen& E = *st.eig;
+  const double mx = std::max(a, b);
+  int e;
+  std::frexp(mx, &e);
+  const int mlev = std::max(1, 1 - e);  // 2^m max(a, b) in [1, 2)
+  const double X = std::ldexp(a, mlev), Y = std::ldexp(b, mlev);
+  int tile;
+  double x, y;
+  if (Y < 1) { tile = 0; x = X - 1; y = Y; }
+  else if (X < 1) { tile = 2; x = X; y = Y - 1; }
+  else { tile = 1; x = X - 1; y = Y - 1; }
+  // Level m-1 configuration: ring in the eigenbasis (c_j = Lambda^j c^), outer points by the
+  // recurrence o_{j+1} = W c_j + S12 o_j. Plain loops over a per-thread buffer: no allocation
+  // per query (Eigen's dynamic products allocate temporaries).
+  std::array<Point3, 16> Pt;
+  if (st.table) {
+    StamLevelTable& T = *st.table;
+    const std::lock_guard<std::mutex> lock(T.mutex);
+    if (T.tiles.empty()) {
+      T.cj.resize(static_cast<size_t>(3) * E.K);
+      stam_start(st, T.cj.data(), T.o);
+    }
+    while (static_cast<int>(T.tiles.size()) < mlev) {
+      if (!T.tiles.empty()) stam_step(E, T.cj.data(), T.o);
+      StamTiles level;
+      for (int k = 0; k < 3; ++k) stam_tile(E, k, T.cj.data(), T.o, level[k]);
+      T.tiles.push_back(level);
+    }
+    Pt = T.tiles[static_cast<size_t>(mlev - 1)][static_cast<size_t>(tile)];
+  } else {
+    thread_local std::vector<double> buffer;
+    buffer.resize(static_cast<size_t>(3) * E.K);
+    double* cj = buffer.data();  // cj[3 * i + c]
+    double o[7][3];
+    stam_start(st, cj, o);
+    for (int j = 0; j + 1 < mlev; ++j) stam_step(E, cj, o);
+    stam_tile(E, tile, cj, o, Pt);
+  }
   Derivs d = bspline16(Pt.data(), x, y);
-  for (int k = 0; k < 3; ++k) d.p[k] += pr.stam->limit[k];
+  for (int k = 0; k < 3; ++k) d.p[k] += st.limit[k];
   const double s1 = std::ldexp(1.0, mlev), s2 = s1 * s1;
   for (int k = 0; k < 3; ++k) {
     d.ds[k] *= s1; d.dt[k] *= s1;
@@ -842,7 +897,7 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
       cached = cache->get(key, [&] {
         DescentCache::Node n;
         n.level = refine_local(*L, *P, f, n.first_child);
-        for (int c = 0; c < 4; ++c) n.children[c] = prepare(n.level.level, n.level.pos, n.first_child + c);
+        for (int c = 0; c < 4; ++c) n.children[c] = prepare(n.level.level, n.level.pos, n.first_child + c, true);
         return n;
       });
       key = key * 4 + static_cast<std::uint64_t>(k);
@@ -936,12 +991,12 @@ LimitEvaluator::LimitEvaluator(SubdivLevel base, std::vector<Point3> positions)
       const int f = cached[first + i];
       FaceCache& fc = cache_[first + i];
       const int size = m.face_size(f);
-      if (size == 4) fc.prepared = prepare(base_, positions_, f);
+      if (size == 4) fc.prepared = prepare(base_, positions_, f, true);
       if (fc.prepared.method != LimitMethod::Refined) return;
       auto lvl = std::make_shared<LocalLevel>(refine_local(base_, positions_, f, fc.first_child));
       bool all = true;
       for (int k = 0; k < size; ++k) {
-        fc.children.push_back(prepare(lvl->level, lvl->pos, fc.first_child + k));
+        fc.children.push_back(prepare(lvl->level, lvl->pos, fc.first_child + k, true));
         all = all && fc.children.back().method != LimitMethod::Refined;
       }
       if (!all) fc.level1 = std::move(lvl);

@@ -84,3 +84,39 @@ TEST(LimitConvergence, ExactAtRefinedVerticesAndTheRightRatesAtValence3To12) {
                 ev_err.back() / ev_err[ev_err.size() - 2], nu);
   }
 }
+
+// Above valence 16 a kept Stam face keeps its tiles level by level (core/limit/limit_evaluator.cpp,
+// StamLevelTable), filled in whatever order the samples ask for levels: the same exact identity
+// (the limit at a level-L vertex's parameters is that vertex's limit position), samples taken
+// coarse-to-fine on one face and fine-to-coarse on the other, on two evaluators.
+TEST(LimitConvergence, ExactAtRefinedVerticesAtHighValenceInAnyOrder) {
+  const int L = 4;
+  for (int n : {17, 40}) {
+    SCOPED_TRACE("valence " + std::to_string(n));
+    const MeshInput in = ev_disc(n, 300u + n);
+    const SubdivLevel base = SubdivLevel::from_input(in);
+    const std::vector<Point3> pos = positions_of(in);
+    const double diag = diagonal(pos);
+    const Refinement r = refine_uniform(base, L);
+    const std::vector<std::vector<Point3>> lp = r.positions(pos);
+    std::vector<Point3> limit_L;
+    StencilTable lim = limit_stencils(r.levels[L]);
+    lim.apply(lp[L], limit_L);
+    const int side = 1 << L;
+    for (bool fine_first : {false, true}) {
+      const LimitEvaluator ev(base, pos);
+      LimitMethod method;
+      ev.evaluate(0, 0, 0.3, 0.2, &method);
+      EXPECT_EQ(method, LimitMethod::Stam);
+      double worst = 0;
+      for (int f : {0, kRings * kRings + 1})
+        for (int k = 0; k <= side * side + 2 * side; ++k) {
+          const int idx = fine_first ? k : side * side + 2 * side - k;
+          const int i = idx / (side + 1), j = idx % (side + 1);
+          const LimitSample s = ev.evaluate(f, 0, std::ldexp(i, -L), std::ldexp(j, -L));
+          worst = std::max(worst, dist(s.p, limit_L[vertex_at(r, f, L, i, j)]) / diag);
+        }
+      EXPECT_LT(worst, 1e-12);
+    }
+  }
+}
