@@ -357,8 +357,8 @@ MeshPathRound round_of(const MeshPathReport& r) {
 }
 
 /// The size rule's next target (mesh_path.h): d x quads is about a constant; its geometric mean
-/// over the rounds so far, over kSizeMargin x the tolerance, within kMaxSizeFactor of the first
-/// round's target.
+/// over the rounds so far, over kSizeMargin x the tolerance, at least the first round's target
+/// over kMaxSizeFactor (the caller checks the upper limit).
 int next_target_faces(const std::vector<MeshPathRound>& rounds, double tolerance) {
   double log_c = 0;
   int n = 0;
@@ -367,7 +367,7 @@ int next_target_faces(const std::vector<MeshPathRound>& rounds, double tolerance
   const double first = rounds.front().target_faces;
   if (n == 0) return static_cast<int>(first);
   const double quads = std::exp(log_c / n) / (kSizeMargin * tolerance);
-  return static_cast<int>(std::lround(std::clamp(quads, first / kMaxSizeFactor, first * kMaxSizeFactor)));
+  return static_cast<int>(std::lround(std::clamp(quads, first / kMaxSizeFactor, 1e9)));
 }
 
 /// Whether round `a` is to be kept over `b` (the size rule: the fewest quads meeting the
@@ -515,14 +515,19 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   MeshCage out = remesh_and_fit(in, ro, "", features);
   std::vector<MeshPathRound> rounds{round_of(out.report)};
   double remesh_ms = out.report.remesh_ms, fit_ms = out.report.fit_ms, measure_ms = out.report.measure_ms;
-  int kept = 0;
+  int kept = 0, predicted = 0;
   while (tolerance > 0 && static_cast<int>(rounds.size()) < kMaxSizeRounds) {
     const MeshPathRound& last = rounds.back();
     const bool coarser = rounds.size() == 1 && last.distance() < kCoarsenBelow * tolerance;
     if (!(last.distance() > tolerance || coarser) || !last.failure.empty()) break;
-    ro.target_faces = next_target_faces(rounds, tolerance);
-    if (std::any_of(rounds.begin(), rounds.end(), [&](const MeshPathRound& r) { return r.target_faces == ro.target_faces; }))
-      break;  // at the clamp: that size was tried
+    const int next = next_target_faces(rounds, tolerance);
+    if (next > kMaxSizeFactor * rounds.front().target_faces) {
+      predicted = next;  // beyond the size limit: not tried
+      break;
+    }
+    if (std::any_of(rounds.begin(), rounds.end(), [&](const MeshPathRound& r) { return r.target_faces == next; }))
+      break;  // at the lower limit: that size was tried
+    ro.target_faces = next;
     const std::string round_text = " (round " + std::to_string(rounds.size() + 1) + ": " +
                                    short_number(last.distance()) + " of the diagonal " +
                                    (coarser ? "is far within" : "misses") + " the fit tolerance " +
@@ -558,12 +563,19 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   rep.remesh_ms = remesh_ms, rep.fit_ms = fit_ms, rep.measure_ms = measure_ms;
   const MeshPathRound& best = rep.rounds[static_cast<std::size_t>(kept)];
   rep.tolerance_met = !(tolerance > 0) || best.distance() <= tolerance;
-  if (!rep.tolerance_met)
-    rep.warning = "subd2nurbs: warning: the mesh's fit tolerance " + short_number(tolerance) +
-                  " was not met: the closest of " + std::to_string(rep.rounds.size()) + " cages (" +
+  rep.predicted_target_faces = rep.tolerance_met ? 0 : predicted;
+  if (!rep.tolerance_met) {
+    const std::size_t n = rep.rounds.size();
+    rep.warning = "subd2nurbs: warning: the fit tolerance " + short_number(tolerance) + " was not met: " +
+                  (n == 1 ? std::string("the cage") : "the closest of " + std::to_string(n) + " cages") + " (" +
                   std::to_string(best.quads) + " quads) is within " + short_number(best.distance()) +
                   " of the diagonal (to the mesh " + short_number(best.to_mesh) + ", from it " +
-                  short_number(best.from_mesh) + "); --target-faces sets the size";
+                  short_number(best.from_mesh) + ")";
+    if (predicted > 0)
+      rep.warning += "; the size rule predicts about " + std::to_string(predicted) + " quads for it, more than " +
+                     short_number(kMaxSizeFactor) + " x the automatic size, so they were not tried";
+    rep.warning += " (--target-faces sets the size)";
+  }
 
   // The kept features' normal angles against the mesh's dihedrals.
   Diagnostics ignore;
@@ -584,7 +596,7 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   w.members("target_faces", r.target_faces, "edge_length", r.edge_length);
   w.key("size").begin_object();
   w.members("rule", r.size_rule, "fit_tolerance", r.fit_tolerance, "tolerance_met", r.tolerance_met, "kept_round",
-            r.kept_round);
+            r.kept_round, "predicted_target_faces", r.predicted_target_faces);
   w.key("rounds").begin_array();
   for (const MeshPathRound& round : r.rounds) {
     w.begin_object();
@@ -641,8 +653,9 @@ std::string mesh_path_summary(const MeshPathReport& r) {
       if (static_cast<int>(i) == r.kept_round) o << " kept";
     }
     if (r.rounds.size() > 1) o << "), ";
-    o << "fit tolerance " << short_number(r.fit_tolerance) << (r.tolerance_met ? " met" : " NOT met")
-      << " (two-sided max distance of the diagonal)\n";
+    o << "fit tolerance " << short_number(r.fit_tolerance) << (r.tolerance_met ? " met" : " NOT met");
+    if (r.predicted_target_faces > 0) o << " (about " << r.predicted_target_faces << " quads predicted for it, not tried)";
+    o << "\n";
   }
   if (r.feature_angles.samples > 0)
     o << "  features   normal angle across kept feature curves within " << short_number(r.feature_angles.max_difference)

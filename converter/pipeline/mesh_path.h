@@ -60,13 +60,15 @@ struct MeshPathSettings {
 /// 0.62 .. 1.49 of that trend). After a round that misses the tolerance, the next size is C /
 /// (kSizeMargin x tolerance), C the geometric mean of d x quads over the rounds so far: the margin
 /// covers that scatter, so one more round usually meets it. After a first round within
-/// kCoarsenBelow x the tolerance, one coarser round at the same prediction. The kept round: the
-/// fewest quads among those that meet the tolerance, else the closest.
+/// kCoarsenBelow x the tolerance, one coarser round at the same prediction. The sizes stay within
+/// kMaxSizeFactor of the first round's target (time and memory grow with the quads): a prediction
+/// beyond it ends the rounds (the tolerance is then not met; the warning names the predicted
+/// size), one below it is raised to it. The kept round: the fewest quads among those that meet
+/// the tolerance, else the closest.
 constexpr int kMaxSizeRounds = 3;
 constexpr double kSizeMargin = 0.7;
 constexpr double kCoarsenBelow = 0.5;
-/// A round's size stays within this factor of the first round's target.
-constexpr double kMaxSizeFactor = 4;
+constexpr double kMaxSizeFactor = 2.5;
 
 /// The automatic size: this many quads per unit of the mesh's area / diagonal^2, within limits.
 int automatic_target_faces(const MeshInput& mesh);
@@ -133,6 +135,7 @@ struct MeshPathReport {
   std::vector<MeshPathRound> rounds;
   int kept_round = 0;
   bool tolerance_met = true;    ///< the kept round meets fit_tolerance (true when there is none)
+  int predicted_target_faces = 0;  ///< the rounds ended at a prediction beyond kMaxSizeFactor: that size, else 0
   std::string warning;          ///< "subd2nurbs: warning: ..." when the tolerance was not met, else empty
   double remesh_ms = 0, fit_ms = 0, measure_ms = 0;  ///< over all rounds
 };

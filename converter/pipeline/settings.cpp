@@ -335,8 +335,8 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
     SettingRow& r = add_row(t, "fit_tolerance", SettingType::Number, 1e-3);
     r.help = "Mesh input with the automatic size: the two-sided max distance between the fitted surface and the "
              "mesh to reach, relative to the bounding-box diagonal; the cage is remeshed finer (or once coarser) at a "
-             "size predicted from the distance measured, at most " + std::to_string(kMaxSizeRounds) +
-             " times (docs/meshes.md); 0: off, one cage at the automatic size";
+             "size predicted from the distance measured (at most " + std::to_string(kMaxSizeRounds) +
+             " times, up to 2.5 x the automatic size: docs/meshes.md); 0: off, one cage at the automatic size";
     r.cli = "--fit-tolerance";
     r.property = {"FitTolerance", "Mesh",
                   "Mesh input with TargetFaces and EdgeLength 0: the largest distance between the surface and the "
