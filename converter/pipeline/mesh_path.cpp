@@ -574,7 +574,7 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
     if (predicted > 0)
       rep.warning += "; the size rule predicts about " + std::to_string(predicted) + " quads for it, more than " +
                      short_number(kMaxSizeFactor) + " x the automatic size, so they were not tried";
-    rep.warning += " (--target-faces sets the size)";
+    rep.warning += " (a target face count given sets the size)";
   }
 
   // The kept features' normal angles against the mesh's dihedrals.
