@@ -262,23 +262,120 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
 }
 
 /// The planar regions of the target's triangles, however narrow and down to 1e-4 of the mesh's
-/// area, and the cage's faces and vertices held in them. No width limit: a face is held only
-/// when its whole limit support lies on the plane, so a strip narrower than a cage edge holds
-/// faces only between two infinitely sharp creases (a wall one quad high, whose faces' limit
-/// depends on the crease vertices alone); a faceted cylinder's strips, bounded by soft edges,
-/// hold none. The area limit (1e-3 by default) lowered for the same reason: small walls (a boss
-/// 0.27 wide and 0.2 high on featuretype, 0.9e-3 of its area) are flat faces too.
-struct PlanarSetup {
-  std::vector<PlanarRegion> regions;
-  PlanarConstraints constraints;
-};
-PlanarSetup planar_setup(const SubdivLevel& cage, const std::vector<Point3>& start, const ShapeTarget& target) {
-  PlanarSetup s;
+/// area (the cage's faces and vertices held in them: planar_constraints per cage). No width
+/// limit: a face is held only when its whole limit support lies on the plane, so a strip narrower
+/// than a cage edge holds faces only between two infinitely sharp creases (a wall one quad high,
+/// whose faces' limit depends on the crease vertices alone); a faceted cylinder's strips, bounded
+/// by soft edges, hold none. The area limit (1e-3 by default) lowered for the same reason: small
+/// walls (a boss 0.27 wide and 0.2 high on featuretype, 0.9e-3 of its area) are flat faces too.
+std::vector<PlanarRegion> planar_regions(const ShapeTarget& target) {
   PlanarRegionOptions po;
   po.min_area = 1e-4;
-  s.regions = detect_planar_regions(target.points(), target.triangles(), po);
-  s.constraints = planar_constraints(cage, start, target.points(), target.triangles(), s.regions, target.diagonal());
-  return s;
+  return detect_planar_regions(target.points(), target.triangles(), po);
+}
+
+/// What one round of the size rule shares with the others: the mesh, its target and planar
+/// regions, the progress.
+struct RoundInput {
+  const MeshInput& tri;
+  const std::string& path;
+  const ShapeTarget& target;
+  const std::vector<PlanarRegion>& regions;
+  const MeshPathProgress& progress;
+};
+
+/// One remesh of the mesh at `ro`'s size and the fit of that cage to it: the cage, its fitted
+/// positions and the report's remesh, feature, fit and planar members (`features`: the mesh's
+/// features as the remesher found them, for the feature angles).
+/// \throw Error (remesh or fit impossible; kind Usage "cancelled")
+MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const std::string& round_text,
+                        FeatureSet& features) {
+  MeshCage out;
+  MeshPathReport& rep = out.report;
+  rep.target_faces = ro.target_faces;
+  rep.edge_length = ro.edge_length;
+  auto t = Clock::now();
+  if (in.progress.stage)
+    in.progress.stage("remeshing " + std::to_string(in.tri.num_faces()) + " triangles into a quad cage" + round_text);
+  QuadRemeshResult rr = quad_remesh(in.tri, ro, in.progress.fraction);
+  if (rr.cancelled) throw Error(ErrorKind::Usage, "cancelled");
+  rep.remesh_ms = ms_since(t);
+  rep.remesh = rr.stats;
+  rep.feature_edges_in = static_cast<int>(rr.features.edges.size());
+  rep.corners_in = static_cast<int>(rr.features.corners.size());
+  rep.feature_chains_in = rr.features.chains;
+  features = std::move(rr.features);
+
+  // The cage, validated as a file's cage would be (a remesher fault is an error, not a crash).
+  LoadedCage cage;
+  cage.path = in.path;
+  cage.input = std::move(rr.cage);
+  out.cage.cage = std::move(cage);
+  Diagnostics validation;
+  out.cage.level = SubdivLevel::from_validated(validate_cage(out.cage.cage, &validation), out.cage.cage.input);
+  const std::vector<Point3> start = out.cage.positions();
+
+  // The fit of the cage's limit surface to the mesh.
+  if (in.progress.stage)
+    in.progress.stage("fitting the cage's " + std::to_string(out.cage.cage.input.num_faces()) + " quads to the mesh" +
+                      round_text);
+  // Samples of level 2 (16 per quad): the cage's quads are a few mesh triangles wide, so 16
+  // samples per quad still outnumber the mesh's vertices; 4 x cheaper than level 3.
+  rep.fit_options.levels = 2;
+  rep.fit_options.max_iterations = 10;
+  rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
+  // The cage's vertices that planar regions' faces depend on, held on their planes (core/fit/planar_regions.h).
+  const PlanarConstraints planar = planar_constraints(out.cage.level, start, in.target.points(),
+                                                      in.target.triangles(), in.regions, in.target.diagonal());
+  rep.fit_options.vertex_planes = vertex_planes(planar, in.regions);
+  ShapeFitProgress fit_progress;
+  if (in.progress.fraction)
+    fit_progress = [&](int iteration, double) {
+      return in.progress.fraction(std::min(1.0, (iteration + 1.0) / rep.fit_options.max_iterations));
+    };
+  // The planar regions' faces made exactly planar (the held vertices onto their planes) before
+  // the fitted cage is measured.
+  const ShapeFitAdjust flatten = [&](std::vector<Point3>& positions) {
+    rep.planar = flatten_planar_regions(out.cage.level, planar, positions, in.regions, in.target.diagonal());
+  };
+  rep.fit = run_shape_fit(out.cage.level, start, in.target, rep.fit_options, fit_progress, flatten);
+  if (rep.fit.fit.stop == ShapeFitStop::Cancelled) throw Error(ErrorKind::Usage, "cancelled");
+  out.positions = rep.fit.fit.positions;
+  rep.fit_ms = rep.fit.fit_ms;
+  rep.measure_ms = rep.fit.measure_ms;
+  return out;
+}
+
+MeshPathRound round_of(const MeshPathReport& r) {
+  MeshPathRound round;
+  round.target_faces = r.target_faces;
+  round.quads = r.remesh.faces;
+  round.to_mesh = r.fit.after.limit_to_target.max;
+  round.from_mesh = r.fit.after.target_to_limit.max;
+  round.ms = r.remesh_ms + r.fit_ms + r.measure_ms;
+  return round;
+}
+
+/// The size rule's next target (mesh_path.h): d x quads is about a constant; its geometric mean
+/// over the rounds so far, over kSizeMargin x the tolerance, at least the first round's target
+/// over kMaxSizeFactor (the caller checks the upper limit).
+int next_target_faces(const std::vector<MeshPathRound>& rounds, double tolerance) {
+  double log_c = 0;
+  int n = 0;
+  for (const MeshPathRound& r : rounds)
+    if (r.quads > 0 && r.distance() > 0) log_c += std::log(r.distance() * r.quads), ++n;
+  const double first = rounds.front().target_faces;
+  if (n == 0) return static_cast<int>(first);
+  const double quads = std::exp(log_c / n) / (kSizeMargin * tolerance);
+  return static_cast<int>(std::lround(std::clamp(quads, first / kMaxSizeFactor, 1e9)));
+}
+
+/// Whether round `a` is to be kept over `b` (the size rule: the fewest quads meeting the
+/// tolerance, else the closest).
+bool better_round(const MeshPathRound& a, const MeshPathRound& b, double tolerance) {
+  const bool a_meets = a.distance() <= tolerance, b_meets = b.distance() <= tolerance;
+  if (a_meets != b_meets) return a_meets;
+  return a_meets ? a.quads < b.quads : a.distance() < b.distance();
 }
 
 void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
@@ -311,6 +408,8 @@ void validate(const MeshPathSettings& s) {
   if (s.target_faces < 0) throw SettingsError("target_faces", "must be >= 0 (0: automatic)");
   if (!(s.edge_length >= 0 && std::isfinite(s.edge_length)))
     throw SettingsError("edge_length", "must be a number >= 0 (0: automatic)");
+  if (!(s.fit_tolerance >= 0 && s.fit_tolerance < 1))
+    throw SettingsError("fit_tolerance", "must be a number from 0 (off) to below 1 (of the diagonal)");
   if (!(s.feature_angle > 0 && s.feature_angle < 180))
     throw SettingsError("feature_angle", "must be between 0 and 180 degrees");
 }
@@ -382,8 +481,6 @@ LoadedSource load_source(const std::string& path, InputKind requested, const Usd
 
 MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, const MeshPathProgress& progress) {
   validate(settings);
-  MeshCage out;
-  MeshPathReport& rep = out.report;
   MeshInput tri = mesh.input;  // the shape: triangles; infinitely sharp creases are the user's features
   triangulate(tri);
   tri.creases.erase(std::remove_if(tri.creases.begin(), tri.creases.end(),
@@ -391,73 +488,99 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
                     tri.creases.end());
   tri.corners.clear();
   tri.holes.clear();
-  rep.input_vertices = tri.num_vertices();
-  rep.input_triangles = tri.num_faces();
-  rep.feature_angle = settings.feature_angle;
 
   QuadRemeshOptions ro;
-  if (settings.target_faces > 0) ro.target_faces = settings.target_faces;
-  else if (settings.edge_length > 0) ro.edge_length = settings.edge_length;
-  else ro.target_faces = automatic_target_faces(tri);
-  rep.target_faces = ro.target_faces;
-  rep.edge_length = ro.edge_length;
   ro.features.angle_degrees = settings.feature_angle;
+  std::string size_rule = "given";
+  if (settings.target_faces > 0) {
+    ro.target_faces = settings.target_faces;
+  } else if (settings.edge_length > 0) {
+    ro.edge_length = settings.edge_length;
+  } else {
+    ro.target_faces = automatic_target_faces(tri);
+    size_rule = settings.fit_tolerance > 0 ? "fit_tolerance" : "automatic";
+  }
+  const double tolerance = size_rule == "fit_tolerance" ? settings.fit_tolerance : 0.0;
 
-  auto t = Clock::now();
-  if (progress.stage) progress.stage("remeshing " + std::to_string(tri.num_faces()) + " triangles into a quad cage");
-  QuadRemeshResult rr = quad_remesh(tri, ro, progress.fraction);
-  if (rr.cancelled) throw Error(ErrorKind::Usage, "cancelled");
-  rep.remesh_ms = ms_since(t);
-  rep.remesh = rr.stats;
-  rep.feature_edges_in = static_cast<int>(rr.features.edges.size());
-  rep.corners_in = static_cast<int>(rr.features.corners.size());
-  rep.feature_chains_in = rr.features.chains;
-
-  // The cage, validated as a file's cage would be (a remesher fault is an error, not a crash).
-  LoadedCage cage;
-  cage.path = mesh.path;
-  cage.input = std::move(rr.cage);
-  out.cage.cage = std::move(cage);
-  Diagnostics validation;
-  out.cage.level = SubdivLevel::from_validated(validate_cage(out.cage.cage, &validation), out.cage.cage.input);
-  const std::vector<Point3> start = out.cage.positions();
-
-  // The fit of the cage's limit surface to the mesh.
-  t = Clock::now();
-  if (progress.stage)
-    progress.stage("fitting the cage's " + std::to_string(out.cage.cage.input.num_faces()) + " quads to the mesh");
   TargetShape shape;
   shape.points = tri.positions;
   shape.triangles = fan_triangles(tri.face_sizes, tri.face_indices);
   const ShapeTarget target = make_target(std::move(shape), mesh.path);
-  // Samples of level 2 (16 per quad): the cage's quads are a few mesh triangles wide, so 16
-  // samples per quad still outnumber the mesh's vertices; 4 x cheaper than level 3.
-  rep.fit_options.levels = 2;
-  rep.fit_options.max_iterations = 10;
-  rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
-  // The cage's vertices that planar regions' faces depend on, held on their planes (core/fit/planar_regions.h).
-  const PlanarSetup planar = planar_setup(out.cage.level, start, target);
-  rep.fit_options.vertex_planes = vertex_planes(planar.constraints, planar.regions);
-  ShapeFitProgress fit_progress;
-  if (progress.fraction)
-    fit_progress = [&](int iteration, double) {
-      return progress.fraction(std::min(1.0, (iteration + 1.0) / rep.fit_options.max_iterations));
-    };
-  // The planar regions' faces made exactly planar (the held vertices onto their planes) before
-  // the fitted cage is measured.
-  const ShapeFitAdjust flatten = [&](std::vector<Point3>& positions) {
-    rep.planar = flatten_planar_regions(out.cage.level, planar.constraints, positions, planar.regions, target.diagonal());
-  };
-  rep.fit = run_shape_fit(out.cage.level, start, target, rep.fit_options, fit_progress, flatten);
-  if (rep.fit.fit.stop == ShapeFitStop::Cancelled) throw Error(ErrorKind::Usage, "cancelled");
-  out.positions = rep.fit.fit.positions;
-  rep.fit_ms = rep.fit.fit_ms;
-  rep.measure_ms = rep.fit.measure_ms;
+  const std::vector<PlanarRegion> regions = planar_regions(target);
+  const RoundInput in{tri, mesh.path, target, regions, progress};
+
+  // The first round at the automatic (or given) size; then, with a tolerance, the size rule
+  // (mesh_path.h): finer while the distance misses the tolerance, or once coarser when far below.
+  FeatureSet features;
+  MeshCage out = remesh_and_fit(in, ro, "", features);
+  std::vector<MeshPathRound> rounds{round_of(out.report)};
+  double remesh_ms = out.report.remesh_ms, fit_ms = out.report.fit_ms, measure_ms = out.report.measure_ms;
+  int kept = 0, predicted = 0;
+  while (tolerance > 0 && static_cast<int>(rounds.size()) < kMaxSizeRounds) {
+    const MeshPathRound& last = rounds.back();
+    const bool coarser = rounds.size() == 1 && last.distance() < kCoarsenBelow * tolerance;
+    if (!(last.distance() > tolerance || coarser) || !last.failure.empty()) break;
+    const int next = next_target_faces(rounds, tolerance);
+    if (next > kMaxSizeFactor * rounds.front().target_faces) {
+      predicted = next;  // beyond the size limit: not tried
+      break;
+    }
+    if (std::any_of(rounds.begin(), rounds.end(), [&](const MeshPathRound& r) { return r.target_faces == next; }))
+      break;  // at the lower limit: that size was tried
+    ro.target_faces = next;
+    const std::string round_text = " (round " + std::to_string(rounds.size() + 1) + ": " +
+                                   short_number(last.distance()) + " of the diagonal " +
+                                   (coarser ? "is far within" : "misses") + " the fit tolerance " +
+                                   short_number(tolerance) + ")";
+    FeatureSet round_features;
+    try {
+      MeshCage made = remesh_and_fit(in, ro, round_text, round_features);
+      rounds.push_back(round_of(made.report));
+      remesh_ms += made.report.remesh_ms, fit_ms += made.report.fit_ms, measure_ms += made.report.measure_ms;
+      if (better_round(rounds.back(), rounds[static_cast<std::size_t>(kept)], tolerance)) {
+        out = std::move(made);
+        features = std::move(round_features);
+        kept = static_cast<int>(rounds.size()) - 1;
+      }
+    } catch (const Error& e) {
+      if (e.kind() == ErrorKind::Usage) throw;  // cancelled
+      MeshPathRound failed;
+      failed.target_faces = ro.target_faces;
+      failed.failure = e.what();
+      rounds.push_back(failed);
+    }
+    if (coarser) break;  // one coarser round at most
+  }
+
+  MeshPathReport& rep = out.report;
+  rep.input_vertices = tri.num_vertices();
+  rep.input_triangles = tri.num_faces();
+  rep.feature_angle = settings.feature_angle;
+  rep.size_rule = size_rule;
+  rep.fit_tolerance = tolerance;
+  rep.rounds = std::move(rounds);
+  rep.kept_round = kept;
+  rep.remesh_ms = remesh_ms, rep.fit_ms = fit_ms, rep.measure_ms = measure_ms;
+  const MeshPathRound& best = rep.rounds[static_cast<std::size_t>(kept)];
+  rep.tolerance_met = !(tolerance > 0) || best.distance() <= tolerance;
+  rep.predicted_target_faces = rep.tolerance_met ? 0 : predicted;
+  if (!rep.tolerance_met) {
+    const std::size_t n = rep.rounds.size();
+    rep.warning = "subd2nurbs: warning: the fit tolerance " + short_number(tolerance) + " was not met: " +
+                  (n == 1 ? std::string("the cage") : "the closest of " + std::to_string(n) + " cages") + " (" +
+                  std::to_string(best.quads) + " quads) is within " + short_number(best.distance()) +
+                  " of the diagonal (to the mesh " + short_number(best.to_mesh) + ", from it " +
+                  short_number(best.from_mesh) + ")";
+    if (predicted > 0)
+      rep.warning += "; the size rule predicts about " + std::to_string(predicted) + " quads for it, more than " +
+                     short_number(kMaxSizeFactor) + " x the automatic size, so they were not tried";
+    rep.warning += " (a target face count given sets the size)";
+  }
 
   // The kept features' normal angles against the mesh's dihedrals.
   Diagnostics ignore;
   const PolyMesh poly = PolyMesh::build(tri.num_vertices(), tri.face_sizes, tri.face_indices, &ignore);
-  rep.feature_angles = measure_feature_angles(out.cage.level, out.positions, mesh_feature_edges(tri, poly, rr.features));
+  rep.feature_angles = measure_feature_angles(out.cage.level, out.positions, mesh_feature_edges(tri, poly, features));
   return out;
 }
 
@@ -471,6 +594,19 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   w.key("cage");
   write_stats(w, r.remesh);
   w.members("target_faces", r.target_faces, "edge_length", r.edge_length);
+  w.key("size").begin_object();
+  w.members("rule", r.size_rule, "fit_tolerance", r.fit_tolerance, "tolerance_met", r.tolerance_met, "kept_round",
+            r.kept_round, "predicted_target_faces", r.predicted_target_faces);
+  w.key("rounds").begin_array();
+  for (const MeshPathRound& round : r.rounds) {
+    w.begin_object();
+    w.members("target_faces", round.target_faces, "quads", round.quads, "limit_to_target_max", round.to_mesh,
+              "target_to_limit_max", round.from_mesh, "ms", round.ms);
+    if (!round.failure.empty()) w.member("failure", round.failure);
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
   w.key("fit").begin_object();
   w.members("iterations", r.fit.fit.iterations, "stop", std::string(to_string(r.fit.fit.stop)));
   w.key("before");
@@ -505,6 +641,22 @@ std::string mesh_path_summary(const MeshPathReport& r) {
   o << "  fit        " << r.fit.fit.iterations << " iterations (" << to_string(r.fit.fit.stop) << "), to the mesh: "
     << distance_text(r.fit.after.limit_to_target) << "; from the mesh: " << distance_text(r.fit.after.target_to_limit)
     << " (of the diagonal)\n";
+  if (r.size_rule == "fit_tolerance") {
+    o << "  size       ";
+    if (r.rounds.size() == 1) o << "one round, ";
+    else o << r.rounds.size() << " rounds (";
+    for (std::size_t i = 0; r.rounds.size() > 1 && i < r.rounds.size(); ++i) {
+      const MeshPathRound& round = r.rounds[i];
+      o << (i ? ", " : "") << round.quads << " quads: ";
+      if (round.failure.empty()) o << short_number(round.distance());
+      else o << "failed";
+      if (static_cast<int>(i) == r.kept_round) o << " kept";
+    }
+    if (r.rounds.size() > 1) o << "), ";
+    o << "fit tolerance " << short_number(r.fit_tolerance) << (r.tolerance_met ? " met" : " NOT met");
+    if (r.predicted_target_faces > 0) o << " (about " << r.predicted_target_faces << " quads predicted for it, not tried)";
+    o << "\n";
+  }
   if (r.feature_angles.samples > 0)
     o << "  features   normal angle across kept feature curves within " << short_number(r.feature_angles.max_difference)
       << " deg of the mesh's dihedral (mean " << short_number(r.feature_angles.mean_difference) << ")\n";

@@ -17,6 +17,7 @@
 //     a triangle cage.
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <optional>
 #include <string>
@@ -39,13 +40,35 @@ InputKind input_kind(const std::string& name);
 constexpr int kMinMeshTriangles = 200;
 
 /// The mesh path's settings (the settings table's rows "input", "target_faces", "edge_length",
-/// "feature_angle").
+/// "fit_tolerance", "feature_angle").
 struct MeshPathSettings {
   InputKind input = InputKind::Auto;
   int target_faces = 0;        ///< quads of the cage wanted; 0 with edge_length 0: automatic
   double edge_length = 0;      ///< the cage's edge length in model units (used when target_faces is 0)
+  /// With the automatic size: the two-sided max distance between the fitted limit surface and
+  /// the mesh to reach, relative to the bounding-box diagonal; the cage is remeshed at a size
+  /// predicted from the measured distance until it is met (the size rule below); 0: off (one
+  /// remesh at the automatic size).
+  double fit_tolerance = 1e-3;
   double feature_angle = 30;   ///< degrees: an edge between faces whose normals differ more is sharp
 };
+
+/// The size rule (docs/meshes.md "Size chosen by the fit tolerance"). With the automatic size and
+/// a fit tolerance, the mesh is remeshed and fitted at most kMaxSizeRounds times. The model:
+/// the two-sided max distance d falls as h^2 (h the cage's edge length), so d x quads is about a
+/// constant C (measured on fandisk over 464 .. 1374 quads: d ~ h^2.26, each size within a factor
+/// 0.62 .. 1.49 of that trend). After a round that misses the tolerance, the next size is C /
+/// (kSizeMargin x tolerance), C the geometric mean of d x quads over the rounds so far: the margin
+/// covers that scatter, so one more round usually meets it. After a first round within
+/// kCoarsenBelow x the tolerance, one coarser round at the same prediction. The sizes stay within
+/// kMaxSizeFactor of the first round's target (time and memory grow with the quads): a prediction
+/// beyond it ends the rounds (the tolerance is then not met; the warning names the predicted
+/// size), one below it is raised to it. The kept round: the fewest quads among those that meet
+/// the tolerance, else the closest.
+constexpr int kMaxSizeRounds = 3;
+constexpr double kSizeMargin = 0.7;
+constexpr double kCoarsenBelow = 0.5;
+constexpr double kMaxSizeFactor = 2.5;
 
 /// The automatic size: this many quads per unit of the mesh's area / diagonal^2, within limits.
 int automatic_target_faces(const MeshInput& mesh);
@@ -82,6 +105,16 @@ struct FeatureAngleStats {
   int where_edge = -1;        ///< the worst cage feature edge (index into cage.creases)
 };
 
+/// One remesh and fit of the size rule.
+struct MeshPathRound {
+  int target_faces = 0;   ///< asked of the remesher (0 with edge_length)
+  int quads = 0;          ///< made (0: the round failed, `failure` says why)
+  double to_mesh = 0, from_mesh = 0;  ///< fit.after's max limit_to_target, target_to_limit (of the diagonal)
+  double ms = 0;          ///< its remesh, fit and measure
+  std::string failure;    ///< a later round's remesh or fit error (the rounds end, the best so far is kept)
+  double distance() const { return std::max(to_mesh, from_mesh); }
+};
+
 /// What the mesh path did, for the report and the summaries.
 struct MeshPathReport {
   InputRoute route;
@@ -95,7 +128,16 @@ struct MeshPathReport {
   ShapeFitRun fit;              ///< the fit, with the two-sided distance before and after
   FeatureAngleStats feature_angles;
   FlattenStats planar;          ///< the planar regions made exactly planar (core/fit/planar_regions.h)
-  double remesh_ms = 0, fit_ms = 0, measure_ms = 0;
+  /// The size rule: "given" (target_faces or edge_length), "automatic" (fit_tolerance 0) or
+  /// "fit_tolerance"; the rounds tried, in order, and the one kept (the numbers above are its).
+  std::string size_rule = "given";
+  double fit_tolerance = 0;
+  std::vector<MeshPathRound> rounds;
+  int kept_round = 0;
+  bool tolerance_met = true;    ///< the kept round meets fit_tolerance (true when there is none)
+  int predicted_target_faces = 0;  ///< the rounds ended at a prediction beyond kMaxSizeFactor: that size, else 0
+  std::string warning;          ///< "subd2nurbs: warning: ..." when the tolerance was not met, else empty
+  double remesh_ms = 0, fit_ms = 0, measure_ms = 0;  ///< over all rounds
 };
 
 /// The cage made from a mesh, fitted, ready for convert().
@@ -113,21 +155,23 @@ struct MeshPathProgress {
   std::function<bool(double fraction)> fraction;
 };
 
-/// The mesh's features, an all-quad cage of it, and the cage fitted to it (see the file comment).
+/// The mesh's features, an all-quad cage of it, and the cage fitted to it (see the file comment);
+/// with the automatic size and a fit tolerance, at the size the size rule chooses (above).
 /// Polygons are fan-triangulated first; infinitely sharp crease tags (an OBJ's `t crease` with
 /// sharpness >= 10 given with --input mesh) are features the user tagged, kept whatever their
 /// angle; other tags are ignored.
 /// \throw SettingsError (settings), Error (remesh or fit impossible, cancelled)
 MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, const MeshPathProgress& progress = {});
 
-/// The rules of the mesh settings: target_faces >= 0, edge_length >= 0, feature angle in (0, 180).
+/// The rules of the mesh settings: target_faces >= 0, edge_length >= 0, fit_tolerance in [0, 1),
+/// feature angle in (0, 180).
 /// \throw SettingsError
 void validate(const MeshPathSettings& settings);
 
 /// The mesh path's member of the conversion report ("mesh": docs/formats.md).
 void write_mesh_path(JsonWriter& w, const MeshPathReport& report);
 
-/// A few lines for stderr: the cage, the features, the fit's distances.
+/// A few lines for stderr: the cage, the features, the fit's distances, the size rule's rounds.
 std::string mesh_path_summary(const MeshPathReport& report);
 
 }  // namespace subd2nurbs::pipeline

@@ -289,7 +289,8 @@ void add_limit_rows(std::vector<SettingRow>& t) {
   }
 }
 
-/// The mesh path (converter/pipeline/mesh_path.h): input, target_faces, edge_length, feature_angle.
+/// The mesh path (converter/pipeline/mesh_path.h): input, target_faces, edge_length, fit_tolerance,
+/// feature_angle.
 void add_mesh_rows(std::vector<SettingRow>& t) {
   {
     SettingRow& r = add_row(t, "input", SettingType::Word, std::string(to_string(InputKind::Auto)));
@@ -307,7 +308,7 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
   }
   {
     SettingRow& r = add_row(t, "target_faces", SettingType::Integer, {});
-    r.default_text = "from the mesh's area: edges of about 1/25 of the diagonal, 100 .. 1500 quads";
+    r.default_text = "from the mesh's area (edges of about 1/25 of the diagonal, 100 .. 1500 quads), then by fit_tolerance";
     r.help = "Mesh input: the number of quads of the cage made from the mesh (about)";
     r.cli = "--target-faces";
     r.property = {"TargetFaces", "Mesh", "Mesh input: quads of the cage (about; 0: automatic)", {}, true};
@@ -329,6 +330,20 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
       if (s.mesh.edge_length == 0) return std::monostate{};
       return s.mesh.edge_length;
     };
+  }
+  {
+    SettingRow& r = add_row(t, "fit_tolerance", SettingType::Number, 1e-3);
+    r.help = "Mesh input with the automatic size: the two-sided max distance between the fitted surface and the "
+             "mesh to reach, relative to the bounding-box diagonal; the cage is remeshed finer (or once coarser) at a "
+             "size predicted from the distance measured (at most " + std::to_string(kMaxSizeRounds) +
+             " times, up to 2.5 x the automatic size: docs/meshes.md); 0: off, one cage at the automatic size";
+    r.cli = "--fit-tolerance";
+    r.property = {"FitTolerance", "Mesh",
+                  "Mesh input with TargetFaces and EdgeLength 0: the largest distance between the surface and the "
+                  "mesh to reach, both ways, relative to the model size (the cage size is chosen for it; 0: off)",
+                  {}};
+    r.set = [](Settings& s, const SettingValue& v) { s.mesh.fit_tolerance = number(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.mesh.fit_tolerance; };
   }
   {
     SettingRow& r = add_row(t, "feature_angle", SettingType::Number, 30.0);

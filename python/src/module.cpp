@@ -630,8 +630,10 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
     } else {
       conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
     }
+    std::vector<std::string> warnings = load_warnings ? *load_warnings : diagnostics_text(diagnostics);
+    if (made && !made->warning.empty()) warnings.push_back(made->warning);  // the fit tolerance not met
     c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
-                          load_warnings ? *load_warnings : diagnostics_text(diagnostics));
+                          warnings);
   });
   c.mesh = std::move(made);
   c.input = input_name;

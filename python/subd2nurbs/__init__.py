@@ -555,8 +555,9 @@ fit_to: a target shape (anything fit() takes): the cage is fitted to it first wi
     defaults, then converted (as the command line's convert --fit-to); excludes fit="interpolate".
 Mesh input (docs/meshes.md): a Cage of triangles that do not pair back into quads (read_mesh(),
     read_cage() of an STL, or input="mesh") is a shape to reproduce: its sharp features are
-    detected (feature_angle), an all-quad cage of about target_faces quads is made and fitted to
-    it, and that cage is converted; result.made_cage is the cage, report["mesh"] the numbers.
+    detected (feature_angle), an all-quad cage of about target_faces quads (by default: sized until
+    the fit meets fit_tolerance) is made and fitted to it, and that cage is converted;
+    result.made_cage is the cage, report["mesh"] the numbers (report["mesh"]["size"]: the rounds).
 """ % _settings_doc()
 
 

@@ -36,7 +36,8 @@ SettingValue other_value(const SettingRow& row) {
   static const std::map<std::string, SettingValue> numbers = {
       {"level", 3LL},         {"tolerance", 1e-3},      {"radial_steps", 2LL}, {"polar_lambda", 0.5},
       {"fair", 0.25},         {"preview_samples", 5LL}, {"samples", 4LL},      {"max_faces", 1e5},
-      {"max_memory", 2e9},    {"threads", 1LL}, {"target_faces", 500LL},  {"edge_length", 0.5},  {"feature_angle", 45.0}};
+      {"max_memory", 2e9},    {"threads", 1LL}, {"target_faces", 500LL},  {"edge_length", 0.5},  {"feature_angle", 45.0},
+      {"fit_tolerance", 2e-3}};
   switch (row.type) {
     case SettingType::Flag:
     case SettingType::OnOff: return !std::get<bool>(row.default_value);

@@ -38,6 +38,7 @@
 #include <gp_Ax2.hxx>
 #include <gp_Pln.hxx>
 #include <gp_Pnt.hxx>
+#include <gp_Vec.hxx>
 
 #include <cmath>
 #include <cstdio>
@@ -486,15 +487,259 @@ TEST(MeshPath, BoxWithFilletedSlot) {
   check_against(exact, mesh, c, 2e-2);
 }
 
+// --- The size chosen by the fit tolerance (docs/meshes.md "Size chosen by the fit tolerance") ---
+
+/// A capsule: the cylinder of radius r around the z axis from z = 0 to z = L, closed by two
+/// hemispheres. The oracle of the size rule's tests: the exact distance of a point to it.
+struct Capsule {
+  double L = 20, r = 1;
+  double distance(const gp_Pnt& p) const {
+    const double z = std::clamp(p.Z(), 0.0, L);
+    return std::abs(std::hypot(p.X(), p.Y(), p.Z() - z) - r);
+  }
+  gp_Pnt point(double z, double radius, double angle) const {
+    return gp_Pnt(radius * std::cos(angle), radius * std::sin(angle), z);
+  }
+  /// Its triangulation with every vertex on it: `around` vertices per ring, `along` steps along
+  /// the cylinder, `cap` rings per hemisphere; every other ring turned by half a step, so the
+  /// triangles do not pair back into quads (the mesh road by the rule).
+  Triangles mesh(int around, int along, int cap) const {
+    std::vector<std::pair<double, double>> rings;  // (z, radius)
+    for (int i = 1; i <= cap; ++i) {
+      const double phi = -M_PI / 2 + M_PI / 2 * i / cap;
+      rings.emplace_back(r * std::sin(phi), r * std::cos(phi));
+    }
+    for (int i = 1; i < along; ++i) rings.emplace_back(L * i / along, r);
+    for (int i = 0; i < cap; ++i) {
+      const double phi = M_PI / 2 * i / cap;
+      rings.emplace_back(L + r * std::sin(phi), r * std::cos(phi));
+    }
+    Triangles t;
+    t.points.emplace_back(0, 0, -r);
+    for (std::size_t k = 0; k < rings.size(); ++k)
+      for (int j = 0; j < around; ++j)
+        t.points.push_back(point(rings[k].first, rings[k].second, 2 * M_PI * (j + 0.5 * (k % 2)) / around));
+    const int top = static_cast<int>(t.points.size());
+    t.points.emplace_back(0, 0, L + r);
+    for (int j = 0; j < around; ++j) t.triangles.push_back({0, 1 + (j + 1) % around, 1 + j});
+    for (int k = 0; k + 1 < static_cast<int>(rings.size()); ++k) {
+      const int a = 1 + k * around, b = a + around;
+      for (int j = 0; j < around; ++j) {
+        const int j1 = (j + 1) % around;
+        if (k % 2 == 0) {
+          t.triangles.push_back({a + j, a + j1, b + j});
+          t.triangles.push_back({a + j1, b + j1, b + j});
+        } else {
+          t.triangles.push_back({a + j, a + j1, b + j1});
+          t.triangles.push_back({a + j, b + j1, b + j});
+        }
+      }
+    }
+    const int last = 1 + (static_cast<int>(rings.size()) - 1) * around;
+    for (int j = 0; j < around; ++j) t.triangles.push_back({last + j, last + (j + 1) % around, top});
+    return t;
+  }
+  /// The largest distance of the mesh's triangles from the capsule (their chord error), sampled
+  /// at 28 barycentric points per triangle.
+  double chord_error(const Triangles& t) const {
+    double worst = 0;
+    for (const auto& tri : t.triangles)
+      for (int i = 0; i <= 6; ++i)
+        for (int j = 0; i + j <= 6; ++j) {
+          const double a = i / 6.0, b = j / 6.0, c = 1 - a - b;
+          const gp_Pnt& p = t.points[tri[0]];
+          const gp_Pnt& q = t.points[tri[1]];
+          const gp_Pnt& w = t.points[tri[2]];
+          worst = std::max(worst, distance(gp_Pnt(a * p.X() + b * q.X() + c * w.X(), a * p.Y() + b * q.Y() + c * w.Y(),
+                                                  a * p.Z() + b * q.Z() + c * w.Z())));
+        }
+    return worst;
+  }
+  /// Points on it: `n` around, along the cylinder at the same spacing, and on the hemispheres.
+  std::vector<gp_Pnt> samples(int n) const {
+    std::vector<gp_Pnt> out;
+    const int along = static_cast<int>(std::ceil(L / (2 * M_PI * r / n)));
+    for (int i = 0; i <= along; ++i)
+      for (int j = 0; j < n; ++j) out.push_back(point(L * i / along, r, 2 * M_PI * j / n));
+    for (int i = 1; i <= n / 4; ++i) {
+      const double phi = M_PI / 2 * i / (n / 4);
+      for (int j = 0; j < n; ++j) {
+        out.push_back(point(L + r * std::sin(phi), r * std::cos(phi), 2 * M_PI * j / n));
+        out.push_back(point(-r * std::sin(phi), r * std::cos(phi), 2 * M_PI * j / n));
+      }
+    }
+    return out;
+  }
+};
+
+/// One number per round of the report's mesh.size.rounds: the values of `key` in order.
+std::vector<double> round_values(const std::string& report, const std::string& key) {
+  std::vector<double> out;
+  const std::size_t begin = report.find("\"rounds\": [");
+  const std::size_t end = report.find(']', begin);
+  if (begin == std::string::npos || end == std::string::npos) return out;
+  for (std::size_t at = report.find("\"" + key + "\": ", begin); at < end; at = report.find("\"" + key + "\": ", at + 1))
+    out.push_back(std::strtod(report.c_str() + at + key.size() + 4, nullptr));
+  return out;
+}
+
+/// The capsule's mesh (6 528 triangles), its diagonal and its chord error.
+struct CapsuleCase {
+  Capsule shape;
+  Triangles mesh = shape.mesh(48, 45, 12);
+  double diag = diagonal(mesh);
+  double chord = shape.chord_error(mesh);
+};
+
+/// The size rule makes the cage finer until the fit tolerance is met (issue #28 item 3). The
+/// tolerance asked for is 0.7 x the distance the automatic size reaches (the report of a run with
+/// fit_tolerance 0), so the automatic size misses it whatever the remesher does. With it the kept
+/// cage is finer and meets it, checked against the exact capsule: our surface (the B-rep, dense
+/// grids on its faces) within the tolerance + the mesh's chord error + the conversion's own
+/// tolerance (1e-5) of the capsule, and the capsule (dense samples) as close to our surface.
+TEST(MeshPath, FitToleranceRefinesTheCageUntilMet) {
+  TempDir dir;
+  const CapsuleCase k;
+  const std::string stl = dir.file("capsule.stl");
+  write_stl(k.mesh, stl);
+  const CommandResult first = run_command(kExe + " convert " + quote(stl) + " -o " + quote(dir.file("a.json")) +
+                                          " --report " + quote(dir.file("a.report.json")) + " -q --fit-tolerance 0");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const std::string first_report = read_text(dir.file("a.report.json"));
+  const double automatic = std::max(json_number(first_report, {"mesh", "fit", "after", "limit_to_target", "max"}),
+                                    json_number(first_report, {"mesh", "fit", "after", "target_to_limit", "max"}));
+  const double tolerance = 0.7 * automatic;
+  // The fit follows the mesh's facets only to about half their chord error.
+  ASSERT_GT(tolerance * k.diag, 1.5 * k.chord) << "the mesh is too coarse for the test";
+
+  TempDir out;
+  char arg[64];
+  std::snprintf(arg, sizeof arg, "--fit-tolerance %.6g --tolerance 1e-5", tolerance);
+  const Converted c = convert(stl, out, arg);
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  EXPECT_NE(c.report.find("\"rule\": \"fit_tolerance\""), std::string::npos);
+  const std::vector<double> quads = round_values(c.report, "quads");
+  ASSERT_GE(quads.size(), 2u);
+  ASSERT_LE(quads.size(), 3u);
+  EXPECT_NE(c.report.find("\"tolerance_met\": true"), std::string::npos) << c.report;
+  const int kept = static_cast<int>(json_number(c.report, {"mesh", "size", "kept_round"}));
+  ASSERT_GE(kept, 1);
+  EXPECT_GT(quads[static_cast<std::size_t>(kept)], quads[0]);
+  EXPECT_EQ(c.cage.input.num_faces(), quads[static_cast<std::size_t>(kept)]);
+  EXPECT_EQ(quads[0], json_number(first_report, {"mesh", "cage", "faces"}));  // round 1: the automatic size
+
+  // The oracle: the exact capsule, both ways.
+  const double bound = tolerance * k.diag + k.chord + 1e-5 * k.diag;
+  double to_exact = 0;
+  for (const gp_Pnt& p : grid_points(c.shape, 12)) to_exact = std::max(to_exact, k.shape.distance(p));
+  const std::vector<gp_Pnt> samples = k.shape.samples(96);
+  const double from_exact = max_distance_to_faces(samples, c.shape, 10 * bound, 3);
+  EXPECT_LT(to_exact, bound) << "relative " << to_exact / k.diag;
+  EXPECT_LT(from_exact, bound) << "relative " << from_exact / k.diag;
+  std::printf("  capsule: automatic %g quads at %.3g; fit tolerance %.3g: rounds", quads[0], automatic, tolerance);
+  for (double q : quads) std::printf(" %g", q);
+  std::printf(", kept %g quads; to the capsule %.3g, from it %.3g of the diagonal (bound %.3g, chord error %.3g)\n",
+              quads[static_cast<std::size_t>(kept)], to_exact / k.diag, from_exact / k.diag, bound / k.diag,
+              k.chord / k.diag);
+}
+
+/// fit_tolerance 0 is the automatic size alone: the same cage as that size given as
+/// --target-faces (one round); a size the user gives is obeyed, one round, whatever the tolerance;
+/// a first round far within the tolerance is tried once coarser, and the cage kept meets it
+/// (against the exact capsule).
+TEST(MeshPath, FitToleranceOffGivenSizeAndCoarsening) {
+  TempDir dir;
+  const CapsuleCase k;
+  const std::string stl = dir.file("capsule.stl");
+  write_stl(k.mesh, stl);
+  auto run = [&](const std::string& name, const std::string& args) {
+    const CommandResult r = run_command(kExe + " convert " + quote(stl) + " -o " + quote(dir.file(name + ".json")) +
+                                        " --report " + quote(dir.file(name + ".report.json")) + " --keep-cage " +
+                                        quote(dir.file(name + ".obj")) + " -q " + args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err;
+    return read_text(dir.file(name + ".report.json"));
+  };
+  const std::string off = run("off", "--fit-tolerance 0");
+  EXPECT_NE(off.find("\"rule\": \"automatic\""), std::string::npos);
+  EXPECT_EQ(round_values(off, "quads").size(), 1u);
+  // The automatic size is the documented one: quads of 1/25 of the diagonal over the mesh's area.
+  double area = 0;
+  for (const auto& t : k.mesh.triangles) {
+    const gp_Vec u(k.mesh.points[t[0]], k.mesh.points[t[1]]), v(k.mesh.points[t[0]], k.mesh.points[t[2]]);
+    area += 0.5 * u.Crossed(v).Magnitude();
+  }
+  const int automatic = static_cast<int>(json_number(off, {"mesh", "target_faces"}));
+  EXPECT_NEAR(automatic, area / std::pow(k.diag / 25, 2), 1.0);
+  const std::string given = run("given", "--target-faces " + std::to_string(automatic));
+  EXPECT_NE(given.find("\"rule\": \"given\""), std::string::npos);
+  const LoadedCage a = read_obj(dir.file("off.obj")), b = read_obj(dir.file("given.obj"));
+  ASSERT_EQ(a.input.num_faces(), b.input.num_faces());
+  EXPECT_EQ(a.input.face_indices, b.input.face_indices);
+  ASSERT_EQ(a.input.positions.size(), b.input.positions.size());
+  double moved = 0;
+  for (std::size_t i = 0; i < a.input.positions.size(); ++i)
+    for (int c = 0; c < 3; ++c) moved = std::max(moved, std::abs(a.input.positions[i][c] - b.input.positions[i][c]));
+  EXPECT_LT(moved, 1e-12 * k.diag);
+
+  // A given size with a tolerance it misses: one round, that size.
+  const std::string small = run("small", "--target-faces 60 --fit-tolerance 1e-5");
+  EXPECT_NE(small.find("\"rule\": \"given\""), std::string::npos);
+  const std::vector<double> small_targets = round_values(small, "target_faces");
+  ASSERT_EQ(small_targets.size(), 1u);
+  EXPECT_EQ(small_targets[0], 60);
+
+  // Far within the tolerance: once coarser; the kept cage meets the tolerance and has no more
+  // quads than the first; checked on its limit surface against the capsule below.
+  const double d0 = std::max(json_number(off, {"mesh", "fit", "after", "limit_to_target", "max"}),
+                             json_number(off, {"mesh", "fit", "after", "target_to_limit", "max"}));
+  char arg[64];
+  std::snprintf(arg, sizeof arg, "--fit-tolerance %.6g", 3 * d0);
+  const std::string coarse = run("coarse", arg);
+  const std::vector<double> quads = round_values(coarse, "quads"), targets = round_values(coarse, "target_faces");
+  ASSERT_EQ(quads.size(), 2u) << coarse;
+  EXPECT_LT(targets[1], targets[0]);
+  const int kept = static_cast<int>(json_number(coarse, {"mesh", "size", "kept_round"}));
+  const LoadedCage kept_cage = read_obj(dir.file("coarse.obj"));
+  EXPECT_EQ(kept_cage.input.num_faces(), quads[static_cast<std::size_t>(kept)]);
+  EXPECT_LE(kept_cage.input.num_faces(), quads[0]);
+  EXPECT_NE(coarse.find("\"tolerance_met\": true"), std::string::npos) << coarse;
+  // The kept cage's exact limit surface (`subd2nurbs limit`, 5 x 5 points per quad) within the
+  // tolerance + the mesh's chord error of the capsule.
+  const std::string queries = dir.file("queries.txt");
+  {
+    std::ofstream q(queries);
+    for (int f = 0; f < kept_cage.input.num_faces(); ++f)
+      for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 5; ++j) q << f << " " << (i + 0.5) / 5 << " " << (j + 0.5) / 5 << "\n";
+  }
+  const CommandResult limit = run_command(kExe + " limit " + quote(dir.file("coarse.obj")) + " " + quote(queries));
+  ASSERT_EQ(limit.exit_code, 0) << limit.err;
+  std::istringstream lines(limit.out);
+  double worst = 0, x, y, z;
+  int points = 0;
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream in(line);
+    if (!(in >> x >> y >> z)) continue;
+    worst = std::max(worst, k.shape.distance(gp_Pnt(x, y, z)));
+    ++points;
+  }
+  EXPECT_EQ(points, 25 * kept_cage.input.num_faces());
+  EXPECT_LT(worst, 3 * d0 * k.diag + k.chord) << "relative " << worst / k.diag;
+  std::printf("  capsule: automatic %d quads at %.3g; fit tolerance %.3g: rounds %g, %g quads, kept %g; its limit within "
+              "%.3g of the diagonal of the capsule\n",
+              automatic, d0, 3 * d0, quads[0], quads[1], quads[static_cast<std::size_t>(kept)], worst / k.diag);
+}
+
 /// Fandisk (12 946 triangles) with the defaults, against the input mesh itself: the report's
 /// two-sided distance (our surface's samples to the mesh's triangles, the mesh's vertices to our
 /// surface) and the normal angle across every kept feature curve against the mesh's dihedral at
-/// the nearest feature edge of the mesh. The issue's goals: <= 300 B-rep faces and the mesh's
-/// vertices within 1e-3 x the diagonal of our surface (met); our surface within 1e-3 of the mesh
-/// and 3 degrees (not met yet: 1.15e-3 and 6.7 degrees, at the fan's tip where two feature
-/// curves meet at 19 degrees; docs/meshes.md "Limits"), so those bounds guard what is reached
-/// (before the split's projection fix and the soft features: 2.5e-3 from the mesh, 82 degrees,
-/// a quad folded across the bottom rim).
+/// the nearest feature edge of the mesh. The issue's goals: <= 300 B-rep faces and 1e-3 x the
+/// diagonal both ways (met since the size is chosen by the fit tolerance, 1e-3 by default: the
+/// automatic size's 674 quads reach 1.14e-3, the second round's ~1 100 quads 0.86e-3) and 3
+/// degrees (not met: 7 degrees at the automatic size, at the fan's tip where two feature curves
+/// meet at 19 degrees, 12 at the finer size; docs/meshes.md "Limits"), so that bound guards what
+/// is reached (before the split's projection fix and the soft features: 82 degrees, a quad folded
+/// across the bottom rim).
 TEST(MeshPath, FandiskFollowsTheMesh) {
   TempDir dir;
   const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir);
@@ -505,14 +750,16 @@ TEST(MeshPath, FandiskFollowsTheMesh) {
   const double from_mesh = json_number(c.report, {"mesh", "fit", "after", "target_to_limit", "max"});
   const double angle_max = json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"});
   const double angle_mean = json_number(c.report, {"mesh", "feature_angles", "mean_difference_deg"});
-  EXPECT_LT(to_mesh, 1.5e-3);
-  EXPECT_LT(from_mesh, 1e-3);
+  EXPECT_LE(to_mesh, 1e-3);
+  EXPECT_LE(from_mesh, 1e-3);
+  EXPECT_NE(c.report.find("\"tolerance_met\": true"), std::string::npos);
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 500);
-  EXPECT_LT(angle_max, 10.0);
+  EXPECT_LT(angle_max, 15.0);
   EXPECT_LT(angle_mean, 1.0);
-  std::printf("  fandisk: %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, feature angles max %.3g "
-              "mean %.3g deg off\n",
-              json_number(c.report, {"brep", "faces"}), to_mesh, from_mesh, angle_max, angle_mean);
+  std::printf("  fandisk: %zu rounds, %d quads, %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, "
+              "feature angles max %.3g mean %.3g deg off\n",
+              round_values(c.report, "quads").size(), c.cage.input.num_faces(), json_number(c.report, {"brep", "faces"}),
+              to_mesh, from_mesh, angle_max, angle_mean);
 }
 
 /// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says
@@ -569,6 +816,8 @@ TEST(MeshPath, DenseTriangleMeshIsAMesh) {
   for (const auto& [args, words] : {std::pair<std::string, std::string>{"--target-faces -3", "--target-faces must be >= 0"},
                                     {"--edge-length -1", "--edge-length must be a number >= 0"},
                                     {"--feature-angle 200", "--feature-angle must be between 0 and 180"},
+                                    {"--fit-tolerance -1e-3", "--fit-tolerance must be a number from 0"},
+                                    {"--fit-tolerance 1", "--fit-tolerance must be a number from 0"},
                                     {"--fit-to " + quote(stl), "--fit-to fits a cage"}}) {
     const CommandResult bad = run_command(kExe + " convert " + quote(stl) + " -o " + quote(out) + " " + args);
     EXPECT_EQ(bad.exit_code, 1) << args << "\n" << bad.err;

@@ -1082,6 +1082,13 @@ class MeshPath(unittest.TestCase):
         self.assertEqual(len(cage.creases), m["cage"]["feature_edges"])
         # The cage converted is the made cage: its vertices are the result's cage vertices.
         np.testing.assert_array_equal(cage.vertices, result.cage_vertices)
+        # A given size is obeyed: one round, whatever fit_tolerance (docs/meshes.md "Size chosen by
+        # the fit tolerance"); the keyword's rule is checked before any work.
+        self.assertEqual(m["size"]["rule"], "given")
+        self.assertEqual([r["target_faces"] for r in m["size"]["rounds"]], [300])
+        with self.assertRaises(s2n.SettingsError) as e:
+            s2n.convert(mesh, fit_tolerance=-1e-3)
+        self.assertIn("fit_tolerance", str(e.exception))
         # A quad cage given with input="mesh" is remeshed too; with input="cage" it is not.
         v, faces = cube_cage()
         self.assertIsNone(s2n.convert(s2n.Cage(v, faces), input="cage").made_cage)
