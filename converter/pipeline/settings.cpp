@@ -341,7 +341,7 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
     r.property = {"FitTolerance", "Mesh",
                   "Mesh input with TargetFaces and EdgeLength 0: the largest distance between the surface and the "
                   "mesh to reach, both ways, relative to the model size (the cage size is chosen for it; 0: off)",
-                  {}};
+                  {}, false};
     r.set = [](Settings& s, const SettingValue& v) { s.mesh.fit_tolerance = number(v); };
     r.get = [](const Settings& s) -> SettingValue { return s.mesh.fit_tolerance; };
   }
