@@ -435,6 +435,9 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   rep.fit_options.levels = 2;
   rep.fit_options.max_iterations = 10;
   rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
+  // The crease curves' sides held at the mesh's normals where a quad meets a crease at an acute
+  // angle (core/fit/shape_fit.h crease_normal_weight; docs/meshes.md, fandisk's fan tip).
+  rep.fit_options.crease_normal_weight = 1;
   // The cage's vertices that planar regions' faces depend on, held on their planes (core/fit/planar_regions.h).
   const PlanarSetup planar = planar_setup(out.cage.level, start, target);
   rep.fit_options.vertex_planes = vertex_planes(planar.constraints, planar.regions);
