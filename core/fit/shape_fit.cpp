@@ -1033,6 +1033,14 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
         const double ds = p3[0] - p0[0], dt = p3[1] - p0[1];
         const double es = p1[0] - p0[0], et = p1[1] - p0[1];
         const Samples::PtexMap& M = S.ptex[f];
+        // Only in the cage faces at a corner (a vertex tagged infinitely sharp), where feature
+        // curves meet: the wedges. Elsewhere a quad meets its crease about square, and the rows
+        // only disturbed the fit of noisy CAD edges (docs/fitting.md).
+        bool at_corner = false;
+        const int* cv = cage.mesh.face_vertices(M.face);
+        for (int j = 0; j < cage.mesh.face_size(M.face); ++j)
+          at_corner = at_corner || cage.vertex_sharpness[cv[j]] >= kInfiniteSharpness;
+        if (!at_corner) continue;
         CreaseNormal c;
         c.face = M.face;
         c.sub = M.sub;

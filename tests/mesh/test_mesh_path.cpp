@@ -503,7 +503,8 @@ TEST(MeshPath, BoxWithFilletedSlot) {
 /// angle between the two faces' normals must be the exact dihedral there (the angle between the
 /// two exact surfaces' outward normals at that point) within 3 degrees. Before the fit held the
 /// crease sides' normals (core/fit/shape_fit.h crease_normal_weight), the tip's quad, sheared
-/// into the wedge, was off by 5.5 degrees.
+/// into the wedge, was off by 8.6 degrees (now 2.75). Only the tip's third of the wedge is checked:
+/// its far end is another case (below).
 TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
   TempDir dir;
   const double deg = M_PI / 180, half = 10 * deg, L = 40, R = 22;
@@ -535,7 +536,7 @@ TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
   std::vector<gp_Pnt> corners;
   for (TopExp_Explorer ex(exact, TopAbs_VERTEX); ex.More(); ex.Next()) corners.push_back(BRep_Tool::Pnt(TopoDS::Vertex(ex.Current())));
 
-  const Triangles mesh = tessellate(exact, 0.01);
+  const Triangles mesh = tessellate(exact, 0.02);
   const std::string stl = dir.file("tip.stl");
   write_stl(mesh, stl);
   const Converted c1 = convert(stl, dir, "--target-faces 300");
@@ -608,10 +609,11 @@ TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
 /// surface) and the normal angle across every kept feature curve against the mesh's dihedral at
 /// the nearest feature edge of the mesh. The goals: <= 300 B-rep faces and the mesh's
 /// vertices within 1e-3 x the diagonal of our surface (met); our surface within 1e-3 of the mesh
-/// and 3 degrees (not met yet: 1.15e-3 and 6.7 degrees, at the fan's tip where two feature
-/// curves meet at 19 degrees; docs/meshes.md "Limits"), so those bounds guard what is reached
-/// (before the split's projection fix and the soft features: 2.5e-3 from the mesh, 82 degrees,
-/// a quad folded across the bottom rim).
+/// and 3 degrees (not met yet: 1.14e-3, and 4.5 degrees on the fan's curved rim, where the
+/// mesh's dihedral changes by 10 degrees over a few mesh edges; docs/meshes.md "Limits"), so
+/// those bounds guard what is reached (before the split's projection fix and the soft features: 2.5e-3 from the mesh, 82
+/// degrees, a quad folded across the bottom rim; before the crease normals: 7.1 degrees at the
+/// fan's tip, where two feature curves meet at 19 degrees).
 TEST(MeshPath, FandiskFollowsTheMesh) {
   TempDir dir;
   const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir);
@@ -625,8 +627,8 @@ TEST(MeshPath, FandiskFollowsTheMesh) {
   EXPECT_LT(to_mesh, 1.5e-3);
   EXPECT_LT(from_mesh, 1e-3);
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 500);
-  EXPECT_LT(angle_max, 10.0);
-  EXPECT_LT(angle_mean, 1.0);
+  EXPECT_LT(angle_max, 5.0);
+  EXPECT_LT(angle_mean, 0.5);
   std::printf("  fandisk: %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, feature angles max %.3g "
               "mean %.3g deg off\n",
               json_number(c.report, {"brep", "faces"}), to_mesh, from_mesh, angle_max, angle_mean);
