@@ -11,7 +11,6 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
-#include <cstdlib>
 
 #include "core/features/features.h"
 #include "core/fit/fairing.h"
@@ -963,7 +962,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   if (static_cast<int>(start.size()) != n) throw std::invalid_argument("fit_to_shape: one start position per cage vertex");
   if (options.levels < 1 || options.levels > 5) throw std::invalid_argument("fit_to_shape: levels must be 1..5");
   if (options.max_iterations < 0 || options.smoothing < 0 || options.target_weight < 0 || options.proximal < 0 ||
-      !(options.min_gain >= 0) ||
+      !(options.min_gain >= 0) || !(options.crease_normal_weight >= 0) || !(options.crease_normal_guard >= 0) ||
       !(options.final_surface_weight > 0))
     throw std::invalid_argument("fit_to_shape: negative option");
   const double diag = target.diagonal();
@@ -1016,7 +1015,8 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   if (target.has_triangles() && !C.edges.empty() && options.crease_angle > 0)
     tcrease = target_creases(target, options.crease_angle);
   for (int v : tcrease) tborder.push_back(v);
-  // Crease tangent planes: at the middle of each level-k crease edge, on both sides.
+  // The crease sides' normals (options.crease_normal_weight): at the middle of each level-k
+  // crease edge in a cage face at a corner, on both sides.
   std::vector<CreaseNormal> crease_normals;
   if (options.crease_normal_weight > 0 && target.has_triangles()) {
     static const double co[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
