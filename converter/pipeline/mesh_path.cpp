@@ -324,6 +324,9 @@ MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const
   rep.fit_options.levels = 2;
   rep.fit_options.max_iterations = 10;
   rep.fit_options.min_gain = 0;  // the mesh path's fits as measured (docs/meshes.md): 10 iterations, no early stop
+  // The crease curves' sides held at the mesh's normals where a quad meets a crease at an acute
+  // angle (core/fit/shape_fit.h crease_normal_weight; docs/meshes.md, fandisk's fan tip).
+  rep.fit_options.crease_normal_weight = 1;
   // The cage's vertices that planar regions' faces depend on, held on their planes (core/fit/planar_regions.h).
   const PlanarConstraints planar = planar_constraints(out.cage.level, start, in.target.points(),
                                                       in.target.triangles(), in.regions, in.target.diagonal());

@@ -80,6 +80,24 @@ struct ShapeFitOptions {
   /// within crease_reach x the mean length of the level-k crease edges.
   double crease_angle = 0.0;
   double crease_reach = 4.0;
+  /// The surface's normal on each side of the crease curves held at the target's (0: off), in
+  /// the cage faces at a corner (a vertex tagged infinitely sharp). At the middle of every
+  /// level-k crease edge there, on each side, the normal T x D of the limit (T
+  /// along the crease, D across it along the level-k edge leaving it) is compared with the
+  /// target's normal n there (the normal of the target's triangle closest to the surface point
+  /// half a level-k edge inside, used when it faces within crease_normal_guard degrees of the
+  /// surface's normal there): to first order the normal is off by (n.T) / |T| along the crease
+  /// and by ((D.t) (n.T) / |T| - n.D) / (D.e) across it (t, e the unit vectors along T and
+  /// across it in the target's plane), both linear in the positions with the frame frozen per
+  /// iteration; each is scaled by |D| to a length and weighted by crease_normal_weight x one
+  /// surface sample x min(1 / sin^2 a - 1, 10), a the angle between T and D; left out of the
+  /// step control's objective (its rows change between iterations). So it acts where a quad
+  /// meets a crease at an acute angle (a wedge between two crease curves meeting at a sharp
+  /// corner, where the normal turns 1 / sin a times faster than D's tilt, which the positions
+  /// alone do not see: fandisk's fan tip, a = 17 deg, 8 deg off; docs/meshes.md) and not where
+  /// the quad meets the crease square (a = 90 deg: the positions hold the normal there).
+  double crease_normal_weight = 0.0;
+  double crease_normal_guard = 15.0;
   /// Cage vertices held on planes (the mesh path's planar regions, core/fit/planar_regions.h):
   /// each adds plane_weight x (the normal equations' mean diagonal) x (normal . P_vertex -
   /// offset)^2 to every solve, so that the rest of the cage fits around the held vertices.

@@ -11,7 +11,16 @@
 #include <BRepBndLib.hxx>
 #include <Bnd_Box.hxx>
 #include <ShapeAnalysis_Surface.hxx>
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAlgoAPI_Common.hxx>
 #include <BRepAlgoAPI_Cut.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
+#include <Geom2d_Curve.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <BRepCheck_Analyzer.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
@@ -730,16 +739,126 @@ TEST(MeshPath, FitToleranceOffGivenSizeAndCoarsening) {
               automatic, d0, 3 * d0, quads[0], quads[1], quads[static_cast<std::size_t>(kept)], worst / k.diag);
 }
 
+/// A fan-like tip (issue #28, fandisk's worst spot; docs/meshes.md "Limits"): a wedge whose two
+/// planar side walls meet at 20 degrees, topped by a sphere, so that at the top of the apex two
+/// sharp rims (sphere against wall) meet at an acute angle and the curved top between them is a
+/// narrow wedge, one cage quad wide at the tip. Oracle: the exact solid's surfaces, analytic
+/// here. At points along every sharp edge of our B-rep (away from the solid's corners), the
+/// angle between the two faces' normals must be the exact dihedral there (the angle between the
+/// two exact surfaces' outward normals at that point) within 3 degrees. Before the fit held the
+/// crease sides' normals (core/fit/shape_fit.h crease_normal_weight), the tip's quad, sheared
+/// into the wedge, was off by 8.6 degrees (now 2.75). Only the tip's third of the wedge is checked:
+/// its far end is another case (below).
+TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
+  TempDir dir;
+  const double deg = M_PI / 180, half = 10 * deg, L = 40, R = 22;
+  const gp_Pnt c(20, 0, -5);
+  BRepBuilderAPI_MakePolygon tri(gp_Pnt(0, 0, 0), gp_Pnt(L, L * std::tan(half), 0), gp_Pnt(L, -L * std::tan(half), 0), true);
+  const TopoDS_Shape prism = BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(tri.Wire()).Face(), gp_Vec(0, 0, 30)).Shape();
+  const TopoDS_Shape exact = BRepAlgoAPI_Common(prism, BRepPrimAPI_MakeSphere(c, R).Shape()).Shape();
+  ASSERT_TRUE(BRepCheck_Analyzer(exact).IsValid());
+  // The exact surfaces: outward normal and distance at a point.
+  struct Surface {
+    gp_Dir normal_at(const gp_Pnt& p) const { return sphere ? gp_Dir(gp_Vec(centre, p)) : n; }
+    double distance(const gp_Pnt& p) const {
+      return sphere ? std::abs(p.Distance(centre) - radius) : std::abs(gp_Vec(n).Dot(gp_Vec(origin, p)));
+    }
+    bool sphere = false;
+    gp_Dir n{0, 0, 1};
+    gp_Pnt origin, centre;
+    double radius = 0;
+  };
+  std::vector<Surface> surfaces(5);
+  surfaces[0].n = gp_Dir(0, 0, -1);                                     // bottom
+  surfaces[1].n = gp_Dir(-std::sin(half), std::cos(half), 0);           // wall y > 0
+  surfaces[2].n = gp_Dir(-std::sin(half), -std::cos(half), 0);          // wall y < 0
+  surfaces[3].n = gp_Dir(1, 0, 0);                                      // far wall
+  surfaces[3].origin = gp_Pnt(L, 0, 0);
+  surfaces[4].sphere = true;                                            // top
+  surfaces[4].centre = c;
+  surfaces[4].radius = R;
+  std::vector<gp_Pnt> corners;
+  for (TopExp_Explorer ex(exact, TopAbs_VERTEX); ex.More(); ex.Next()) corners.push_back(BRep_Tool::Pnt(TopoDS::Vertex(ex.Current())));
+
+  const Triangles mesh = tessellate(exact, 0.02);
+  const std::string stl = dir.file("tip.stl");
+  write_stl(mesh, stl);
+  const Converted c1 = convert(stl, dir, "--target-faces 300");
+  ASSERT_EQ(c1.run.exit_code, 0) << c1.run.err;
+  const double diag = diagonal(mesh);
+  EXPECT_TRUE(BRepCheck_Analyzer(c1.shape).IsValid());
+  EXPECT_NEAR(volume(c1.shape), volume(exact), 0.01 * volume(exact));
+
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+  TopExp::MapShapesAndAncestors(c1.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  int samples = 0, near_tip = 0;
+  double worst = 0, worst_all = 0;  // within 0.3 L of the tip; anywhere
+  gp_Pnt worst_at, worst_all_at;
+  for (int i = 1; i <= edge_faces.Extent(); ++i) {
+    const TopoDS_Edge e = TopoDS::Edge(edge_faces.FindKey(i));
+    const TopTools_ListOfShape& faces = edge_faces.FindFromIndex(i);
+    if (faces.Extent() != 2 || BRep_Tool::Degenerated(e)) continue;
+    const BRepAdaptor_Curve curve(e);
+    for (int k = 1; k < 8; ++k) {
+      const double t = curve.FirstParameter() + k / 8.0 * (curve.LastParameter() - curve.FirstParameter());
+      const gp_Pnt p = curve.Value(t);
+      gp_Vec normal[2];
+      int side = 0;
+      for (const TopoDS_Shape& fs : faces) {
+        const TopoDS_Face f = TopoDS::Face(fs);
+        double a, b;
+        const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(e, f, a, b);
+        const gp_Pnt2d uv = pc->Value(t);
+        gp_Pnt q;
+        gp_Vec du, dv;
+        BRepAdaptor_Surface(f).D1(uv.X(), uv.Y(), q, du, dv);
+        normal[side] = du.Crossed(dv);
+        if (f.Orientation() == TopAbs_REVERSED) normal[side].Reverse();
+        ++side;
+      }
+      if (normal[0].Magnitude() < 1e-12 || normal[1].Magnitude() < 1e-12) continue;
+      const double ours = normal[0].Angle(normal[1]) / deg;
+      if (ours < 20) continue;  // a smooth seam between our faces (exact dihedral 0 inside a face)
+      // The two exact surfaces through p; skipped near the solid's corners (a third one near).
+      bool at_corner = false;
+      for (const gp_Pnt& v : corners) at_corner = at_corner || v.Distance(p) < 0.01 * diag;
+      std::vector<std::pair<double, int>> d;
+      for (int s = 0; s < 5; ++s) d.push_back({surfaces[s].distance(p), s});
+      std::sort(d.begin(), d.end());
+      if (at_corner || d[2].first < 4 * std::max(d[1].first, 1e-3 * diag)) continue;
+      const double dihedral = surfaces[d[0].second].normal_at(p).Angle(surfaces[d[1].second].normal_at(p)) / deg;
+      ++samples;
+      if (std::abs(ours - dihedral) > worst_all) worst_all = std::abs(ours - dihedral), worst_all_at = p;
+      if (p.X() > 0.3 * L) continue;
+      ++near_tip;
+      if (std::abs(ours - dihedral) > worst) worst = std::abs(ours - dihedral), worst_at = p;
+    }
+  }
+  std::printf("  acute tip: %d sharp-edge samples, %d within 0.3 L of the tip: normal angle within %.3g deg of the exact "
+              "dihedral there (worst at %.3g %.3g %.3g), %.3g deg anywhere (at %.3g %.3g %.3g); report: %.3g / %.3g deg "
+              "against the mesh, %g B-rep faces\n",
+              samples, near_tip, worst, worst_at.X(), worst_at.Y(), worst_at.Z(), worst_all, worst_all_at.X(),
+              worst_all_at.Y(), worst_all_at.Z(), json_number(c1.report, {"mesh", "feature_angles", "max_difference_deg"}),
+              json_number(c1.report, {"mesh", "feature_angles", "mean_difference_deg"}), json_number(c1.report, {"brep", "faces"}));
+  EXPECT_GT(samples, 100);
+  EXPECT_GT(near_tip, 30);
+  EXPECT_LT(worst, 3.0) << "at " << worst_at.X() << " " << worst_at.Y() << " " << worst_at.Z();
+  // Not checked elsewhere (printed): at the far end the sphere comes down to 0.9 .. 4 above the
+  // bottom (walls lower than a cage quad), and the far bottom edge and the low walls' rims are
+  // off by up to ~15 degrees with or without the crease normals (docs/meshes.md "Limits").
+}
+
 /// Fandisk (12 946 triangles) with the defaults, against the input mesh itself: the report's
 /// two-sided distance (our surface's samples to the mesh's triangles, the mesh's vertices to our
 /// surface) and the normal angle across every kept feature curve against the mesh's dihedral at
 /// the nearest feature edge of the mesh. The issue's goals: <= 300 B-rep faces and 1e-3 x the
 /// diagonal both ways (met since the size is chosen by the fit tolerance, 1e-3 by default: the
 /// automatic size's 674 quads reach 1.14e-3, the second round's ~1 100 quads 0.86e-3) and 3
-/// degrees (not met: 7 degrees at the automatic size, at the fan's tip where two feature curves
-/// meet at 19 degrees, 12 at the finer size; docs/meshes.md "Limits"), so that bound guards what
-/// is reached (before the split's projection fix and the soft features: 82 degrees, a quad folded
-/// across the bottom rim).
+/// degrees (not met: 11.7 degrees at the finer size, 4.5 at the automatic one; docs/meshes.md
+/// "Limits"), so that bound guards what is reached
+/// (before the split's projection fix and the soft features: 82 degrees, a quad folded across the
+/// bottom rim; before the crease normals: 7.1 degrees at the automatic size, at the fan's tip
+/// where two feature curves meet at 19 degrees, 11.7 at the finer size).
 TEST(MeshPath, FandiskFollowsTheMesh) {
   TempDir dir;
   const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir);
@@ -755,7 +874,7 @@ TEST(MeshPath, FandiskFollowsTheMesh) {
   EXPECT_NE(c.report.find("\"tolerance_met\": true"), std::string::npos);
   EXPECT_GT(json_number(c.report, {"mesh", "feature_angles", "samples"}), 500);
   EXPECT_LT(angle_max, 15.0);
-  EXPECT_LT(angle_mean, 1.0);
+  EXPECT_LT(angle_mean, 0.5);
   std::printf("  fandisk: %zu rounds, %d quads, %g B-rep faces, to the mesh %.3g, from the mesh %.3g of the diagonal, "
               "feature angles max %.3g mean %.3g deg off\n",
               round_values(c.report, "quads").size(), c.cage.input.num_faces(), json_number(c.report, {"brep", "faces"}),
