@@ -356,6 +356,7 @@ MeshPathRound round_of(const MeshPathReport& r) {
   round.to_mesh = r.fit.after.limit_to_target.max;
   round.from_mesh = r.fit.after.target_to_limit.max;
   round.ms = r.remesh_ms + r.fit_ms + r.measure_ms;
+  round.remesh_ms = r.remesh_ms;
   return round;
 }
 
@@ -604,7 +605,7 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   for (const MeshPathRound& round : r.rounds) {
     w.begin_object();
     w.members("target_faces", round.target_faces, "quads", round.quads, "limit_to_target_max", round.to_mesh,
-              "target_to_limit_max", round.from_mesh, "ms", round.ms);
+              "target_to_limit_max", round.from_mesh, "ms", round.ms, "remesh_ms", round.remesh_ms);
     if (!round.failure.empty()) w.member("failure", round.failure);
     w.end_object();
   }

@@ -111,6 +111,7 @@ struct MeshPathRound {
   int quads = 0;          ///< made (0: the round failed, `failure` says why)
   double to_mesh = 0, from_mesh = 0;  ///< fit.after's max limit_to_target, target_to_limit (of the diagonal)
   double ms = 0;          ///< its remesh, fit and measure
+  double remesh_ms = 0;   ///< its remesh alone
   std::string failure;    ///< a later round's remesh or fit error (the rounds end, the best so far is kept)
   double distance() const { return std::max(to_mesh, from_mesh); }
 };
