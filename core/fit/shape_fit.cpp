@@ -22,6 +22,7 @@
 #include "core/util/error.h"
 #include "core/util/gauss_newton.h"
 #include "core/util/bicubic.h"
+#include "core/util/constants.h"
 #include "core/util/parallel.h"
 
 namespace subd2nurbs {
@@ -1056,7 +1057,7 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   }
   const double wcn = options.crease_normal_weight / ns;
   constexpr double kMaxConditioning = 10;  // 1 / sin^2 - 1 at 17.5 deg
-  const double cos_guard = std::cos(options.crease_normal_guard * M_PI / 180.0);
+  const double cos_guard = std::cos(options.crease_normal_guard * kPi / 180.0);
   const int nborder = static_cast<int>(tborder.size()) - static_cast<int>(tcrease.size());
   const int nbd = static_cast<int>(tborder.size());
   const double wbd_border = options.target_weight / std::max(nborder, 1);
