@@ -94,6 +94,9 @@ void raise(const char* name, const std::string& message, const Attributes&... at
   PyErr_SetObject(cls.ptr(), error.ptr());
 }
 
+/// Thrown from a conversion's progress callback when the Python callable returned False.
+struct CancelledByProgress {};
+
 /// Raises the Python exception of an error's kind (converter/pipeline/errors.h) with the
 /// attributes its class carries.
 void translate(std::exception_ptr p) {
@@ -580,7 +583,7 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
                                     const std::vector<std::pair<int, double>>& corners, const std::vector<int>& holes,
                                     const py::dict& options, const Settings& settings, const std::string& input_name,
                                     const std::optional<std::vector<std::string>>& load_warnings,
-                                    const std::function<void(const std::string&, double, const std::string&)>& progress) {
+                                    const std::function<py::object(const std::string&, double, const std::string&)>& progress) {
   const MeshInput in = make_input(positions, face_sizes, face_indices, creases, corners, holes, options);
   Diagnostics diagnostics;
   auto conversion = std::make_shared<Conversion>();
@@ -593,11 +596,18 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
   const pipeline::InputRoute route = pipeline::route_input(probe, input_name, settings.settings.mesh.input);
 
   // The conversion runs without_gil; the progress callback takes the lock back for each call.
+  // When it returns False the conversion stops at that call (an exception through the stages,
+  // or the mesh path's own cancel) and subd2nurbs.Cancelled is raised: nothing is returned.
   pipeline::ConversionProgress callbacks;
   std::string current, key;
+  bool cancelled = false;
   const auto report = [&](double fraction) {
     py::gil_scoped_acquire locked;
-    progress(current, fraction, key);
+    const py::object go = progress(current, fraction, key);
+    if (go.ptr() == Py_False) {
+      cancelled = true;
+      throw CancelledByProgress{};
+    }
   };
   if (progress) {
     callbacks.stage = [&](pipeline::Stage stage, const std::string& s) {
@@ -609,32 +619,51 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
   }
   pipeline::ConversionResult& c = conversion->result;
   std::optional<pipeline::MeshPathReport> made;
-  without_gil([&] {
-    // threads= for the mesh path too (pipeline::convert sets it for itself)
-    const ThreadLimit threads(settings.settings.conversion.limits.threads.value_or(0));
-    const JobShare job;  // Python threads converting at once share the cores
-    if (route.mesh) {
-      pipeline::MeshPathProgress mesh_progress;
-      if (progress)
-        mesh_progress.stage = [&](const std::string& s) {
-          current = s;
-          key = "mesh";
-          report(0.0);
-        };
-      pipeline::MeshCage cage = pipeline::mesh_to_cage(probe, settings.settings.mesh, mesh_progress);
-      cage.report.route = route;
-      conversion->base = std::make_shared<const SubdivLevel>(std::move(cage.cage.level));
-      conversion->cage_input = std::move(cage.cage.cage.input);
-      points = std::move(cage.positions);
-      made = std::move(cage.report);
-    } else {
-      conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
-    }
-    std::vector<std::string> warnings = load_warnings ? *load_warnings : diagnostics_text(diagnostics);
-    if (made && !made->warning.empty()) warnings.push_back(made->warning);  // the fit tolerance not met
-    c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
-                          warnings);
-  });
+  try {
+    without_gil([&] {
+      // threads= for the mesh path too (pipeline::convert sets it for itself)
+      const ThreadLimit threads(settings.settings.conversion.limits.threads.value_or(0));
+      const JobShare job;  // Python threads converting at once share the cores
+      if (route.mesh) {
+        pipeline::MeshPathProgress mesh_progress;
+        if (progress) {
+          mesh_progress.stage = [&](const std::string& s) {
+            current = s;
+            key = "mesh";
+            report(0.0);
+          };
+          // The remesh's and the fit's fractions; a cancel there ends mesh_to_cage with its own error.
+          mesh_progress.fraction = [&](double fraction) {
+            try {
+              report(fraction);
+              return true;
+            } catch (const CancelledByProgress&) {
+              return false;
+            }
+          };
+        }
+        pipeline::MeshCage cage = pipeline::mesh_to_cage(probe, settings.settings.mesh, mesh_progress);
+        cage.report.route = route;
+        conversion->base = std::make_shared<const SubdivLevel>(std::move(cage.cage.level));
+        conversion->cage_input = std::move(cage.cage.cage.input);
+        points = std::move(cage.positions);
+        made = std::move(cage.report);
+      } else {
+        conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
+      }
+      std::vector<std::string> warnings = load_warnings ? *load_warnings : diagnostics_text(diagnostics);
+      if (made && !made->warning.empty()) warnings.push_back(made->warning);  // the fit tolerance not met
+      c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
+                            warnings);
+    });
+  } catch (const CancelledByProgress&) {
+    raise("Cancelled", "the conversion was cancelled (the progress callback returned False)");
+    throw py::error_already_set();
+  } catch (const Error&) {
+    if (!cancelled) throw;
+    raise("Cancelled", "the conversion was cancelled (the progress callback returned False)");
+    throw py::error_already_set();
+  }
   c.mesh = std::move(made);
   c.input = input_name;
   if (c.has_brep) c.output.format = "BREP";

@@ -29,7 +29,7 @@ import numbers
 
 import numpy as np
 
-from .errors import CageError, ConversionError, FitError, SettingsError, Subd2NurbsError, WriteError
+from .errors import Cancelled, CageError, ConversionError, FitError, SettingsError, Subd2NurbsError, WriteError
 from . import _subd2nurbs
 
 #: The deviation tolerance (relative to the bounding-box diagonal) convert() uses when neither a
@@ -45,7 +45,7 @@ __all__ = [
     "Cage", "ConversionResult", "read_cage", "read_mesh", "input_route", "read_obj", "from_triangles", "info", "refine", "convert", "fair", "fit",
     "brep_summary", "file_summary",
     "occt_compatible", "CAGE_OPTIONS", "CageError", "SettingsError", "ConversionError", "WriteError", "FitError",
-    "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS", "SETTINGS",
+    "Cancelled", "Subd2NurbsError", "OCC_VERSION", "INFINITE_SHARPNESS", "SETTINGS",
 ]
 
 #: Sharpness at or above this is infinitely sharp (OpenSubdiv's convention).
@@ -549,7 +549,9 @@ a SettingsError names the setting at fault:
 
 progress: a callable(stage: str, fraction: float) called as the stages run; `stage` is a line
     for people ("building patches (2 extra levels)") whose `key` attribute names the stage:
-    "fit", "patches", "deviation", "packing", "continuity", "brep" or (with preview) "preview".
+    "mesh" (mesh input: the remesh and the fit, with their fractions), "fit", "patches",
+    "deviation", "packing", "continuity", "brep" or (with preview) "preview". Returning False
+    (not None) cancels the conversion at that call: Cancelled is raised, nothing is returned.
 allow_invalid: return a B-rep that BRepCheck rejects instead of raising ConversionError.
 fit_to: a target shape (anything fit() takes): the cage is fitted to it first with fit()'s
     defaults, then converted (as the command line's convert --fit-to); excludes fit="interpolate".

@@ -59,3 +59,8 @@ class WriteError(Subd2NurbsError, OSError):
     """An output file could not be written (``file``)."""
 
     file = None
+
+
+class Cancelled(Subd2NurbsError):
+    """The conversion was cancelled: its progress callable returned False. Nothing was
+    returned or written."""

@@ -280,6 +280,25 @@ class Conversion(unittest.TestCase):
         self.assertEqual({s.key for s, _ in stages} - {"fit"},
                          {"patches", "deviation", "packing", "continuity", "brep"})
 
+    def test_progress_returning_false_cancels(self):
+        # Returning False (not None) stops the conversion at that call: Cancelled, no result;
+        # the stages after it never run.
+        cube = s2n.read_obj(corpus("catmark_cube"))
+        for stop in ("patches", "continuity", "brep"):
+            keys = []
+
+            def progress(stage, fraction):
+                keys.append(stage.key)
+                return False if stage.key == stop else None
+            with self.assertRaises(s2n.Cancelled):
+                s2n.convert(cube, progress=progress)
+            self.assertEqual(keys[-1], stop)
+            self.assertEqual(keys.count(stop), 1)
+        self.assertTrue(issubclass(s2n.Cancelled, s2n.Subd2NurbsError))
+        # Falsy values other than False do not cancel.
+        r = s2n.convert(cube, progress=lambda stage, fraction: 0)
+        self.assertTrue(r.brep["valid"])
+
     def test_worst_edges_are_edges_of_the_shape(self):
         r = s2n.convert(s2n.read_obj(corpus("catmark_cube")))
         worst = r.worst_edges(3)
@@ -1086,6 +1105,18 @@ class MeshPath(unittest.TestCase):
         # the fit tolerance"); the keyword's rule is checked before any work.
         self.assertEqual(m["size"]["rule"], "given")
         self.assertEqual([r["target_faces"] for r in m["size"]["rounds"]], [300])
+        # A cancel inside the remesh or the fit (the mesh stage's fractions) stops there.
+        fractions = []
+
+        def progress(stage, fraction):
+            if stage.key == "mesh" and fraction > 0:
+                fractions.append(fraction)
+                return False if fraction >= 0.5 else None
+            self.assertEqual(stage.key, "mesh")  # no later stage runs
+        with self.assertRaises(s2n.Cancelled):
+            s2n.convert(mesh, target_faces=300, progress=progress)
+        self.assertGreaterEqual(fractions[-1], 0.5)
+        self.assertTrue(all(f < 0.5 for f in fractions[:-1]))
         with self.assertRaises(s2n.SettingsError) as e:
             s2n.convert(mesh, fit_tolerance=-1e-3)
         self.assertIn("fit_tolerance", str(e.exception))
