@@ -116,7 +116,7 @@ def make_fitted_cage(cage, target, smoothing=1e-4, max_iterations=30, doc=None, 
     return obj
 
 
-def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **settings):
+def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, previewed=None, **settings):
     """A parametric NURBS object (Part::FeaturePython) converted from a Cage object or a
     Mesh::Feature. A Mesh takes the road of docs/meshes.md: a triangulated cage gets its quads back
     (triangle pairs; fans around high-valence vertices are kept; the object's RecoveredQuads says
@@ -129,7 +129,11 @@ def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **set
     default "Polar caps"), fit="Interpolate" (Fit), fair=0.1 (FairWeight, with Interpolate),
     faces="PerQuad" (Faces, default "Packed"), max_faces, max_memory (MaxMemoryMiB). shell: a shell
     instead of a solid. It recomputes when the source or one of its properties changes. Raises
-    (document unchanged) when the conversion fails."""
+    (document unchanged) when the conversion fails, or subd2nurbs.Cancelled when the user
+    cancels it (Esc in the GUI's progress indicator; progress: True, False or a callable as
+    subd2nurbs.convert takes). previewed: a (signature, result) pair of an earlier conversion
+    (the mesh task panel's preview), used instead of converting again when its signature is
+    this source's and settings' (features.NurbsFeature.signature)."""
     check_occt()
     if source is None or not hasattr(source, "Document"):
         raise TypeError("make_nurbs: expected a Cage object or a Mesh::Feature")
@@ -143,7 +147,10 @@ def make_nurbs(source, shell=False, doc=None, name="NURBS", progress=True, **set
     # Convert before touching the document (errors leave it as it was); the first recompute
     # reuses the result.
     cage, kwargs = features.source_and_settings(source, features.settings_of(values))
-    result = features.convert_cage(cage, kwargs, progress=progress)
+    if previewed is not None and previewed[0] == features.NurbsFeature.signature(cage, kwargs):
+        result = previewed[1]
+    else:
+        result = features.convert_cage(cage, kwargs, progress=progress)
     with _Transaction(doc, "Convert to NURBS"):
         obj = doc.addObject("Part::FeaturePython", name)
         proxy = features.NurbsFeature(obj)

@@ -63,8 +63,11 @@ class ConvertToNurbs:
         return App.ActiveDocument is not None and bool(_selected_sources())
 
     def Activated(self):
+        sources = _selected_sources()
+        if len(sources) == 1 and self._open_mesh_panel(sources[0]):
+            return
         made = []
-        for source in _selected_sources():
+        for source in sources:
             try:
                 obj = api.make_nurbs(source, name=source.Label + "_NURBS")
             except Exception as e:
@@ -79,6 +82,27 @@ class ConvertToNurbs:
         if made:
             Gui.Selection.clearSelection()
             Gui.Selection.addSelection(made[-1])
+
+
+    @staticmethod
+    def _open_mesh_panel(source):
+        """One Mesh to reproduce (docs/meshes.md) opens the mesh task panel (mesh_panel.py):
+        settings, a preview of the cage and the face count, progress and cancel. True if it
+        opened."""
+        if not source.isDerivedFrom("Mesh::Feature"):
+            return False
+        try:
+            if features.cage_of(source).route["kind"] != "mesh":
+                return False
+        except Exception as e:
+            _report_failure("Convert to NURBS (%s)" % source.Label, e)
+            return True
+        if Gui.Control.activeDialog():
+            _report_failure("Convert to NURBS", "another task panel is open: close it first")
+            return True
+        from . import mesh_panel
+        Gui.Control.showDialog(mesh_panel.MeshTaskPanel(source))
+        return True
 
 
 class _OnSelectedNurbs:

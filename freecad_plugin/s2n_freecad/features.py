@@ -362,7 +362,8 @@ def mesh_note(label, report):
 
 class _Progress:
     """FreeCAD's progress indicator (status bar in the GUI, nothing visible headless) driven by
-    subd2nurbs's progress callback."""
+    subd2nurbs's progress callback. In the GUI, Esc cancels: the callback then returns False
+    and subd2nurbs.convert raises subd2nurbs.Cancelled."""
 
     STEPS = 100
 
@@ -372,16 +373,22 @@ class _Progress:
         self.done = 0
 
     def __call__(self, stage, fraction):
-        target = {"mesh": 5, "patches": 10, "deviation": 20, "continuity": 30}.get(stage.key, None)
-        if stage.key == "brep":
-            target = 30 + int(70 * fraction)
-        if target is not None:
-            while self.done < min(target, self.STEPS):
-                self.indicator.next()
+        # A mesh's remesh and fit (each size round from 0 to 1) take most of a mesh's conversion.
+        target = {"patches": 55, "deviation": 60, "continuity": 65}.get(stage.key, None)
+        if stage.key == "mesh":
+            target = 5 + int(45 * fraction)
+        elif stage.key == "brep":
+            target = 65 + int(35 * fraction)
+        try:
+            while target is not None and self.done < min(target, self.STEPS):
+                self.indicator.next(True)  # raises once the user has pressed cancel
                 self.done += 1
+        except Exception:
+            return False
         if App.GuiUp:
             import FreeCADGui
             FreeCADGui.updateGui()
+        return None
 
     def stop(self):
         self.indicator.stop()
@@ -432,7 +439,11 @@ PROPERTY_OF_SETTING = dict({row["name"]: row["property"]["name"] for row in SETT
 def convert_cage(cage, settings, progress=True):
     """subd2nurbs.convert of `cage` with `settings` (its keywords, as settings_of() makes them);
     the converter's rules check the values, and a SettingsError names the property
-    (PROPERTY_OF_SETTING)."""
+    (PROPERTY_OF_SETTING). progress: True (FreeCAD's progress indicator, Esc cancels), False, or
+    a callable as subd2nurbs.convert takes; a cancel raises subd2nurbs.Cancelled."""
+    if callable(progress):
+        with settings_named_by_property():
+            return subd2nurbs.convert(cage, progress=progress, **settings)
     indicator = _Progress("Converting %s to NURBS" % cage.name) if progress else None
     try:
         with settings_named_by_property():

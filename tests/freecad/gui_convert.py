@@ -3,7 +3,9 @@
 # FreeCAD must have loaded the workbench from there; "Convert to NURBS" on an imported cage must
 # give one valid solid with one face per cage quad; "Check surface quality" must run; the view
 # is saved as a PNG (S2N_SCREENSHOT); "Colour map" must draw the curvature colours, saved as a
-# second PNG next to it (..._colormap.png). Exits through os._exit (0 = pass) so the GUI closes.
+# second PNG next to it (..._colormap.png); "Convert to NURBS" on a triangle Mesh (S2N_MESH) must
+# open the mesh task panel, whose preview shows the cage and whose OK adds a valid solid with the
+# face count the preview gave (a third PNG, ..._mesh_panel.png, shows the preview). Exits through os._exit (0 = pass) so the GUI closes.
 import os
 import sys
 import traceback
@@ -70,6 +72,40 @@ def main():
     out2 = out[:-4] + "_colormap.png"
     view.saveImage(out2, 1000, 700, "White")
     assert os.path.getsize(out2) > 10000, os.path.getsize(out2)
+
+    # "Convert to NURBS" on a triangle Mesh opens the mesh task panel: the preview shows the
+    # cage made from the mesh and the face count; OK adds the NURBS object with that count.
+    import Mesh
+    from s2n_freecad import mesh_panel
+    maps[0].ViewObject.Visibility = False
+    nurbs.ViewObject.Visibility = False
+    mesh = doc.addObject("Mesh::Feature", "PlateMesh")
+    mesh.Mesh = Mesh.read(os.environ["S2N_MESH"])
+    doc.recompute()
+    Gui.Selection.clearSelection()
+    Gui.Selection.addSelection(mesh)
+    Gui.runCommand("Subd2Nurbs_Convert")
+    panel = mesh_panel.ACTIVE
+    assert panel is not None and Gui.Control.activeDialog(), "the mesh task panel did not open"
+    panel.fields["TargetFaces"][1].setText("200")
+    assert panel.preview(), panel.summary.text()
+    preview = panel.logic.cage_object
+    text = panel.summary.text()
+    assert preview is not None and "Cage: %d quads" % preview.NumFaces in text, text
+    view.viewIsometric()
+    view.fitAll()
+    Gui.updateGui()
+    out3 = out[:-4] + "_mesh_panel.png"
+    view.saveImage(out3, 1000, 700, "White")
+    before = len(doc.Objects)
+    assert panel.accept()
+    assert mesh_panel.ACTIVE is None and not Gui.Control.activeDialog()
+    made = [o for o in doc.Objects if isinstance(getattr(o, "Proxy", None), features.NurbsFeature)
+            and o.Source == mesh]
+    assert len(made) == 1 and len(doc.Objects) == before, [o.Name for o in doc.Objects]  # the preview cage went
+    solid = made[0].Shape
+    assert solid.isValid() and len(solid.Solids) == 1, (solid.isValid(), len(solid.Solids))
+    assert "NURBS: %d faces" % len(solid.Faces) in text, (len(solid.Faces), text)
     App.Console.PrintMessage("gui_convert: ok, %d faces, screenshot %s\n" % (len(shape.Faces), out))
 
 

@@ -460,6 +460,82 @@ class Workbench(unittest.TestCase):
         self.assertAlmostEqual(nurbs.Shape.Volume / mesh.Mesh.Volume, 1.0, delta=0.02)
         self.assertEqual(nurbs.TargetFaces, 300)
 
+    def plate_mesh(self):
+        path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "mesh", "plate_holes.STL")
+        mesh = self.doc.addObject("Mesh::Feature", "plate")
+        mesh.Mesh = Mesh.read(path)
+        self.doc.recompute()
+        return mesh
+
+    def counting_conversions(self):
+        """Counts features.convert_cage's calls (restored at the test's end)."""
+        calls = []
+        original = features.convert_cage
+
+        def counted(*args, **kwargs):
+            calls.append(1)
+            return original(*args, **kwargs)
+        features.convert_cage = counted
+        self.addCleanup(setattr, features, "convert_cage", original)
+        return calls
+
+    def test_mesh_panel_previews_the_cage_and_ok_adds_that_conversion(self):
+        # The mesh task panel's logic (mesh_panel.MeshConversion): the preview's cage and face
+        # count are those of the NURBS object OK adds (FreeCAD's count of the solid read back),
+        # without converting again; the cage kept on request is that NURBS object's cage.
+        from s2n_freecad import mesh_panel
+        mesh = self.plate_mesh()
+        before = self.names()
+        calls = self.counting_conversions()
+        panel = mesh_panel.MeshConversion(mesh)
+        self.assertEqual(panel.values["FitTolerance"], 1e-3)  # the settings table's defaults
+        self.assertEqual(panel.values["TargetFaces"], 0)
+        panel.values["TargetFaces"] = 200
+        lines = panel.preview(progress=False)
+        cage = panel.cage_object
+        self.assertEqual(self.names(), sorted(before + [cage.Name]))
+        self.assertTrue(all(n == 4 for n in cage.FaceSizes))
+        nurbs = panel.accept(keep_cage=True, progress=False)
+        self.assertEqual(len(calls), 1)  # OK reused the preview's conversion
+        self.assertEqual(self.names(), sorted(before + [cage.Name, nurbs.Name]))
+        self.assertSolid(nurbs.Shape, len(nurbs.Shape.Faces))
+        self.assertEqual(nurbs.CageFaces, cage.NumFaces)
+        self.assertEqual(nurbs.TargetFaces, 200)
+        self.assertIn("Cage: %d quads" % cage.NumFaces, lines[0])
+        self.assertTrue(any(line.startswith("NURBS: %d faces" % len(nurbs.Shape.Faces)) for line in lines), lines)
+        # The kept cage converts (as a Cage) to the same solid: the same faces and volume.
+        again = s2n.make_nurbs(cage, progress=False)
+        self.assertEqual(len(again.Shape.Faces), len(nurbs.Shape.Faces))
+        self.assertAlmostEqual(again.Shape.Volume, nurbs.Shape.Volume, delta=1e-9 * abs(nurbs.Shape.Volume))
+
+    def test_mesh_panel_cancel_and_changed_settings_leave_the_document_right(self):
+        from s2n_freecad import mesh_panel
+        mesh = self.plate_mesh()
+        before = self.names()
+        calls = self.counting_conversions()
+        panel = mesh_panel.MeshConversion(mesh)
+        panel.values["TargetFaces"] = 200
+        # A cancel inside the remesh (the progress callable returning False): nothing added.
+        with self.assertRaises(subd2nurbs.Cancelled):
+            panel.preview(progress=lambda stage, fraction: False if fraction > 0.2 else None)
+        self.assertEqual(self.names(), before)
+        # Cancel after a preview: the document as it was.
+        panel.preview(progress=False)
+        self.assertNotEqual(self.names(), before)
+        panel.reject()
+        self.assertEqual(self.names(), before)
+        # Settings changed after the preview: OK converts again with them, and the previewed
+        # cage (not this conversion's) is not kept.
+        panel.preview(progress=False)
+        previewed = panel.cage_object.Name
+        panel.values["TargetFaces"] = 150
+        nurbs = panel.accept(keep_cage=True, progress=False)
+        self.assertEqual(len(calls), 4)
+        self.assertEqual(nurbs.TargetFaces, 150)
+        self.assertEqual(self.names(), sorted(before + [nurbs.Name]))
+        self.assertNotIn(previewed, self.names())
+        self.assertTrue(nurbs.Shape.isValid())
+
     def test_fit_interpolate_passes_through_the_cage_vertices(self):
         """The NURBS object's Fit property: Interpolate makes the shape pass through the cage's
         vertices (FreeCAD's own distance from each vertex to the shape), Approximate does not;
