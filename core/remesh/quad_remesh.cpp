@@ -1155,12 +1155,15 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
 // Ears: a coarse triangle whose two edges are consecutive edges of one feature chain (a, c, b:
 // c a chain vertex that is no corner) and whose third edge a - b is no feature edge lies along
 // the chain, its third edge a chord of it. Where the chain bends (a rim rounding a corner of the
-// part) the chord leaves the triangle's side of the part: the ear lies across the sharp edge (on
-// the wall side of a rounded rim its plane is the top's, facing away), and the split's quads
-// there fold. Each ear's chord is flipped with the triangle across it, (a, b, c), (b, a, dd) ->
-// (a, dd, c), (dd, b, c), so that the chain vertex c is joined to the side's vertex dd, when the
-// new edge is new and both new triangles face within 60 degrees of the triangle across (which
-// lies on the side). Returns the flips made.
+// part) the chord leaves the triangle's side of the part: on the wall side of a rounded rim the
+// ear's plane is the top's, facing away from the wall, and the split's three quads lie along the
+// sharp edge, folded over onto the top (fandisk's bottom rim at --target-faces 300: 180 degrees
+// between the fitted normals across a 90 degree edge). An ear that faces more than 60 degrees
+// away from the triangle across its chord (which lies on the side) has the chord flipped,
+// (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c), joining the chain vertex c to the side's
+// vertex dd, when dd is on no feature (not across a wall one quad high), the new edge is new and
+// both new triangles face within 60 degrees of the triangle across. An ear lying on its side
+// (on the top, inside the arc) is left as it is. Returns the flips made.
 template <class IsFeature>
 int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
               IsFeature&& coarse_feature) {
@@ -1185,9 +1188,10 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
           if (tris[j][m] != a && tris[j][m] != b) dd = tris[j][m];
         if (dd < 0 || dd == c || half.count(half_key(c, dd)) || half.count(half_key(dd, c))) continue;
         if (fl.kind[dense_of[dd]] != 0) continue;  // the side's vertex (not across a wall one quad high)
-        const V3 side = normal(b, a, dd), n1 = normal(a, dd, c), n2 = normal(dd, b, c);
+        const V3 side = normal(b, a, dd), n1 = normal(a, dd, c), n2 = normal(dd, b, c), ear = normal(a, b, c);
         const double ls = side.norm();
         if (!(ls > 0) || n1.dot(side) <= 0.5 * n1.norm() * ls || n2.dot(side) <= 0.5 * n2.norm() * ls) continue;
+        if (ear.dot(side) > 0.5 * ear.norm() * ls) continue;  // the ear lies on the side: left as it is
         for (int t : {int(i), j})
           for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
         tris[i] = {a, dd, c};
