@@ -1152,6 +1152,61 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
   return flips;
 }
 
+// Ears: a coarse triangle whose two edges are consecutive edges of one feature chain (a, c, b:
+// c a chain vertex that is no corner) and whose third edge a - b is no feature edge lies along
+// the chain, its third edge a chord of it. Where the chain bends (a rim rounding a corner of the
+// part) the chord leaves the triangle's side of the part: on the wall side of a rounded rim the
+// ear's plane is the top's, facing away from the wall, and the split's three quads lie along the
+// sharp edge, folded over onto the top (fandisk's bottom rim at --target-faces 300: 180 degrees
+// between the fitted normals across a 90 degree edge). An ear that faces more than 60 degrees
+// away from the triangle across its chord (which lies on the side) has the chord flipped,
+// (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c), joining the chain vertex c to the side's
+// vertex dd, when dd is on no feature (not across a wall one quad high), the new edge is new and
+// both new triangles face within 60 degrees of the triangle across. An ear lying on its side
+// (on the top, inside the arc) is left as it is. Returns the flips made.
+template <class IsFeature>
+int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
+              IsFeature&& coarse_feature) {
+  std::unordered_map<std::uint64_t, int> half;  // directed edge -> triangle
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+  auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
+  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
+  int flips = 0;
+  for (int pass = 0; pass < 10; ++pass) {
+    int changed = 0;
+    for (size_t i = 0; i < tris.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
+        if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b) || !coarse_feature(b, c) || !coarse_feature(c, a))
+          continue;
+        auto it = half.find(half_key(b, a));
+        if (it == half.end()) continue;
+        const int j = it->second;
+        int dd = -1;
+        for (int m = 0; m < 3; ++m)
+          if (tris[j][m] != a && tris[j][m] != b) dd = tris[j][m];
+        if (dd < 0 || dd == c || half.count(half_key(c, dd)) || half.count(half_key(dd, c))) continue;
+        if (fl.kind[dense_of[dd]] != 0) continue;  // the side's vertex (not across a wall one quad high)
+        const V3 side = normal(b, a, dd), n1 = normal(a, dd, c), n2 = normal(dd, b, c), ear = normal(a, b, c);
+        const double ls = side.norm();
+        if (!(ls > 0) || n1.dot(side) <= 0.5 * n1.norm() * ls || n2.dot(side) <= 0.5 * n2.norm() * ls) continue;
+        if (ear.dot(side) > 0.5 * ear.norm() * ls) continue;  // the ear lies on the side: left as it is
+        for (int t : {int(i), j})
+          for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
+        tris[i] = {a, dd, c};
+        tris[j] = {dd, b, c};
+        for (int t : {int(i), j})
+          for (int m = 0; m < 3; ++m) half[half_key(tris[t][m], tris[t][(m + 1) % 3])] = t;
+        ++changed;
+        break;
+      }
+    flips += changed;
+    if (changed == 0) break;
+  }
+  return flips;
+}
+
 // Pairs the coarse triangles into quads (diagonal edges first, never across a feature edge);
 // returns the quads, then the unpaired triangles; `quads` their count.
 template <class IsFeature>
@@ -1417,6 +1472,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);
       auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
       if (options.regularize_valence) st.flips = flip_to_regular_valence(d, fl, tris, dense_of, coarse_feature);
+      flip_ears(d, fl, tris, dense_of, coarse_feature);  // always: an ear folds the cage
       const std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
       st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;

@@ -299,6 +299,58 @@ TEST(QuadRemesh, QuadsBesideTightArcsStayOnTheirFace) {
     }
 }
 
+// An ear along a rounded rim (fandisk's bottom rim at --target-faces 300): a coarse triangle
+// whose three corners are consecutive vertices of one rim chain (two of its edges rim edges, the
+// third a chord of the rim's arc). On the wall side its plane is the cap's and it faces away
+// from the wall: its three split quads lie along the sharp edge, folded over onto the cap, and
+// the fit turns the normals across the crease by 180 degrees. The oracle is the slab's exact
+// geometry: no cage quad may have all four vertices on one rim (the rim of the caps z = +-h at
+// the rounded square's outline), and every quad whose vertices all lie on a cap faces that
+// cap's normal (+-z) within 60 degrees. This slab (rounded corners of radius 0.25, 12 wall
+// layers, 400 quads) made an ear at a bottom arc before the ears were flipped (3 quads along
+// the rim).
+TEST(QuadRemesh, NoEarAlongARoundedRim) {
+  const double rho = 0.25, h = 0.3, tol = 2e-3;
+  MeshInput m = test::rounded_slab(rho, h, 128, 12, 12);
+  QuadRemeshResult r = remesh(m, 400);
+  check_cage(m, r, 400);
+  auto outline = [&](const P3& p) {  // signed distance to the rounded square's outline
+    const double qx = std::abs(p[0]) - (1 - rho), qy = std::abs(p[1]) - (1 - rho);
+    return std::hypot(std::max(qx, 0.0), std::max(qy, 0.0)) + std::min(std::max(qx, qy), 0.0) - rho;
+  };
+  auto on_cap = [&](const P3& p, double side) { return std::abs(p[2] - side * h) < 1e-9 && outline(p) < tol; };
+  auto on_rim = [&](const P3& p, double side) { return on_cap(p, side) && std::abs(outline(p)) < tol; };
+  int along_rim = 0, facing_away = 0, on_caps = 0;
+  for (int q = 0; q < r.cage.num_faces(); ++q) {
+    P3 c[4];
+    for (int k = 0; k < 4; ++k) c[k] = r.cage.positions[r.cage.face_indices[4 * q + k]];
+    for (double side : {-1.0, 1.0}) {
+      bool rim = true, cap = true;
+      for (const P3& p : c) rim &= on_rim(p, side), cap &= on_cap(p, side);
+      if (rim) {
+        ++along_rim;
+        std::printf("    quad %d along the rim z = %g at (%.3f %.3f)\n", q, side * h, c[0][0], c[0][1]);
+      }
+      if (!cap) continue;
+      ++on_caps;
+      double nz = 0, len2 = 0;  // Newell's normal
+      P3 n{0, 0, 0};
+      for (int k = 0; k < 4; ++k) {
+        const P3 &a = c[k], &b = c[(k + 1) % 4];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+      }
+      for (double x : n) len2 += x * x;
+      nz = side * n[2];
+      if (!(nz > 0.5 * std::sqrt(len2))) ++facing_away;
+    }
+  }
+  EXPECT_GT(on_caps, 0);
+  EXPECT_EQ(along_rim, 0) << "cage quads lying along a sharp rim (an ear's split)";
+  EXPECT_EQ(facing_away, 0) << "cap quads facing more than 60 degrees away from their cap's normal";
+}
+
 // The coarse edge flips (regularize_valence) keep the topology and the features, and do not add
 // irregular vertices: on the torus (Euler characteristic 0: a cage without extraordinary
 // vertices exists) and on the drilled box (8 corners, 14 feature curves), with flips the cage has
