@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "core/mesh/poly_mesh.h"
+#include "core/remesh/quad_cleanup.h"
 #include "core/util/error.h"
 
 namespace subd2nurbs {
@@ -1473,8 +1474,22 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
       if (options.regularize_valence) st.flips = flip_to_regular_valence(d, fl, tris, dense_of, coarse_feature);
       flip_ears(d, fl, tris, dense_of, coarse_feature);  // always: an ear folds the cage
-      const std::vector<std::vector<int>> polygons =
+      std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
+      if (options.cleanup) {  // quad-dominant clean-up (core/remesh/quad_cleanup.h, docs/remesh.md step 6b)
+        std::vector<V3> positions, normals;
+        std::vector<char> corner;
+        for (int v : dense_of) {
+          positions.push_back(d.p[v]);
+          normals.push_back(fl.normal[v]);
+          corner.push_back(fl.kind[v] == 2 ? 1 : 0);
+        }
+        const QuadCleanupStats cs = clean_quad_dominant(polygons, positions, normals, corner, coarse_feature);
+        st.cleanup_rotations = cs.rotations;
+        st.cleanup_merges = cs.merges;
+        st.coarse_quads = static_cast<int>(std::count_if(polygons.begin(), polygons.end(),
+                                                         [](const std::vector<int>& p) { return p.size() == 4; }));
+      }
       st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
       check(0.92);
       result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);

@@ -20,6 +20,7 @@ struct QuadRemeshOptions {
   double curvature_alignment = 1.0;  ///< weight of principal-curvature alignment of the cross field (0 = off)
   int smoothing_iterations = 0;      ///< 0 = automatic
   bool regularize_valence = true;    ///< edge flips on the coarse triangles before pairing (fewer extraordinary vertices)
+  bool cleanup = true;  ///< quad-dominant clean-up of the coarse quads and triangles before the split (core/remesh/quad_cleanup.h)
   /// Soft features (FeatureOptions::soft_angle_degrees): edges bending by more than this fraction
   /// of the feature angle, with the bend concentrated within the cage's edge length, are
   /// features too (used when features.soft_angle_degrees and soft_reach are 0; 0 = off).
@@ -38,6 +39,8 @@ struct QuadRemeshStats {
   int coarse_triangles = 0;    ///< triangles left unpaired after the extraction (each becomes 3 quads)
   int coarse_quads = 0;        ///< quads paired by the extraction (each becomes 4 quads)
   int flips = 0;               ///< coarse edges flipped towards regular valences (regularize_valence)
+  int cleanup_rotations = 0;   ///< coarse edges rotated by the clean-up (cleanup)
+  int cleanup_merges = 0;      ///< pairs of coarse triangles merged into quads by the clean-up
   int attempts = 0;            ///< position field + extraction runs (2: the first gave > 1.3x the faces asked for)
 };
 
