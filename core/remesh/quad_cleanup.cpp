@@ -45,8 +45,12 @@ class Cleaner {
     valence_.assign(p_.size(), 0);
     boundary_.assign(p_.size(), 0);
     for (size_t i = 0; i < faces_.size(); ++i) add_face(static_cast<int>(i));
-    for (const auto& [key, e] : edges_)
-      if (e[0] < 0 || e[1] < 0) boundary_[key >> 32] = boundary_[key & 0xffffffffu] = 1;
+    on_curve_.assign(p_.size(), 0);
+    for (const auto& [key, e] : edges_) {
+      const int a = int(key >> 32), b = int(key & 0xffffffffu);
+      if (e[0] < 0 || e[1] < 0) boundary_[a] = boundary_[b] = 1;
+      if (e[0] < 0 || e[1] < 0 || feature_(a, b)) on_curve_[a] = on_curve_[b] = 1;
+    }
     cos_normal_ = std::cos(opt_.max_normal_degrees * kPi / 180);
   }
 
@@ -81,6 +85,7 @@ class Cleaner {
   std::unordered_map<std::uint64_t, std::array<int, 2>> edges_;  // edge -> its faces (-1: none); lookups only
   std::vector<int> valence_;
   std::vector<char> boundary_;  // fixed: only interior edges change
+  std::vector<char> on_curve_;  // on a boundary or feature edge (fixed too)
   double cos_normal_ = 0.5;
 
   Energy vertex_energy(int v, int change) const {
@@ -144,7 +149,23 @@ class Cleaner {
   }
   // A new face: convex with corner sines >= the minimum, facing within the angle of `ref` (the
   // old faces' normal) and of its corners' surface normals.
-  bool good_face(const Poly& f, const V3& ref) const {
+  // The smallest corner sine of a face (about its Newell normal; -1 if degenerate or not convex).
+  double worst_sine(const Poly& f) const {
+    V3 n = newell(f);
+    const double ln = n.norm();
+    if (!(ln > 0)) return -1;
+    n /= ln;
+    const size_t m = f.size();
+    double worst = 1;
+    for (size_t k = 0; k < m; ++k) {
+      const V3 a = p_[f[(k + 1) % m]] - p_[f[k]], b = p_[f[(k + m - 1) % m]] - p_[f[k]];
+      const double la = a.norm(), lb = b.norm();
+      if (!(la > 0) || !(lb > 0)) return -1;
+      worst = std::min(worst, a.cross(b).dot(n) / (la * lb));
+    }
+    return worst;
+  }
+  bool good_face(const Poly& f, const V3& ref, double min_sine) const {
     V3 n = newell(f);
     const double ln = n.norm();
     if (!(ln > 0)) return false;
@@ -153,13 +174,7 @@ class Cleaner {
     V3 mean = V3::Zero();
     for (int v : f) mean += n_[v];
     if (n.dot(mean) <= cos_normal_ * mean.norm()) return false;
-    const size_t m = f.size();
-    for (size_t k = 0; k < m; ++k) {
-      const V3 a = p_[f[(k + 1) % m]] - p_[f[k]], b = p_[f[(k + m - 1) % m]] - p_[f[k]];
-      const double la = a.norm(), lb = b.norm();
-      if (!(la > 0) || !(lb > 0) || a.cross(b).dot(n) < opt_.min_corner_sine * la * lb) return false;
-    }
-    return true;
+    return worst_sine(f) >= min_sine;
   }
 
   // The energy change of op (faces f, g -> nf, ng) from the valences of the edges it removes and adds.
@@ -187,7 +202,11 @@ class Cleaner {
     for (size_t i = 0; i < change.size();) {
       int v = change[i].first, c = 0;
       for (; i < change.size() && change[i].first == v; ++i) c += change[i].second;
-      d = d + (vertex_energy(v, c) - vertex_energy(v, 0));
+      const Energy dv = vertex_energy(v, c) - vertex_energy(v, 0);
+      // a vertex on a feature curve or the boundary never gets more irregular: the faces beside
+      // the curve keep one side each (a face bent around it makes the crease's limit normal poor)
+      if (on_curve_[v] && dv.excess > 0) return {1 << 20, 0};
+      d = d + dv;
     }
     d = d + face_energy(static_cast<int>(op.nf.size())) - face_energy(static_cast<int>(faces_[op.f].size())) -
         face_energy(static_cast<int>(faces_[op.g].size()));
@@ -212,6 +231,9 @@ class Cleaner {
     for (int k = 2; k < ng; ++k) P.push_back(G[(j + k) % ng]);
     const int n = static_cast<int>(P.size());
     const V3 ref = newell(F).normalized() + newell(G).normalized();
+    // new faces: at least the minimum sine, and no worse than the old pair's worst or keep_sine
+    const double min_sine =
+        std::max(opt_.min_corner_sine, std::min(opt_.keep_sine, std::min(worst_sine(F), worst_sine(G))));
     auto piece = [&](int from, int to) {
       Poly q;
       for (int k = from;; k = (k + 1) % n) {
@@ -220,7 +242,7 @@ class Cleaner {
       }
       return q;
     };
-    if (nf == 3 && ng == 3 && good_face(P, ref)) out.push_back({f, g, P, {}});
+    if (nf == 3 && ng == 3 && good_face(P, ref, min_sine)) out.push_back({f, g, P, {}});
     for (int p = 0; p < n; ++p)
       for (int q = p + 2; q < n; ++q) {
         if (p == 0 && q == n - 1) continue;   // adjacent
@@ -234,7 +256,7 @@ class Cleaner {
           const Poly& tri = x.size() == 3 ? x : y;
           if (std::count(tri.begin(), tri.end(), far_from)) continue;
         }
-        if (!good_face(x, ref) || !good_face(y, ref)) continue;
+        if (!good_face(x, ref, min_sine) || !good_face(y, ref, min_sine)) continue;
         out.push_back({f, g, std::move(x), std::move(y)});
       }
   }
