@@ -242,7 +242,8 @@ class Cleaner {
       }
       return q;
     };
-    if (nf == 3 && ng == 3 && good_face(P, ref, min_sine)) out.push_back({f, g, P, {}});
+    // two triangles into a quad: held to the pairing's minimum only (as the extraction's own pairs)
+    if (nf == 3 && ng == 3 && good_face(P, ref, opt_.min_corner_sine)) out.push_back({f, g, P, {}});
     for (int p = 0; p < n; ++p)
       for (int q = p + 2; q < n; ++q) {
         if (p == 0 && q == n - 1) continue;   // adjacent

@@ -376,6 +376,48 @@ TEST(QuadRemesh, ValenceFlipsKeepTopologyAndLowerIrregularity) {
   }
 }
 
+// The quad-dominant clean-up (cleanup, core/remesh/quad_cleanup.h) on the remesher's own coarse
+// meshes: the torus (Euler characteristic 0: a cage without extraordinary vertices exists) and the
+// drilled box (8 corners, 14 feature curves) get strictly fewer extraordinary vertices than
+// without it, keep their topology (check_cage), and the features are untouched: the same tagged
+// edges (as pairs of end positions) and the same corners as without the pass.
+TEST(QuadRemesh, CleanupLowersExtraordinaryVerticesAndKeepsFeatures) {
+  using EdgeAt = std::pair<P3, P3>;
+  auto tagged = [](const MeshInput& c) {
+    std::set<EdgeAt> e;
+    for (const auto& k : c.creases) e.insert(std::minmax(c.positions[k.v0], c.positions[k.v1]));
+    return e;
+  };
+  auto corners = [](const MeshInput& c) {
+    std::set<P3> v;
+    for (const auto& k : c.corners) v.insert(c.positions[k.vertex]);
+    return v;
+  };
+  for (int shape = 0; shape < 2; ++shape) {
+    MeshInput m = shape == 0 ? test::torus(2, 0.7, 90, 36) : test::drilled_box(0.4, 64, 8, 16);
+    QuadRemeshOptions o;
+    o.target_faces = 400;
+    o.cleanup = false;
+    QuadRemeshResult off = quad_remesh(m, o);
+    o.cleanup = true;
+    QuadRemeshResult on = quad_remesh(m, o);
+    check_cage(m, off, 400);
+    check_cage(m, on, 400);
+    EXPECT_EQ(off.stats.cleanup_rotations + off.stats.cleanup_merges, 0);
+    EXPECT_GT(on.stats.cleanup_rotations + on.stats.cleanup_merges, 0);
+    EXPECT_LT(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices) << "shape " << shape;
+    EXPECT_EQ(tagged(on.cage), tagged(off.cage)) << "shape " << shape;
+    EXPECT_EQ(corners(on.cage), corners(off.cage)) << "shape " << shape;
+    // merges only remove interior coarse edges: each removes one coarse quad's worth of faces
+    // (two triangles, 3 + 3 cage faces, become one quad, 4)
+    EXPECT_EQ(on.stats.coarse_quads + on.stats.coarse_triangles,
+              off.stats.coarse_quads + off.stats.coarse_triangles - on.stats.cleanup_merges);
+    std::printf("  shape %d: %d rotations, %d merges, extraordinary vertices %d -> %d, unpaired triangles %d -> %d\n",
+                shape, on.stats.cleanup_rotations, on.stats.cleanup_merges, off.stats.extraordinary_vertices,
+                on.stats.extraordinary_vertices, off.stats.coarse_triangles, on.stats.coarse_triangles);
+  }
+}
+
 TEST(QuadRemesh, Deterministic) {
   MeshInput m = test::drilled_box(0.4, 32, 6, 8);
   QuadRemeshResult a = remesh(m, 250), b = remesh(m, 250);
