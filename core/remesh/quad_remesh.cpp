@@ -1484,7 +1484,9 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
           normals.push_back(fl.normal[v]);
           corner.push_back(fl.kind[v] == 2 ? 1 : 0);
         }
+        const auto t_cleanup = Clock::now();
         const QuadCleanupStats cs = clean_quad_dominant(polygons, positions, normals, corner, coarse_feature);
+        st.cleanup_seconds += seconds_since(t_cleanup);
         st.cleanup_rotations = cs.rotations;
         st.cleanup_merges = cs.merges;
         st.coarse_quads = static_cast<int>(std::count_if(polygons.begin(), polygons.end(),

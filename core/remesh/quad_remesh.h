@@ -41,6 +41,7 @@ struct QuadRemeshStats {
   int flips = 0;               ///< coarse edges flipped towards regular valences (regularize_valence)
   int cleanup_rotations = 0;   ///< coarse edges rotated by the clean-up (cleanup)
   int cleanup_merges = 0;      ///< pairs of coarse triangles merged into quads by the clean-up
+  double cleanup_seconds = 0;  ///< wall time of the clean-up (part of extract_seconds)
   int attempts = 0;            ///< position field + extraction runs (2: the first gave > 1.3x the faces asked for)
 };
 
