@@ -149,8 +149,9 @@ class Cleaner {
   }
   // A new face: convex with corner sines >= the minimum, facing within the angle of `ref` (the
   // old faces' normal) and of its corners' surface normals.
-  // The smallest corner sine of a face (about its Newell normal; -1 if degenerate or not convex).
-  double worst_sine(const Poly& f) const {
+  // The smallest corner sine of a face (about its Newell normal; -1 if degenerate or not convex);
+  // curve_only: at its vertices on a feature curve or the boundary only (1 if none).
+  double worst_sine(const Poly& f, bool curve_only = false) const {
     V3 n = newell(f);
     const double ln = n.norm();
     if (!(ln > 0)) return -1;
@@ -161,11 +162,12 @@ class Cleaner {
       const V3 a = p_[f[(k + 1) % m]] - p_[f[k]], b = p_[f[(k + m - 1) % m]] - p_[f[k]];
       const double la = a.norm(), lb = b.norm();
       if (!(la > 0) || !(lb > 0)) return -1;
+      if (curve_only && !on_curve_[f[k]]) continue;
       worst = std::min(worst, a.cross(b).dot(n) / (la * lb));
     }
     return worst;
   }
-  bool good_face(const Poly& f, const V3& ref, double min_sine) const {
+  bool good_face(const Poly& f, const V3& ref, double min_sine, double curve_sine) const {
     V3 n = newell(f);
     const double ln = n.norm();
     if (!(ln > 0)) return false;
@@ -174,7 +176,7 @@ class Cleaner {
     V3 mean = V3::Zero();
     for (int v : f) mean += n_[v];
     if (n.dot(mean) <= cos_normal_ * mean.norm()) return false;
-    return worst_sine(f) >= min_sine;
+    return worst_sine(f) >= min_sine && worst_sine(f, true) >= curve_sine;
   }
 
   // The energy change of op (faces f, g -> nf, ng) from the valences of the edges it removes and adds.
@@ -234,6 +236,10 @@ class Cleaner {
     // new faces: at least the minimum sine, and no worse than the old pair's worst or keep_sine
     const double min_sine =
         std::max(opt_.min_corner_sine, std::min(opt_.keep_sine, std::min(worst_sine(F), worst_sine(G))));
+    // at feature-curve and boundary vertices: no worse than the old faces there, or curve_sine
+    // (a face meeting a crease at a small angle makes the crease's limit normal ill-conditioned)
+    const double curve_sine = std::max(
+        min_sine, std::min(opt_.curve_sine, std::min(worst_sine(F, true), worst_sine(G, true))));
     auto piece = [&](int from, int to) {
       Poly q;
       for (int k = from;; k = (k + 1) % n) {
@@ -243,7 +249,7 @@ class Cleaner {
       return q;
     };
     // two triangles into a quad: held to the pairing's minimum only (as the extraction's own pairs)
-    if (nf == 3 && ng == 3 && good_face(P, ref, opt_.min_corner_sine)) out.push_back({f, g, P, {}});
+    if (nf == 3 && ng == 3 && good_face(P, ref, opt_.min_corner_sine, curve_sine)) out.push_back({f, g, P, {}});
     for (int p = 0; p < n; ++p)
       for (int q = p + 2; q < n; ++q) {
         if (p == 0 && q == n - 1) continue;   // adjacent
@@ -257,7 +263,7 @@ class Cleaner {
           const Poly& tri = x.size() == 3 ? x : y;
           if (std::count(tri.begin(), tri.end(), far_from)) continue;
         }
-        if (!good_face(x, ref, min_sine) || !good_face(y, ref, min_sine)) continue;
+        if (!good_face(x, ref, min_sine, curve_sine) || !good_face(y, ref, min_sine, curve_sine)) continue;
         out.push_back({f, g, std::move(x), std::move(y)});
       }
   }

@@ -15,6 +15,7 @@ namespace subd2nurbs {
 struct QuadCleanupOptions {
   double min_corner_sine = 0.2;     ///< every new face: the smallest corner sine (convex, not degenerate)
   double keep_sine = 0.3;           ///< ... and at least min(keep_sine, the replaced faces' smallest corner sine)
+  double curve_sine = 0.9;          ///< ... at vertices on feature curves or the boundary: min(curve_sine, the replaced faces' smallest there)
   double max_normal_degrees = 60;   ///< every new face within this of the old faces' normal and of its corners' normals
   int walk_depth = 3;               ///< rotations a triangle may make to meet another (0: no walks)
   int max_passes = 20;

@@ -1476,6 +1476,8 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       flip_ears(d, fl, tris, dense_of, coarse_feature);  // always: an ear folds the cage
       std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
+      int split_faces = 0;  // the cage's faces without the clean-up: the size check's count
+      for (const auto& polygon : polygons) split_faces += static_cast<int>(polygon.size());
       if (options.cleanup) {  // quad-dominant clean-up (core/remesh/quad_cleanup.h, docs/remesh.md step 6b)
         std::vector<V3> positions, normals;
         std::vector<char> corner;
@@ -1496,7 +1498,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       check(0.92);
       result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
-      double ratio = result.cage.num_faces() * h * h / area;
+      double ratio = split_faces * h * h / area;
       st.attempts = attempt + 1;
       if (attempt == 0 && ratio > 1.3) {
         s *= std::sqrt(ratio);
