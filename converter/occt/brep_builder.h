@@ -50,7 +50,8 @@ struct BrepOptions {
 /// faces, see BrepOptions), then a shell, and a solid when
 /// ps.closed. Checks the result with BRepCheck_Analyzer (see BrepResult::valid).
 ///
-/// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given), each
+/// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given;
+/// periodic in a direction the face closes in, see BrepOptions::periodic_closed_faces), each
 /// BoundaryCurve a Geom_BSplineCurve (its poles; its knots mapped linearly onto the edge's
 /// range), and each use of a curve a pcurve on the patch's parameter-domain side. Edges are
 /// made as OCCT makes its own (BRepBuilderAPI_MakeFace, BRepPrimAPI_MakeTorus): the edge's
