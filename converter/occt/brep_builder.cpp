@@ -108,6 +108,25 @@ Handle(Geom_BSplineSurface) make_surface(const NurbsPatch& patch, int index) {
   });
 }
 
+/// A face whose surface closes onto itself along a seam (the same curve on its sides 1 and 3:
+/// closed in u; on sides 0 and 2: closed in v; a packed cylinder's side, a torus, a polar cap)
+/// gets its surface made periodic in that direction, as OCCT's own closed faces are: the same
+/// poles and knots but the repeated pole row, i.e. the same surface, and the same parameter
+/// range, so the pcurves along the sides (the seam's two lines at the range's ends) are those
+/// of the clamped surface. OCCT's offset and shell algorithms extend a face's surface before
+/// intersecting it with its neighbours; a clamped closed B-spline is taken whole (both ends of
+/// the seam, wrapping round), a periodic one over the face's own range plus a margin
+/// (BRepOffset_Tool::EnLargeFace), which is what lets a cut-then-shell through a wrapping
+/// face succeed (docs/downstream.md).
+void make_closed_periodic(const NurbsPatch& patch, const Handle(Geom_BSplineSurface)& surface, int index) {
+  guarded("surface", index, [&] {
+    if (patch.curves[1] >= 0 && patch.curves[1] == patch.curves[3] && surface->IsUClosed())
+      surface->SetUPeriodic();
+    if (patch.curves[0] >= 0 && patch.curves[0] == patch.curves[2] && surface->IsVClosed())
+      surface->SetVPeriodic();
+  });
+}
+
 /// The 3D curve of an edge: the curve's poles with its knots mapped affinely onto `range`
 /// (the edge's parameter range, see edge_parameter_range), so the same curve, reparametrized linearly.
 Handle(Geom_BSplineCurve) make_curve(const BoundaryCurve& curve, int index, int patch,
@@ -635,6 +654,8 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
   const int step = std::max(1, num_patches / 100);
   for (int p = 0; p < num_patches; ++p) {
     surfaces[p] = make_surface(ps.patches[p], p);
+    if (planar.face_of_patch[p] < 0 && options.periodic_closed_faces)
+      make_closed_periodic(ps.patches[p], surfaces[p], p);
     if (planar.face_of_patch[p] < 0)
       guarded("face", p, [&] { make_face(ps, p, surfaces[p], shared, builder, tol, faces[p]); });
     if (progress && ((p + 1) % step == 0 || p + 1 == num_patches))

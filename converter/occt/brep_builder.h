@@ -39,13 +39,19 @@ struct BrepOptions {
   /// Geom_Plane, bounded by the set's outer curves (core/patch/planar_faces.h); false: one face
   /// per patch. The pipeline turns it on for packed faces (setting planar_faces).
   bool merge_planar = false;
+  /// A face that closes onto itself along a seam (a packed cylinder's side, a torus, a polar
+  /// cap) gets a periodic surface in that direction (the same surface and parameter range),
+  /// as OCCT's own closed faces have; OCCT's shell and offset algorithms need it
+  /// (docs/downstream.md). false: the clamped B-spline as the PatchSet gives it.
+  bool periodic_closed_faces = true;
 };
 
 /// Builds the faces of `ps` with shared edges and vertices (coplanar patches merged into planar
 /// faces, see BrepOptions), then a shell, and a solid when
 /// ps.closed. Checks the result with BRepCheck_Analyzer (see BrepResult::valid).
 ///
-/// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given), each
+/// Geometry: each patch becomes a Geom_BSplineSurface (rational when weights are given;
+/// periodic in a direction the face closes in, see BrepOptions::periodic_closed_faces), each
 /// BoundaryCurve a Geom_BSplineCurve (its poles; its knots mapped linearly onto the edge's
 /// range), and each use of a curve a pcurve on the patch's parameter-domain side. Edges are
 /// made as OCCT makes its own (BRepBuilderAPI_MakeFace, BRepPrimAPI_MakeTorus): the edge's

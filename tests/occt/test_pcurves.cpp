@@ -13,6 +13,7 @@
 #include <GProp_GProps.hxx>
 #include <Geom2d_Line.hxx>
 #include <Geom_Curve.hxx>
+#include <Geom_BSplineSurface.hxx>
 #include <Geom_Plane.hxx>
 #include <Geom_Surface.hxx>
 #include <TopExp.hxx>
@@ -139,6 +140,42 @@ TEST(Pcurves, ClosedTorusFaceCutFlatThenShelled) {
     BRepGProp::VolumeProperties(thick.Shape(), v);
     EXPECT_NEAR(v.Mass(), kept_area * t, 0.08 * kept_area * t);
   }
+}
+
+
+// A face that closes onto itself (the one-face torus: seams in u and v) gets a periodic
+// surface in each closed direction, as OCCT's own closed faces: the same surface (sampled
+// against the clamped B-spline the PatchSet gives, BrepOptions::periodic_closed_faces = false)
+// over the same parameter range, so the pcurves are the same lines.
+TEST(Pcurves, ClosedFacesArePeriodicWithTheSameSurface) {
+  const PatchSet ps = as_packed(bspline_torus(1, 1));
+  BrepOptions clamped_options;
+  clamped_options.periodic_closed_faces = false;
+  const BrepResult periodic = build_brep(ps), clamped = build_brep(ps, {}, clamped_options);
+  ASSERT_TRUE(periodic.valid) << periodic.check_message;
+  ASSERT_TRUE(clamped.valid) << clamped.check_message;
+  TopExp_Explorer fp(periodic.shape, TopAbs_FACE), fc(clamped.shape, TopAbs_FACE);
+  ASSERT_TRUE(fp.More() && fc.More());
+  const auto sp = Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(TopoDS::Face(fp.Current())));
+  const auto sc = Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(TopoDS::Face(fc.Current())));
+  ASSERT_FALSE(sp.IsNull() || sc.IsNull());
+  EXPECT_TRUE(sp->IsUPeriodic());
+  EXPECT_TRUE(sp->IsVPeriodic());
+  EXPECT_FALSE(sc->IsUPeriodic());
+  EXPECT_FALSE(sc->IsVPeriodic());
+  double a0, a1, b0, b1, c0, c1, d0, d1;
+  sp->Bounds(a0, a1, b0, b1);
+  sc->Bounds(c0, c1, d0, d1);
+  EXPECT_EQ(a0, c0);
+  EXPECT_EQ(a1, c1);
+  EXPECT_EQ(b0, d0);
+  EXPECT_EQ(b1, d1);
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) {
+      const double u = c0 + (c1 - c0) * i / 20, v = d0 + (d1 - d0) * j / 20;
+      EXPECT_LT(sp->Value(u, v).Distance(sc->Value(u, v)), 1e-12 * ps.model_size) << u << " " << v;
+    }
+  EXPECT_EQ(check_pcurves(periodic.shape, ps.model_size), 4);
 }
 
 }  // namespace
