@@ -654,10 +654,10 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
   const int step = std::max(1, num_patches / 100);
   for (int p = 0; p < num_patches; ++p) {
     surfaces[p] = make_surface(ps.patches[p], p);
-    if (planar.face_of_patch[p] < 0 && options.periodic_closed_faces)
-      make_closed_periodic(ps.patches[p], surfaces[p], p);
-    if (planar.face_of_patch[p] < 0)
+    if (planar.face_of_patch[p] < 0) {
+      if (options.periodic_closed_faces) make_closed_periodic(ps.patches[p], surfaces[p], p);
       guarded("face", p, [&] { make_face(ps, p, surfaces[p], shared, builder, tol, faces[p]); });
+    }
     if (progress && ((p + 1) % step == 0 || p + 1 == num_patches))
       progress(static_cast<double>(p + 1) / num_patches);
   }

@@ -52,14 +52,25 @@ def _property_choices(row):
     return None
 
 
+def property_default(row):
+    """The value a row's number property starts at: the setting's default in the property's
+    unit; None for an enumeration (its first choice) and where the property starts at 0 (0 means
+    the default, or the setting has no number default)."""
+    p = row["property"]
+    if row["default"] is None or _property_choices(row) is not None or p["zero_is_default"]:
+        return None
+    return row["default"] / p["scale"] if p["scale"] != 1 else row["default"]
+
+
 def add_setting_properties(obj):
     """One property per row of SETTING_ROWS (those the object has are kept); a new one starts at
     the setting's default (0 where 0 means the default)."""
     for row in SETTING_ROWS:
         p = row["property"]
         if _add(obj, _property_kind(row), p["name"], p["group"], p["tooltip"], choices=_property_choices(row)):
-            if row["default"] is not None and _property_choices(row) is None and not p["zero_is_default"]:
-                setattr(obj, p["name"], row["default"] / p["scale"] if p["scale"] != 1 else row["default"])
+            value = property_default(row)
+            if value is not None:
+                setattr(obj, p["name"], value)
 
 
 def settings_of(values):

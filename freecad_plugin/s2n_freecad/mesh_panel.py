@@ -22,14 +22,6 @@ from . import api, features
 PANEL_SETTINGS = ("target_faces", "edge_length", "fit_tolerance", "feature_angle", "tolerance")
 
 
-def _default(row):
-    """A property's value for "the setting's default" (0 where 0 means the default)."""
-    p = row["property"]
-    if p["zero_is_default"] or row["default"] is None:
-        return 0
-    return row["default"] / p["scale"] if p["scale"] != 1 else row["default"]
-
-
 def summary_lines(result):
     """The preview's lines for people: the cage made from the mesh, how its size was chosen, its
     distance to the mesh, the kept sharp edges, the NURBS object's faces and poles."""
@@ -79,7 +71,8 @@ class MeshConversion:
         self.doc = source.Document
         rows = {row["name"]: row for row in features.SETTING_ROWS}
         self.rows = [rows[name] for name in PANEL_SETTINGS]
-        self.values = {row["property"]["name"]: _default(row) for row in self.rows}
+        # A new NURBS object's values (features.property_default; 0 where 0 means the default).
+        self.values = {row["property"]["name"]: features.property_default(row) or 0 for row in self.rows}
         self.previewed = None  # (signature, ConversionResult) of the last preview
         self.cage_object = None
         self.lines = []

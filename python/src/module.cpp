@@ -656,11 +656,11 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
       c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
                             warnings);
     });
-  } catch (const CancelledByProgress&) {
-    raise("Cancelled", "the conversion was cancelled (the progress callback returned False)");
-    throw py::error_already_set();
+  } catch (const CancelledByProgress&) {  // a stage's callback: cancelled is set
   } catch (const Error&) {
-    if (!cancelled) throw;
+    if (!cancelled) throw;  // else the mesh path's own "cancelled", after the callback's False
+  }
+  if (cancelled) {
     raise("Cancelled", "the conversion was cancelled (the progress callback returned False)");
     throw py::error_already_set();
   }
