@@ -102,27 +102,41 @@ def op_booleans(body):
     close(fuse.Volume, va + vb - common.Volume, VOL_REL, "vol(A|B) vs vol(A) + vol(B) - vol(A&B)")
 
 
+# The largest safe thickness each way, from the report of the conversion (curvature_radius:
+# inward = convex, the shell / inward offset limit; outward = concave): issue 33 asks the
+# operations to pass "at a thickness below the reported smallest radius". run_body sets it
+# per body; None for OCCT's bodies and where the surface never curves that way.
+RADII = {"inward": None, "outward": None}
+
+
+def thickness(body, fraction, side):
+    """fraction of the diagonal, but at most half the reported smallest radius on that side."""
+    t = fraction * frame(body)[2]
+    r = RADII[side]
+    return t if r is None else min(t, 0.5 * r)
+
+
 def offset_checked(body, d):
     off = body.makeOffsetShape(d, 1e-6 * frame(body)[2], join=2)
     valid(off, "offset %g" % d)
     s = solid_of(off)
     # First order: dV = area * d; the second-order term (mean curvature) stays well inside 30 %
-    # at 1 % of the diagonal for these bodies (radii >= 10 % of the diagonal).
+    # at 1 % of the diagonal and at most half the smallest radius (thickness below).
     dv = s.Volume - body.Volume
     close(dv, body.Area * d, 0.3, "offset %g: volume change vs area * d" % d)
     return s
 
 
 def op_offset_out(body):
-    offset_checked(body, 0.01 * frame(body)[2])
+    offset_checked(body, thickness(body, 0.01, "outward"))
 
 
 def op_offset_in(body):
-    offset_checked(body, -0.01 * frame(body)[2])
+    offset_checked(body, -thickness(body, 0.01, "inward"))
 
 
 def op_hollow(body):
-    t = 0.01 * frame(body)[2]
+    t = thickness(body, 0.01, "inward")
     inner = offset_checked(body, -t)
     hollow = body.cut(inner)
     valid(hollow, "hollow")
@@ -140,7 +154,7 @@ def op_cut_shell(body):
         flats = [f for f in part.Faces if f.Surface.__class__.__name__ == "Plane"
                  and abs(f.CenterOfMass[axis] - c) < 1e-6 * diag]
         require(flats, "cut: no flat face at the cut")
-        t = 0.02 * diag
+        t = thickness(body, 0.02, "inward")
         shell = part.makeThickness(flats, -t, 1e-6 * diag)
         valid(shell, "shell (axis %d)" % axis)
         s = solid_of(shell)
@@ -230,7 +244,8 @@ def occt_bodies():
 KNOWN = set()
 
 
-def run_body(name, body):
+def run_body(name, body, radii=None):
+    RADII.update(radii or {"inward": None, "outward": None})
     outcome = {}
     for op, fn in OPS:
         try:
@@ -250,7 +265,14 @@ for item in os.environ.get("S2N_BODIES", "").split():
     shape = Part.read(path)
     if len(shape.Solids) != 1:
         fail("%s: %d solids in %s, expected one" % (name, len(shape.Solids), path))
-    results["ours"][name] = run_body(name, shape.Solids[0])
+    # The conversion's report beside the body (NAME.json): its smallest radii of curvature.
+    radii = None
+    report = os.path.splitext(path)[0] + ".json"
+    if os.path.exists(report):
+        cr = json.load(open(report))["curvature_radius"]
+        radii = {side: cr[side]["radius"] if cr.get(side) else None for side in ("inward", "outward")}
+        log("  %-18s smallest radius inward %s, outward %s" % (name, radii["inward"], radii["outward"]))
+    results["ours"][name] = run_body(name, shape.Solids[0], radii)
 for name, body in occt_bodies():
     results["occt"][name] = run_body(name, solid_of(body))
     # The same body with its faces and edges converted to B-splines by OCCT (like ours).
