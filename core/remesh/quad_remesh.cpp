@@ -1327,7 +1327,7 @@ int relocate_stuck_vertices(const Dense& d, const Fields& fl, double s, const st
       const V3 &pa = d.p[dense_of[a]], &pb = d.p[dense_of[b]];
       const double l = (pb - pa).norm();
       for (int w : poly)
-        if (w != a && w != b && fl.kind[w == v ? at : dense_of[w]] == 0) {
+        if (w == v) {
           const V3& x = corner(w, v, at);
           result = std::min(result, (x - closest_on_segment(x, pa, pb)).norm() / l);
         }
@@ -1349,6 +1349,7 @@ int relocate_stuck_vertices(const Dense& d, const Fields& fl, double s, const st
       if (!(ln > 0) || n.dot(old_normal[j]) <= 0.5 * ln || n.dot(fl.normal[at]) <= 0.5 * ln) return -1.0;
       n /= ln;
       for (int k = 0; k < m; ++k) {
+        if (poly[k] != v && poly[(k + 1) % m] != v && poly[(k + m - 1) % m] != v) continue;  // unchanged by v
         const V3& x = corner(poly[k], v, at);
         const V3 e = corner(poly[(k + 1) % m], v, at) - x, f = corner(poly[(k + m - 1) % m], v, at) - x;
         const double l = e.squaredNorm() + f.squaredNorm();
