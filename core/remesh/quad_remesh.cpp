@@ -1292,10 +1292,10 @@ std::vector<std::vector<int>> pair_triangles(const Dense& d, const Fields& fl, d
 // quarter as high as long, leave the limit normal across the crease ill-conditioned. Each such
 // vertex whose polygons touch one feature curve only (not a wall one polygon high between two
 // rims) moves to the dense vertex, on no feature and reached from it without crossing one, at
-// least 0.1 x the spacing farther from its feature neighbours, that makes the worst of its
-// polygons best: each polygon's smallest corner measure 2 (e x f) . n / (|e|^2 + |f|^2) (1 at a
-// square's corners; small at a sliver's) and, for a polygon along a feature edge, the distance of
-// its corners off the curve from that edge over the edge's length. The move must gain 0.05 (0.01
+// least 0.1 x the spacing farther from its feature neighbours, that makes the worst of what the
+// move changes best: the corner measure 2 (e x f) . n / (|e|^2 + |f|^2) (1 at a square's corners,
+// small at a sliver's) at the vertex and at the corners beside it in its polygons, and its
+// distance from each feature edge of its polygons over the edge's length. The move must gain 0.05 (0.01
 // in the later passes, where two stuck vertices side by side make room for each other), and every
 // polygon must face within 60 degrees of its old normal and of the surface's normal there. Only
 // the vertex's place changes (a coarse vertex is a dense vertex): no count, edge or feature, so
@@ -1316,8 +1316,8 @@ int relocate_stuck_vertices(const Dense& d, const Fields& fl, double s, const st
     for (int k = 0; k < m; ++k) n += corner(poly[k], v, at).cross(corner(poly[(k + 1) % m], v, at));
     return n;
   };
-  // A polygon along a feature edge: the distance of its corners off the feature curve from the
-  // edge, relative to the edge's length (1 if it has no feature edge).
+  // The distance of v (at dense vertex `at`) from each feature edge of polygon `poly`, relative
+  // to the edge's length (1 if the polygon has no feature edge without v).
   auto off_feature_edge = [&](const auto& poly, int v, int at) {
     const int m = static_cast<int>(poly.size());
     double result = 1;
