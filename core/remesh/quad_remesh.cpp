@@ -1283,6 +1283,169 @@ std::vector<std::vector<int>> pair_triangles(const Dense& d, const Fields& fl, d
   return polygons;
 }
 
+// Stuck vertices (docs/remesh.md step 6c): a coarse vertex on no feature whose lattice point is
+// that of a feature vertex beside it should have collapsed into that feature vertex, and could
+// not. Where a feature arc is tighter than the lattice spacing, the chain rule
+// (Collapser::chord_follows_chain) keeps extra chain vertices, and a side's vertex between two of
+// them stays just beside the curve (fandisk's bottom rim: a wall vertex 0.037 above a 0.105 chord,
+// 0.2 of the spacing): its polygons are slivers along the crease, and the split's quads there, a
+// quarter as high as long, leave the limit normal across the crease ill-conditioned. Each such
+// vertex whose polygons touch one feature curve only (not a wall one polygon high between two
+// rims) moves to the dense vertex, on no feature and reached from it without crossing one, at
+// least 0.1 x the spacing farther from its feature neighbours, that makes the worst of what the
+// move changes best: the corner measure 2 (e x f) . n / (|e|^2 + |f|^2) (1 at a square's corners,
+// small at a sliver's) at the vertex and at the corners beside it in its polygons, and its
+// distance from each feature edge of its polygons over the edge's length. The move must gain 0.05 (0.01
+// in the later passes, where two stuck vertices side by side make room for each other), and every
+// polygon must face within 60 degrees of its old normal and of the surface's normal there. Only
+// the vertex's place changes (a coarse vertex is a dense vertex): no count, edge or feature, so
+// the topology is kept. Returns the vertices moved.
+template <class IsFeature>
+int relocate_stuck_vertices(const Dense& d, const Fields& fl, double s, const std::vector<std::vector<int>>& polygons,
+                            std::vector<int>& dense_of, IsFeature&& coarse_feature) {
+  const int nc = static_cast<int>(dense_of.size());
+  std::vector<std::vector<int>> around(nc);  // polygons per coarse vertex
+  for (size_t i = 0; i < polygons.size(); ++i)
+    for (int v : polygons[i]) around[v].push_back(static_cast<int>(i));
+  std::vector<char> taken(d.p.size(), 0);  // dense vertices that are coarse vertices
+  for (int v : dense_of) taken[v] = 1;
+  auto corner = [&](int w, int v, int at) -> const V3& { return d.p[w == v ? at : dense_of[w]]; };
+  auto newell = [&](const auto& poly, int v, int at) {
+    V3 n = V3::Zero();
+    const int m = static_cast<int>(poly.size());
+    for (int k = 0; k < m; ++k) n += corner(poly[k], v, at).cross(corner(poly[(k + 1) % m], v, at));
+    return n;
+  };
+  // The distance of v (at dense vertex `at`) from each feature edge of polygon `poly`, relative
+  // to the edge's length (1 if the polygon has no feature edge without v).
+  auto off_feature_edge = [&](const auto& poly, int v, int at) {
+    const int m = static_cast<int>(poly.size());
+    double result = 1;
+    for (int k = 0; k < m; ++k) {
+      const int a = poly[k], b = poly[(k + 1) % m];
+      if (a == v || b == v || !coarse_feature(a, b)) continue;
+      const V3 &pa = d.p[dense_of[a]], &pb = d.p[dense_of[b]];
+      const double l = (pb - pa).norm();
+      for (int w : poly)
+        if (w == v) {
+          const V3& x = corner(w, v, at);
+          result = std::min(result, (x - closest_on_segment(x, pa, pb)).norm() / l);
+        }
+    }
+    return result;
+  };
+  // The worst corner of v's polygons with v at dense vertex `at`: 2 (e x f) . n / (|e|^2 + |f|^2)
+  // for the corner's two edges e, f and the polygon's unit normal n (1 at a square's corners,
+  // 0.87 at an equilateral triangle's; small for a sliver or a thin quad); -1 when a polygon
+  // turns by 60 degrees or more from its old normal or from the surface's normal at `at`.
+  auto worst = [&](int v, int at, const std::vector<V3>& old_normal) {
+    double result = 1;
+    for (size_t j = 0; j < around[v].size(); ++j) {
+      double pq = 1;
+      const auto& poly = polygons[around[v][j]];
+      const int m = static_cast<int>(poly.size());
+      V3 n = newell(poly, v, at);
+      const double ln = n.norm();
+      if (!(ln > 0) || n.dot(old_normal[j]) <= 0.5 * ln || n.dot(fl.normal[at]) <= 0.5 * ln) return -1.0;
+      n /= ln;
+      for (int k = 0; k < m; ++k) {
+        if (poly[k] != v && poly[(k + 1) % m] != v && poly[(k + m - 1) % m] != v) continue;  // unchanged by v
+        const V3& x = corner(poly[k], v, at);
+        const V3 e = corner(poly[(k + 1) % m], v, at) - x, f = corner(poly[(k + m - 1) % m], v, at) - x;
+        const double l = e.squaredNorm() + f.squaredNorm();
+        if (!(l > 0)) return -1.0;
+        pq = std::min(pq, 2 * e.cross(f).dot(n) / l);
+      }
+      if (pq <= 0) return -1.0;
+      pq = std::min(pq, off_feature_edge(poly, v, at));
+      result = std::min(result, pq);
+    }
+    return result;
+  };
+  // The distance from dense vertex `at` to the nearest feature vertex among v's neighbours.
+  auto off_curve = [&](int v, int at) {
+    double nearest = INFINITY;
+    for (int pi : around[v])
+      for (int w : polygons[pi])
+        if (w != v && fl.kind[dense_of[w]] != 0) nearest = std::min(nearest, (d.p[dense_of[w]] - d.p[at]).norm());
+    return nearest;
+  };
+  std::vector<int> stuck;  // the coarse vertices to move, found before any moves
+  for (int v = 0; v < nc; ++v) {
+    const int dv = dense_of[v];
+    if (fl.kind[dv] != 0) continue;
+    bool is_stuck = false;
+    for (int pi : around[v]) {
+      const auto& poly = polygons[pi];
+      const int m = static_cast<int>(poly.size());
+      for (int k = 0; k < m; ++k)
+        if (poly[k] == v)
+          for (int w : {poly[(k + 1) % m], poly[(k + m - 1) % m]})
+            if (fl.kind[dense_of[w]] != 0 && (fl.o[dense_of[w]] - fl.o[dv]).norm() < 0.5 * s) is_stuck = true;
+    }
+    // and the feature vertices of its polygons are one path of feature edges (one curve: not a
+    // wall one quad high between two rims, where the vertex has no room to move away)
+    std::vector<int> on_curve;
+    for (int pi : around[v])
+      for (int w : polygons[pi])
+        if (fl.kind[dense_of[w]] != 0) on_curve.push_back(w);
+    std::sort(on_curve.begin(), on_curve.end());
+    on_curve.erase(std::unique(on_curve.begin(), on_curve.end()), on_curve.end());
+    std::vector<int> part(on_curve.size());
+    std::iota(part.begin(), part.end(), 0);
+    for (size_t i = 0; i < on_curve.size(); ++i)
+      for (size_t j = 0; j < i; ++j)
+        if (coarse_feature(on_curve[i], on_curve[j])) part[find_root(part, int(i))] = find_root(part, int(j));
+    for (size_t i = 0; i < on_curve.size(); ++i)
+      if (find_root(part, int(i)) != find_root(part, 0)) is_stuck = false;
+    if (is_stuck) stuck.push_back(v);
+  }
+  // Moved one at a time, a few passes (two stuck vertices side by side make room for each other).
+  std::vector<char> was_moved(nc, 0);
+  std::vector<int> queue, seen(d.p.size(), -1);
+  int stamp = 0;
+  for (int pass = 0; pass < 4; ++pass) {
+    int changed = 0;
+    for (int v : stuck) {
+      const int dv = dense_of[v];
+      double reach = 0;  // candidates: no farther than its farthest polygon corner
+      for (int pi : around[v])
+        for (int w : polygons[pi]) reach = std::max(reach, (d.p[dense_of[w]] - d.p[dv]).norm());
+      std::vector<V3> old_normal;
+      for (int pi : around[v]) {
+        const V3 n = newell(polygons[pi], v, dv);
+        old_normal.push_back(n.norm() > 0 ? V3(n.normalized()) : V3::Zero());
+      }
+      const double now = worst(v, dv, old_normal);
+      double best = now + (pass == 0 ? 0.05 : 0.01);
+      int best_at = -1;
+      queue.assign(1, dv);
+      seen[dv] = ++stamp;
+      for (size_t head = 0; head < queue.size(); ++head) {
+        const int x = queue[head];
+        if (!taken[x] && off_curve(v, x) >= off_curve(v, dv) + 0.1 * s) {
+          const double q = worst(v, x, old_normal);
+          if (q > best) best = q, best_at = x;
+        }
+        for (int i = fl.offsets[x]; i < fl.offsets[x + 1]; ++i) {
+          const int y = fl.adj[i];
+          if (seen[y] == stamp || fl.kind[y] != 0 || (d.p[y] - d.p[dv]).norm() > reach) continue;
+          seen[y] = stamp;
+          queue.push_back(y);
+        }
+      }
+      if (best_at < 0) continue;
+      taken[dv] = 0;
+      taken[best_at] = 1;
+      dense_of[v] = best_at;
+      was_moved[v] = 1;
+      ++changed;
+    }
+    if (changed == 0) break;
+  }
+  return static_cast<int>(std::count(was_moved.begin(), was_moved.end(), 1));
+}
+
 // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface;
 // feature edges into two feature edges, feature corners tagged.
 template <class IsFeature>
@@ -1496,6 +1659,8 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       }
       st.coarse_triangles = static_cast<int>(polygons.size()) - st.coarse_quads;
       check(0.92);
+      if (options.relocate_stuck)  // after the pairing and the clean-up: their counts are kept (step 6c)
+        st.relocations = relocate_stuck_vertices(d, fl, s, polygons, dense_of, coarse_feature);
       result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
       double ratio = split_faces * h * h / area;

@@ -487,4 +487,55 @@ TEST(QuadRemesh, Fandisk) { real_mesh("fandisk.off", 1000, true); }
 TEST(QuadRemesh, PlateHoles) { real_mesh("plate_holes.STL", 200, false); }
 
 }  // namespace
+// Stuck vertices (docs/remesh.md step 6c): a slab whose rounded corners (radius 0.06) are much
+// tighter than the lattice spacing (~0.2 at 1000 quads), so the chain rule keeps extra rim
+// vertices at the arcs and a wall vertex that could not collapse into the rim stays beside it.
+// Oracle: the exact geometry. The caps are the planes z = +-h, so a wall vertex's distance from
+// the rim is |z -+ h|: every cage quad along a rim crease on the wall side must have its two
+// other vertices at least 0.4 x the crease edge's length from the rim (a square quad: 1). Without
+// the move a quad 0.27 as high as long stays (a sliver across which the limit normal of the crease
+// is ill-conditioned: fandisk's bottom rim); the move changes no count.
+TEST(QuadRemesh, NoSliverBesideATightRim) {
+  const double rho = 0.06, h = 0.3;
+  MeshInput m = test::rounded_slab(rho, h, 256, 16, 24);
+  auto lowest_wall_quad = [&](const QuadRemeshResult& r) {  // min height / length along the rims
+    std::set<std::pair<int, int>> crease;
+    for (const auto& c : r.cage.creases) crease.insert(std::minmax(c.v0, c.v1));
+    double worst = INFINITY;
+    for (int q = 0; q < r.cage.num_faces(); ++q) {
+      const int* f = &r.cage.face_indices[4 * q];
+      for (int k = 0; k < 4; ++k) {
+        const P3 &a = r.cage.positions[f[k]], &b = r.cage.positions[f[(k + 1) % 4]];
+        if (!crease.count(std::minmax(f[k], f[(k + 1) % 4])) || std::abs(std::abs(a[2]) - h) > 1e-9 ||
+            std::abs(b[2] - a[2]) > 1e-9)
+          continue;  // not a rim edge
+        const double length = std::hypot(b[0] - a[0], b[1] - a[1]);
+        for (int j : {f[(k + 2) % 4], f[(k + 3) % 4]}) {
+          const double off = std::abs(r.cage.positions[j][2] - a[2]);
+          if (off > 1e-9) worst = std::min(worst, off / length);  // a wall quad (not a cap's)
+        }
+      }
+    }
+    return worst;
+  };
+  QuadRemeshOptions o;
+  o.target_faces = 1000;
+  o.relocate_stuck = false;
+  const QuadRemeshResult off = quad_remesh(m, o);
+  o.relocate_stuck = true;
+  const QuadRemeshResult on = quad_remesh(m, o);
+  check_cage(m, off, 1000);
+  check_cage(m, on, 1000);
+  const double before = lowest_wall_quad(off), after = lowest_wall_quad(on);
+  std::printf("  %d stuck vertices moved; lowest wall quad along a rim: %.3f -> %.3f of its length\n",
+              on.stats.relocations, before, after);
+  EXPECT_EQ(off.stats.relocations, 0);
+  EXPECT_GT(on.stats.relocations, 0);
+  EXPECT_LT(before, 0.4) << "the slab no longer has a stuck vertex: the test checks nothing";
+  EXPECT_GE(after, 0.4);
+  EXPECT_EQ(on.cage.num_faces(), off.cage.num_faces());
+  EXPECT_EQ(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices);
+  EXPECT_EQ(on.cage.creases.size(), off.cage.creases.size());
+}
+
 }  // namespace subd2nurbs
