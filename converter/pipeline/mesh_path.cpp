@@ -387,7 +387,7 @@ void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
   w.members("faces", r.faces, "vertices", r.vertices, "extraordinary_vertices", r.extraordinary_vertices,
             "feature_edges", r.feature_edges, "feature_chains_kept", r.feature_chains_kept, "corners", r.corners);
   w.members("coarse_quads", r.coarse_quads, "coarse_triangles", r.coarse_triangles, "flips", r.flips, "attempts", r.attempts);
-  w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges);
+  w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges, "relocations", r.relocations);
   w.members("euler_characteristic", r.euler_cage, "boundaries", r.boundaries_cage, "components", r.components_cage);
   w.end_object();
 }

@@ -102,7 +102,7 @@ struct FeatureAngleStats {
   int samples = 0;            ///< points measured (3 per feature edge of the cage, where a mesh feature edge runs along)
   double max_difference = 0;  ///< max |surface angle - mesh angle|, degrees
   double mean_difference = 0;
-  int where_edge = -1;        ///< the worst cage feature edge (index into cage.creases)
+  int where_edge = -1;        ///< the worst cage feature edge (an edge number of the fitted cage's PolyMesh)
 };
 
 /// One remesh and fit of the size rule.
