@@ -27,6 +27,7 @@
 
 namespace subd2nurbs {
 
+using fit_detail::BlockLDLT3;
 using fit_detail::SparseMatrix;
 
 ShapeFitOptions exact_target_options() {
@@ -448,13 +449,13 @@ struct NormalEquations {
   std::vector<int> block_a, block_b; ///< per block: its vertex pair
   std::vector<double> blocks;        ///< 9 per block, row-major
   Eigen::VectorXd rhs;               ///< coordinate-major: x of every vertex, then y, then z
-  /// The factorised structure: H's pattern, where each block entry (and its mirror) and each
-  /// diagonal entry sit in H's values, and lambda K there (the regulariser, constant).
-  SparseMatrix H;
+  /// The factorised structure: the blocks' pattern (every pair of vertices with a block, and
+  /// every pair lambda K couples), its fill-reducing ordering and symbolic factorisation
+  /// (fit_detail::BlockLDLT3), and lambda K(a, b) for each block (the regulariser, constant).
   std::size_t structured_blocks = 0;
-  std::vector<int> pos, pos_mirror, diag_pos;
-  std::vector<double> base;
-  Eigen::SimplicialLDLT<SparseMatrix> ldlt;
+  std::vector<double> kvalue, values;
+  BlockLDLT3 ldlt;
+  std::vector<double> b3, x3;
 
   explicit NormalEquations(int vertices) : n(vertices), rhs(Eigen::VectorXd::Zero(3 * n)) {
     std::size_t capacity = 1024;
@@ -513,64 +514,41 @@ struct NormalEquations {
       }
     }
   }
-  /// H's structure (every block whole, lambda K (x) I3, the diagonal) and its symbolic
+  /// The structure (every block, lambda K's pairs, the diagonal) and its symbolic
   /// factorisation, when blocks were added since the last one.
   void structure(const SparseMatrix* K, double lambda) {
-    if (structured_blocks == block_a.size() && H.rows() == 3 * n) return;
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(18 * block_a.size() + 3 * static_cast<std::size_t>(n) * (K ? 26 : 1));
-    for (std::size_t i = 0; i < block_a.size(); ++i) {
-      const int a = block_a[i], b = block_b[i];
-      for (int k = 0; k < 9; ++k) {
-        trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, 0.0);
-        if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, 0.0);
-      }
-    }
-    for (int c = 0; c < 3; ++c) {
-      if (K)
-        for (int col = 0; col < n; ++col)
-          for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
-            trip.emplace_back(c * n + static_cast<int>(e.row()), c * n + col, lambda * e.value());
-      for (int v = 0; v < n; ++v) trip.emplace_back(c * n + v, c * n + v, 0.0);
-    }
-    H = SparseMatrix(3 * n, 3 * n);
-    H.setFromTriplets(trip.begin(), trip.end());
-    H.makeCompressed();
-    base.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
-    auto at = [&](int r, int c) {
-      const int* first = H.innerIndexPtr() + H.outerIndexPtr()[c];
-      const int* last = H.innerIndexPtr() + H.outerIndexPtr()[c + 1];
-      return static_cast<int>(std::lower_bound(first, last, r) - H.innerIndexPtr());
-    };
-    pos.resize(9 * block_a.size());
-    pos_mirror.resize(9 * block_a.size());
-    for (std::size_t i = 0; i < block_a.size(); ++i) {
-      const int a = block_a[i], b = block_b[i];
-      for (int k = 0; k < 9; ++k) {
-        pos[9 * i + k] = at((k / 3) * n + a, (k % 3) * n + b);
-        pos_mirror[9 * i + k] = b != a ? at((k % 3) * n + b, (k / 3) * n + a) : -1;
-      }
-    }
-    diag_pos.resize(3 * n);
-    for (int r = 0; r < 3 * n; ++r) diag_pos[r] = at(r, r);
+    if (structured_blocks == block_a.size() && ldlt.size() == n) return;
+    for (int v = 0; v < n; ++v) block_index(v, v);
+    if (K)
+      for (int col = 0; col < n; ++col)
+        for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
+          if (e.row() <= col) block_index(static_cast<int>(e.row()), col);
+    kvalue.assign(block_a.size(), 0.0);
+    if (K)
+      for (int col = 0; col < n; ++col)
+        for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
+          if (e.row() <= col) kvalue[static_cast<std::size_t>(block_index(static_cast<int>(e.row()), col))] += lambda * e.value();
     structured_blocks = block_a.size();
-    ldlt.analyzePattern(H);
+    ldlt.analyze(n, block_a, block_b);
   }
   /// Solves (sum of the rows + lambda K (x) I3 + mu I) x = rhs + extra. \throw FitError
   Eigen::VectorXd solve(const SparseMatrix* K, double lambda, double mu, const Eigen::VectorXd& extra) {
     structure(K, lambda);
-    double* value = H.valuePtr();
-    std::copy(base.begin(), base.end(), value);
-    for (std::size_t i = 0; i < block_a.size(); ++i)
-      for (int k = 0; k < 9; ++k) {
-        value[pos[9 * i + k]] += blocks[9 * i + k];
-        if (pos_mirror[9 * i + k] >= 0) value[pos_mirror[9 * i + k]] += blocks[9 * i + k];
-      }
-    for (int r = 0; r < 3 * n; ++r) value[diag_pos[r]] += mu;
-    const Eigen::VectorXd b = rhs + extra;
-    ldlt.factorize(H);
-    if (ldlt.info() != Eigen::Success) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
-    return ldlt.solve(b);
+    values.assign(blocks.begin(), blocks.end());
+    for (std::size_t i = 0; i < block_a.size(); ++i) {
+      const double d = kvalue[i] + (block_a[i] == block_b[i] ? mu : 0.0);
+      for (int k : {0, 4, 8}) values[9 * i + static_cast<std::size_t>(k)] += d;
+    }
+    if (!ldlt.factorize(values.data())) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
+    b3.resize(3 * static_cast<std::size_t>(n));
+    x3.resize(3 * static_cast<std::size_t>(n));
+    for (int c = 0; c < 3; ++c)
+      for (int v = 0; v < n; ++v) b3[3 * static_cast<std::size_t>(v) + c] = rhs[c * n + v] + extra[c * n + v];
+    ldlt.solve(b3.data(), x3.data());
+    Eigen::VectorXd x(3 * n);
+    for (int c = 0; c < 3; ++c)
+      for (int v = 0; v < n; ++v) x[c * n + v] = x3[3 * static_cast<std::size_t>(v) + c];
+    return x;
   }
   double trace() const {
     double t = 0;
