@@ -212,6 +212,7 @@ struct ExactRows {
   std::vector<int> colour;                    ///< per cage vertex
   std::vector<std::vector<int>> support;      ///< per cage face: its 1-ring's vertices
   std::vector<LimitEvaluator> basis;          ///< basis[c / 3], coordinate c % 3
+  std::vector<std::vector<int>> bases;        ///< per cage face: the bases its support's colours are in
 
   explicit ExactRows(const SubdivLevel& cage) {
     const PolyMesh& m = cage.mesh;
@@ -253,6 +254,12 @@ struct ExactRows {
       colour[v] = c;
       colours = std::max(colours, c + 1);
     }
+    bases.resize(nf);
+    for (int f = 0; f < nf; ++f) {
+      for (int v : support[f]) bases[f].push_back(colour[v] / 3);
+      std::sort(bases[f].begin(), bases[f].end());
+      bases[f].erase(std::unique(bases[f].begin(), bases[f].end()), bases[f].end());
+    }
     for (int e = 0; e < (colours + 2) / 3; ++e) {
       std::vector<Point3> pos(n, Point3{0, 0, 0});
       for (int v = 0; v < n; ++v)
@@ -268,7 +275,7 @@ struct ExactRows {
     w1.assign(idx.size(), 0.0);
     w2.assign(idx.size(), 0.0);
     std::vector<LimitPoint> value(basis.size());
-    for (size_t e = 0; e < basis.size(); ++e) value[e] = basis[e].evaluate_point(face, sub, u, v);
+    for (int e : bases[face]) value[e] = basis[e].evaluate_point(face, sub, u, v);
     for (std::size_t k = 0; k < idx.size(); ++k) {
       const LimitPoint& q = value[colour[idx[k]] / 3];
       const int c = colour[idx[k]] % 3;
@@ -281,7 +288,7 @@ struct ExactRows {
     idx.clear();
     w.clear();
     std::vector<LimitPoint> value(basis.size());
-    for (size_t e = 0; e < basis.size(); ++e) value[e] = basis[e].evaluate_point(face, sub, u, v);
+    for (int e : bases[face]) value[e] = basis[e].evaluate_point(face, sub, u, v);
     for (int vtx : support[face]) {
       const double x = value[colour[vtx] / 3].p[colour[vtx] % 3];
       if (x == 0) continue;
