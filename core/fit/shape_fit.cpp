@@ -755,18 +755,29 @@ double solve_step(const Samples& S, const ExactRows* exact, const std::vector<Fo
     const int v = S.vertex[i], o = S.all_rows.offsets[v];
     eq.add(&S.all_rows.indices[o], &S.all_rows.weights[o], S.all_rows.row_size(v), weight(Ma, i), Ga.row(i).transpose());
   }
+  // The exact limit rows of the feet that need them, evaluated in parallel (each is pure), then
+  // summed in the feet's order as before.
+  std::vector<int> exact_feet;
+  for (int j = 0; j < nb; ++j)
+    if (foot[j].grid == kExact) exact_feet.push_back(j);
+  std::vector<std::vector<int>> ei(exact_feet.size());
+  std::vector<std::vector<double>> ew(exact_feet.size());
+  parallel_for(static_cast<int>(exact_feet.size()), [&](int k) {
+    const Foot& f = foot[static_cast<std::size_t>(exact_feet[static_cast<std::size_t>(k)])];
+    const Samples::PtexMap& M = S.ptex[f.face];
+    double u, v;
+    M.apply(f.u, f.v, u, v);
+    exact->row(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0), ei[static_cast<std::size_t>(k)],
+               ew[static_cast<std::size_t>(k)]);
+  });
   RowSum row(n);
-  std::vector<int> ei;
-  std::vector<double> ew;
+  std::size_t next_exact = 0;
   for (int j = 0; j < nb; ++j) {
     const Foot& f = foot[j];
     row.clear();
     if (f.grid == kExact) {
-      const Samples::PtexMap& M = S.ptex[f.face];
-      double u, v;
-      M.apply(f.u, f.v, u, v);
-      exact->row(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0), ei, ew);
-      row.add(ei, ew);
+      row.add(ei[next_exact], ew[next_exact]);
+      ++next_exact;
     } else if (f.grid >= 0) {
       double bu[4], dbu[4], bv[4], dbv[4];
       bspline(f.u, bu, dbu);
