@@ -197,16 +197,7 @@ V3 middle_point(const V3& p0, const V3& n0, const V3& p1, const V3& n1) {
   return c + ((r0 - k * r1) / det) * n0 + ((r1 - k * r0) / det) * n1;
 }
 
-// std::round (halves away from zero) without libm's call and without a branch on the fraction
-// (its direction is a coin toss in the sweeps), the same value for every double: the position
-// field's sweeps round four times per neighbour.
-inline double round_half_away(double x) {
-  if (!(std::abs(x) < 4503599627370496.0)) return x;  // 2^52: an integer already (or inf / NaN)
-  std::int64_t i = static_cast<std::int64_t>(x);  // towards zero
-  const double f = x - static_cast<double>(i);     // exact
-  i += static_cast<std::int64_t>(f >= 0.5) - static_cast<std::int64_t>(f <= -0.5);
-  return std::copysign(static_cast<double>(i), x);
-}
+using remesh_detail::round_half_away;
 
 // Inlined into the sweeps (the same arithmetic; a call made them pass the vectors through memory).
 [[gnu::always_inline]] inline V3 round_lattice(const V3& x, const V3& origin, const V3& q, const V3& t, double s) {
