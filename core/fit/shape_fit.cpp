@@ -1,9 +1,9 @@
 #include "core/fit/shape_fit.h"
 
 #include <Eigen/SVD>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cstdint>
+#include <exception>
 #include <cmath>
 #include <iterator>
 #include <limits>
@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 #include "core/features/features.h"
 #include "core/fit/fairing.h"
@@ -27,6 +28,7 @@
 
 namespace subd2nurbs {
 
+using fit_detail::BlockLDLT3;
 using fit_detail::SparseMatrix;
 
 ShapeFitOptions exact_target_options() {
@@ -211,6 +213,7 @@ struct ExactRows {
   std::vector<int> colour;                    ///< per cage vertex
   std::vector<std::vector<int>> support;      ///< per cage face: its 1-ring's vertices
   std::vector<LimitEvaluator> basis;          ///< basis[c / 3], coordinate c % 3
+  std::vector<std::vector<int>> bases;        ///< per cage face: the bases its support's colours are in
 
   explicit ExactRows(const SubdivLevel& cage) {
     const PolyMesh& m = cage.mesh;
@@ -252,6 +255,12 @@ struct ExactRows {
       colour[v] = c;
       colours = std::max(colours, c + 1);
     }
+    bases.resize(nf);
+    for (int f = 0; f < nf; ++f) {
+      for (int v : support[f]) bases[f].push_back(colour[v] / 3);
+      std::sort(bases[f].begin(), bases[f].end());
+      bases[f].erase(std::unique(bases[f].begin(), bases[f].end()), bases[f].end());
+    }
     for (int e = 0; e < (colours + 2) / 3; ++e) {
       std::vector<Point3> pos(n, Point3{0, 0, 0});
       for (int v = 0; v < n; ++v)
@@ -267,7 +276,7 @@ struct ExactRows {
     w1.assign(idx.size(), 0.0);
     w2.assign(idx.size(), 0.0);
     std::vector<LimitPoint> value(basis.size());
-    for (size_t e = 0; e < basis.size(); ++e) value[e] = basis[e].evaluate_point(face, sub, u, v);
+    for (int e : bases[face]) value[e] = basis[e].evaluate_point(face, sub, u, v);
     for (std::size_t k = 0; k < idx.size(); ++k) {
       const LimitPoint& q = value[colour[idx[k]] / 3];
       const int c = colour[idx[k]] % 3;
@@ -280,7 +289,7 @@ struct ExactRows {
     idx.clear();
     w.clear();
     std::vector<LimitPoint> value(basis.size());
-    for (size_t e = 0; e < basis.size(); ++e) value[e] = basis[e].evaluate_point(face, sub, u, v);
+    for (int e : bases[face]) value[e] = basis[e].evaluate_point(face, sub, u, v);
     for (int vtx : support[face]) {
       const double x = value[colour[vtx] / 3].p[colour[vtx] % 3];
       if (x == 0) continue;
@@ -448,13 +457,13 @@ struct NormalEquations {
   std::vector<int> block_a, block_b; ///< per block: its vertex pair
   std::vector<double> blocks;        ///< 9 per block, row-major
   Eigen::VectorXd rhs;               ///< coordinate-major: x of every vertex, then y, then z
-  /// The factorised structure: H's pattern, where each block entry (and its mirror) and each
-  /// diagonal entry sit in H's values, and lambda K there (the regulariser, constant).
-  SparseMatrix H;
+  /// The factorised structure: the blocks' pattern (every pair of vertices with a block, and
+  /// every pair lambda K couples), its fill-reducing ordering and symbolic factorisation
+  /// (fit_detail::BlockLDLT3), and lambda K(a, b) for each block (the regulariser, constant).
   std::size_t structured_blocks = 0;
-  std::vector<int> pos, pos_mirror, diag_pos;
-  std::vector<double> base;
-  Eigen::SimplicialLDLT<SparseMatrix> ldlt;
+  std::vector<double> kvalue, values;
+  BlockLDLT3 ldlt;
+  std::vector<double> b3, x3;
 
   explicit NormalEquations(int vertices) : n(vertices), rhs(Eigen::VectorXd::Zero(3 * n)) {
     std::size_t capacity = 1024;
@@ -513,64 +522,41 @@ struct NormalEquations {
       }
     }
   }
-  /// H's structure (every block whole, lambda K (x) I3, the diagonal) and its symbolic
+  /// The structure (every block, lambda K's pairs, the diagonal) and its symbolic
   /// factorisation, when blocks were added since the last one.
   void structure(const SparseMatrix* K, double lambda) {
-    if (structured_blocks == block_a.size() && H.rows() == 3 * n) return;
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(18 * block_a.size() + 3 * static_cast<std::size_t>(n) * (K ? 26 : 1));
-    for (std::size_t i = 0; i < block_a.size(); ++i) {
-      const int a = block_a[i], b = block_b[i];
-      for (int k = 0; k < 9; ++k) {
-        trip.emplace_back((k / 3) * n + a, (k % 3) * n + b, 0.0);
-        if (b != a) trip.emplace_back((k % 3) * n + b, (k / 3) * n + a, 0.0);
-      }
-    }
-    for (int c = 0; c < 3; ++c) {
-      if (K)
-        for (int col = 0; col < n; ++col)
-          for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
-            trip.emplace_back(c * n + static_cast<int>(e.row()), c * n + col, lambda * e.value());
-      for (int v = 0; v < n; ++v) trip.emplace_back(c * n + v, c * n + v, 0.0);
-    }
-    H = SparseMatrix(3 * n, 3 * n);
-    H.setFromTriplets(trip.begin(), trip.end());
-    H.makeCompressed();
-    base.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
-    auto at = [&](int r, int c) {
-      const int* first = H.innerIndexPtr() + H.outerIndexPtr()[c];
-      const int* last = H.innerIndexPtr() + H.outerIndexPtr()[c + 1];
-      return static_cast<int>(std::lower_bound(first, last, r) - H.innerIndexPtr());
-    };
-    pos.resize(9 * block_a.size());
-    pos_mirror.resize(9 * block_a.size());
-    for (std::size_t i = 0; i < block_a.size(); ++i) {
-      const int a = block_a[i], b = block_b[i];
-      for (int k = 0; k < 9; ++k) {
-        pos[9 * i + k] = at((k / 3) * n + a, (k % 3) * n + b);
-        pos_mirror[9 * i + k] = b != a ? at((k % 3) * n + b, (k / 3) * n + a) : -1;
-      }
-    }
-    diag_pos.resize(3 * n);
-    for (int r = 0; r < 3 * n; ++r) diag_pos[r] = at(r, r);
+    if (structured_blocks == block_a.size() && ldlt.size() == n) return;
+    for (int v = 0; v < n; ++v) block_index(v, v);
+    if (K)
+      for (int col = 0; col < n; ++col)
+        for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
+          if (e.row() <= col) block_index(static_cast<int>(e.row()), col);
+    kvalue.assign(block_a.size(), 0.0);
+    if (K)
+      for (int col = 0; col < n; ++col)
+        for (SparseMatrix::InnerIterator e(*K, col); e; ++e)
+          if (e.row() <= col) kvalue[static_cast<std::size_t>(block_index(static_cast<int>(e.row()), col))] += lambda * e.value();
     structured_blocks = block_a.size();
-    ldlt.analyzePattern(H);
+    ldlt.analyze(n, block_a, block_b);
   }
   /// Solves (sum of the rows + lambda K (x) I3 + mu I) x = rhs + extra. \throw FitError
   Eigen::VectorXd solve(const SparseMatrix* K, double lambda, double mu, const Eigen::VectorXd& extra) {
     structure(K, lambda);
-    double* value = H.valuePtr();
-    std::copy(base.begin(), base.end(), value);
-    for (std::size_t i = 0; i < block_a.size(); ++i)
-      for (int k = 0; k < 9; ++k) {
-        value[pos[9 * i + k]] += blocks[9 * i + k];
-        if (pos_mirror[9 * i + k] >= 0) value[pos_mirror[9 * i + k]] += blocks[9 * i + k];
-      }
-    for (int r = 0; r < 3 * n; ++r) value[diag_pos[r]] += mu;
-    const Eigen::VectorXd b = rhs + extra;
-    ldlt.factorize(H);
-    if (ldlt.info() != Eigen::Success) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
-    return ldlt.solve(b);
+    values.assign(blocks.begin(), blocks.end());
+    for (std::size_t i = 0; i < block_a.size(); ++i) {
+      const double d = kvalue[i] + (block_a[i] == block_b[i] ? mu : 0.0);
+      for (int k : {0, 4, 8}) values[9 * i + static_cast<std::size_t>(k)] += d;
+    }
+    if (!ldlt.factorize(values.data())) throw FitError("fit_to_shape: the normal equations could not be factorised", {});
+    b3.resize(3 * static_cast<std::size_t>(n));
+    x3.resize(3 * static_cast<std::size_t>(n));
+    for (int c = 0; c < 3; ++c)
+      for (int v = 0; v < n; ++v) b3[3 * static_cast<std::size_t>(v) + c] = rhs[c * n + v] + extra[c * n + v];
+    ldlt.solve(b3.data(), x3.data());
+    Eigen::VectorXd x(3 * n);
+    for (int c = 0; c < 3; ++c)
+      for (int v = 0; v < n; ++v) x[c * n + v] = x3[3 * static_cast<std::size_t>(v) + c];
+    return x;
   }
   double trace() const {
     double t = 0;
@@ -770,18 +756,29 @@ double solve_step(const Samples& S, const ExactRows* exact, const std::vector<Fo
     const int v = S.vertex[i], o = S.all_rows.offsets[v];
     eq.add(&S.all_rows.indices[o], &S.all_rows.weights[o], S.all_rows.row_size(v), weight(Ma, i), Ga.row(i).transpose());
   }
+  // The exact limit rows of the feet that need them, evaluated in parallel (each is pure), then
+  // summed in the feet's order as before.
+  std::vector<int> exact_feet;
+  for (int j = 0; j < nb; ++j)
+    if (foot[j].grid == kExact) exact_feet.push_back(j);
+  std::vector<std::vector<int>> ei(exact_feet.size());
+  std::vector<std::vector<double>> ew(exact_feet.size());
+  parallel_for(static_cast<int>(exact_feet.size()), [&](int k) {
+    const Foot& f = foot[static_cast<std::size_t>(exact_feet[static_cast<std::size_t>(k)])];
+    const Samples::PtexMap& M = S.ptex[f.face];
+    double u, v;
+    M.apply(f.u, f.v, u, v);
+    exact->row(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0), ei[static_cast<std::size_t>(k)],
+               ew[static_cast<std::size_t>(k)]);
+  });
   RowSum row(n);
-  std::vector<int> ei;
-  std::vector<double> ew;
+  std::size_t next_exact = 0;
   for (int j = 0; j < nb; ++j) {
     const Foot& f = foot[j];
     row.clear();
     if (f.grid == kExact) {
-      const Samples::PtexMap& M = S.ptex[f.face];
-      double u, v;
-      M.apply(f.u, f.v, u, v);
-      exact->row(M.face, M.sub, std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0), ei, ew);
-      row.add(ei, ew);
+      row.add(ei[next_exact], ew[next_exact]);
+      ++next_exact;
     } else if (f.grid >= 0) {
       double bu[4], dbu[4], bv[4], dbv[4];
       bspline(f.u, bu, dbu);
@@ -971,16 +968,46 @@ ShapeFitResult fit_to_shape(const SubdivLevel& cage, const std::vector<Point3>& 
   for (const ShapeFitOptions::VertexPlane& c : options.vertex_planes)
     if (c.vertex < 0 || c.vertex >= n) throw std::invalid_argument("fit_to_shape: a held vertex out of range");
 
-  const Samples S = make_samples(cage, options.levels);
-  const int ns = static_cast<int>(S.vertex.size());
-  if (ns == 0) throw std::invalid_argument("fit_to_shape: the cage has no limit surface");
+  // The energy matrix (serial, the set-up's longest part: about 0.2 s for fandisk's 1 124 quads)
+  // on a thread of its own beside the samples and the exact rows' evaluators, when the loops may
+  // use two threads (it holds a ThreadReservation meanwhile: the evaluators' loops take one fewer).
+  Samples S;
   SparseMatrix K;
   const double lambda = options.smoothing / ptex_faces(cage);
-  if (lambda > 0) K = energy_matrix(cage, EnergyOptions{1.0, 0.0, 2});
-
   std::unique_ptr<ExactRows> exact;
+  auto energy = [&] {
+    if (lambda > 0) K = energy_matrix(cage, EnergyOptions{1.0, 0.0, 2});
+  };
+  auto rows = [&] {
+    S = make_samples(cage, options.levels);
+    exact = std::make_unique<ExactRows>(cage);
+  };
+  if (lambda > 0 && loop_threads() > 1) {
+    std::exception_ptr error;
+    std::thread beside([&] {
+      const ThreadLimit one(1);
+      const ThreadReservation core;
+      try {
+        energy();
+      } catch (...) {
+        error = std::current_exception();
+      }
+    });
+    try {
+      rows();
+    } catch (...) {
+      beside.join();
+      throw;
+    }
+    beside.join();
+    if (error) std::rethrow_exception(error);
+  } else {
+    rows();
+    energy();
+  }
+  const int ns = static_cast<int>(S.vertex.size());
+  if (ns == 0) throw std::invalid_argument("fit_to_shape: the cage has no limit surface");
   std::optional<LimitEvaluator> E;
-  exact = std::make_unique<ExactRows>(cage);
   // The normal equations keep one structure through the fit: every pair of vertices in one cage
   // face's support (any limit point's row, hence any sample's or foot's, lies in one), so that
   // the symbolic factorisation is done once.

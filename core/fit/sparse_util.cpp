@@ -1,11 +1,13 @@
 #include "core/fit/sparse_util.h"
 
+#include <Eigen/OrderingMethods>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <sstream>
+#include <stdexcept>
 
 namespace subd2nurbs::fit_detail {
 
@@ -73,6 +75,160 @@ std::string vertex_list(const std::vector<int>& v) {
   return os.str();
 }
 
+
+void BlockLDLT3::analyze(int n, const std::vector<int>& row, const std::vector<int>& col) {
+  if (n < 0 || row.size() != col.size()) throw std::invalid_argument("BlockLDLT3::analyze: bad pattern");
+  n_ = n;
+  const std::size_t m = row.size();
+  std::vector<char> has_diagonal(static_cast<std::size_t>(n), 0);
+  for (std::size_t e = 0; e < m; ++e) {
+    if (row[e] < 0 || col[e] >= n || row[e] > col[e])
+      throw std::invalid_argument("BlockLDLT3::analyze: a block outside the upper triangle");
+    if (row[e] == col[e]) has_diagonal[static_cast<std::size_t>(row[e])] = 1;
+  }
+  for (char d : has_diagonal)
+    if (!d) throw std::invalid_argument("BlockLDLT3::analyze: a diagonal block is missing");
+
+  // The fill-reducing ordering: AMD of the block pattern (both triangles).
+  {
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(2 * m);
+    for (std::size_t e = 0; e < m; ++e) {
+      trip.emplace_back(row[e], col[e], 1.0);
+      if (row[e] != col[e]) trip.emplace_back(col[e], row[e], 1.0);
+    }
+    SparseMatrix pattern(n, n);
+    pattern.setFromTriplets(trip.begin(), trip.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p;
+    Eigen::AMDOrdering<int> amd;
+    amd(pattern, p);
+    perm_.assign(p.indices().data(), p.indices().data() + n);
+  }
+  inv_.assign(static_cast<std::size_t>(n), -1);
+  for (int k = 0; k < n; ++k) inv_[static_cast<std::size_t>(perm_[static_cast<std::size_t>(k)])] = k;
+
+  // The permuted upper triangle, by column.
+  ucol_.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (std::size_t e = 0; e < m; ++e) ++ucol_[static_cast<std::size_t>(std::max(inv_[row[e]], inv_[col[e]])) + 1];
+  for (int k = 0; k < n; ++k) ucol_[k + 1] += ucol_[k];
+  urow_.resize(m);
+  usrc_.resize(m);
+  ukind_.resize(m);
+  std::vector<int> next(ucol_.begin(), ucol_.end() - 1);
+  for (std::size_t e = 0; e < m; ++e) {
+    const int a = inv_[row[e]], b = inv_[col[e]];
+    const int at = next[static_cast<std::size_t>(std::max(a, b))]++;
+    urow_[at] = std::min(a, b);
+    usrc_[at] = static_cast<int>(e);
+    ukind_[at] = a == b ? 2 : a < b ? 0 : 1;
+  }
+
+  // The elimination tree and L's column counts (LDL's symbolic step).
+  parent_.assign(static_cast<std::size_t>(n), -1);
+  lnz_.assign(static_cast<std::size_t>(n), 0);
+  flag_.assign(static_cast<std::size_t>(n), -1);
+  for (int k = 0; k < n; ++k) {
+    flag_[k] = k;
+    for (int p = ucol_[k]; p < ucol_[k + 1]; ++p)
+      for (int i = urow_[p]; flag_[i] != k; i = parent_[i]) {
+        if (parent_[i] == -1) parent_[i] = k;
+        ++lnz_[i];
+        flag_[i] = k;
+      }
+  }
+  lp_.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (int k = 0; k < n; ++k) lp_[k + 1] = lp_[k] + lnz_[k];
+  li_.assign(static_cast<std::size_t>(lp_[n]), 0);
+  lx_.assign(9 * static_cast<std::size_t>(lp_[n]), 0.0);
+  dinv_.assign(9 * static_cast<std::size_t>(n), 0.0);
+  y_.assign(9 * static_cast<std::size_t>(n), 0.0);
+  pattern_.assign(static_cast<std::size_t>(n), 0);
+}
+
+bool BlockLDLT3::factorize(const double* values) {
+  using M3 = Eigen::Matrix3d;
+  using Map = Eigen::Map<M3>;
+  using CMap = Eigen::Map<const M3>;
+  const int n = n_;
+  std::fill(flag_.begin(), flag_.end(), -1);
+  std::fill(lnz_.begin(), lnz_.end(), 0);
+  double* Y = y_.data();
+  for (int k = 0; k < n; ++k) {
+    // Column k of the upper triangle scattered into Y, and the rows of L's row k (the reach of
+    // its entries in the elimination tree) in topological order at pattern_[top..n).
+    int top = n;
+    flag_[k] = k;
+    for (int p = ucol_[k]; p < ucol_[k + 1]; ++p) {
+      int i = urow_[p];
+      const double* v = values + 9 * static_cast<std::size_t>(usrc_[p]);
+      double* y = Y + 9 * static_cast<std::size_t>(i);
+      // Y is column-major: y[r + 3 c] is the entry (3 i + r, 3 k + c).
+      switch (ukind_[p]) {
+        case 0:
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) y[r + 3 * c] += v[3 * r + c];
+          break;
+        case 1:  // the stored block is (k, i): its transpose, i.e. its row-major values as column-major
+          for (int q = 0; q < 9; ++q) y[q] += v[q];
+          break;
+        default:
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) y[r + 3 * c] += v[3 * std::min(r, c) + std::max(r, c)];
+      }
+      int len = 0;
+      for (; flag_[i] != k; i = parent_[i]) {
+        pattern_[len++] = i;
+        flag_[i] = k;
+      }
+      while (len > 0) pattern_[--top] = pattern_[--len];
+    }
+    M3 d = Map(Y + 9 * static_cast<std::size_t>(k));
+    Map(Y + 9 * static_cast<std::size_t>(k)).setZero();
+    for (; top < n; ++top) {
+      const int i = pattern_[top];
+      const M3 yi = Map(Y + 9 * static_cast<std::size_t>(i));
+      Map(Y + 9 * static_cast<std::size_t>(i)).setZero();
+      const int p2 = lp_[i] + lnz_[i];
+      for (int p = lp_[i]; p < p2; ++p)
+        Map(Y + 9 * static_cast<std::size_t>(li_[p])).noalias() -= CMap(&lx_[9 * static_cast<std::size_t>(p)]) * yi;
+      const M3 lki = yi.transpose() * CMap(&dinv_[9 * static_cast<std::size_t>(i)]);
+      d.noalias() -= lki * yi;
+      li_[p2] = k;
+      Map lkp(&lx_[9 * static_cast<std::size_t>(p2)]);
+      lkp = lki;
+      ++lnz_[i];
+    }
+    d = 0.5 * (d + d.transpose()).eval();
+    const double det = d.determinant();
+    if (!(det != 0) || !std::isfinite(det)) return false;
+    const M3 dinv = d.inverse();
+    if (!dinv.allFinite()) return false;
+    Map dk(&dinv_[9 * static_cast<std::size_t>(k)]);
+    dk = dinv;
+  }
+  return true;
+}
+
+void BlockLDLT3::solve(const double* b, double* x) const {
+  using V3 = Eigen::Vector3d;
+  using CMap = Eigen::Map<const Eigen::Matrix3d>;
+  const int n = n_;
+  z_.resize(3 * static_cast<std::size_t>(n));
+  auto z = [&](int k) { return Eigen::Map<V3>(&z_[3 * static_cast<std::size_t>(k)]); };
+  for (int k = 0; k < n; ++k) z(k) = Eigen::Map<const V3>(b + 3 * static_cast<std::size_t>(perm_[k]));
+  for (int j = 0; j < n; ++j) {
+    const V3 zj = z(j);
+    for (int p = lp_[j]; p < lp_[j + 1]; ++p) z(li_[p]).noalias() -= CMap(&lx_[9 * static_cast<std::size_t>(p)]) * zj;
+  }
+  for (int j = 0; j < n; ++j) z(j) = (CMap(&dinv_[9 * static_cast<std::size_t>(j)]) * z(j)).eval();
+  for (int j = n - 1; j >= 0; --j) {
+    V3 s = z(j);
+    for (int p = lp_[j]; p < lp_[j + 1]; ++p)
+      s.noalias() -= CMap(&lx_[9 * static_cast<std::size_t>(p)]).transpose() * z(li_[p]);
+    z(j) = s;
+  }
+  for (int k = 0; k < n; ++k) Eigen::Map<V3>(x + 3 * static_cast<std::size_t>(perm_[k])) = z(k);
+}
 
 Eigen::VectorXd inverse_iteration(SparseLUSolver& lu, int n, int iterations) {
   Eigen::VectorXd x = start_vector(n);

@@ -197,9 +197,12 @@ V3 middle_point(const V3& p0, const V3& n0, const V3& p1, const V3& n1) {
   return c + ((r0 - k * r1) / det) * n0 + ((r1 - k * r0) / det) * n1;
 }
 
-V3 round_lattice(const V3& x, const V3& origin, const V3& q, const V3& t, double s) {
+using remesh_detail::round_half_away;
+
+// Inlined into the sweeps (the same arithmetic; a call made them pass the vectors through memory).
+[[gnu::always_inline]] inline V3 round_lattice(const V3& x, const V3& origin, const V3& q, const V3& t, double s) {
   V3 d = x - origin;
-  return origin + q * (s * std::round(d.dot(q) / s)) + t * (s * std::round(d.dot(t) / s));
+  return origin + q * (s * round_half_away(d.dot(q) / s)) + t * (s * round_half_away(d.dot(t) / s));
 }
 
 struct Fields {
@@ -354,14 +357,30 @@ void init_cross_field(Fields& fl, Check&& check) {
     if (!set[v]) fl.q[v] = any_perpendicular(fl.normal[v]);
 }
 
-void smooth_cross_vertex(Fields& fl, int v) {
+// match_cross with n1 x q1 given (`nq1`).
+std::pair<V3, V3> match_cross_given(const V3& q0, const V3& n0, const V3& q1, const V3& nq1) {
+  V3 a[2] = {q0, n0.cross(q0)};
+  const V3* b[2] = {&q1, &nq1};
+  double best = -1;
+  int bi = 0, bj = 0;
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) {
+      double s = std::abs(a[i].dot(*b[j]));
+      if (s > best) best = s, bi = i, bj = j;
+    }
+  double sign = a[bi].dot(*b[bj]) < 0 ? -1.0 : 1.0;
+  return {a[bi], sign * *b[bj]};
+}
+
+// One vertex's cross field step; `nq` holds normal x q of every vertex, kept up to date.
+void smooth_cross_vertex(Fields& fl, std::vector<V3>& nq, int v) {
   if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) return;  // constrained to the feature
   const V3& n = fl.normal[v];
   V3 sum = fl.q[v];
   double weight = 0;
   for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
     int w = fl.adj[i];
-    auto [a, b] = match_cross(sum, n, fl.q[w], fl.normal[w]);
+    auto [a, b] = match_cross_given(sum, n, fl.q[w], nq[w]);
     sum = a * weight + b;
     sum -= n * n.dot(sum);
     weight += 1;
@@ -374,7 +393,10 @@ void smooth_cross_vertex(Fields& fl, int v) {
     sum -= n * n.dot(sum);
   }
   double l = sum.norm();
-  if (l > 1e-12) fl.q[v] = sum / l;
+  if (l > 1e-12) {
+    fl.q[v] = sum / l;
+    nq[v] = n.cross(fl.q[v]);
+  }
 }
 
 void constrain_position(Fields& fl, int v) {
@@ -410,18 +432,39 @@ void init_position_field(Fields& fl, Check&& check) {
       [&](int v) { fl.o[v] = fl.p[v]; }, check);
 }
 
-void smooth_position_vertex(Fields& fl, int v) {
+// What the position field's sweeps on one level read but never change (the cross field and
+// the positions are fixed by then): each vertex's second lattice direction n x q, and for each
+// neighbour entry of the adjacency the middle point of the two vertices' tangent planes.
+struct PositionFrame {
+  std::vector<V3> t;    // per vertex
+  std::vector<V3> mid;  // per adjacency entry i of v (neighbour adj[i]): middle_point(v, adj[i])
+};
+
+PositionFrame position_frame(const Fields& fl) {
+  PositionFrame f;
+  f.t.resize(fl.n);
+  f.mid.resize(fl.adj.size());
+  for (int v = 0; v < fl.n; ++v) {
+    f.t[v] = fl.normal[v].cross(fl.q[v]);
+    for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
+      const int w = fl.adj[i];
+      f.mid[i] = middle_point(fl.p[v], fl.normal[v], fl.p[w], fl.normal[w]);
+    }
+  }
+  return f;
+}
+
+void smooth_position_vertex(Fields& fl, const PositionFrame& frame, int v) {
   if (fl.kind[v] == 2) return;
   const V3& n = fl.normal[v];
   const V3& p = fl.p[v];
-  V3 t = n.cross(fl.q[v]);
+  const V3& t = frame.t[v];
   V3 sum = fl.o[v];
   double weight = 0;
   for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) {
     int w = fl.adj[i];
-    V3 m = middle_point(p, n, fl.p[w], fl.normal[w]);
-    V3 a = round_lattice(m, sum, fl.q[v], t, fl.s);
-    V3 b = round_lattice(a, fl.o[w], fl.q[w], fl.normal[w].cross(fl.q[w]), fl.s);  // the same lattice point
+    V3 a = round_lattice(frame.mid[i], sum, fl.q[v], t, fl.s);
+    V3 b = round_lattice(a, fl.o[w], fl.q[w], frame.t[w], fl.s);  // the same lattice point
     sum = (a * weight + b) / (weight + 1);
     sum -= n * n.dot(sum - p);
     weight += 1;
@@ -566,10 +609,14 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
         }
       }
     }
-    if (cross)
-      sweeps(fl, iterations, smooth_cross_vertex, check);
-    else
-      sweeps(fl, iterations, smooth_position_vertex, check);
+    if (cross) {
+      std::vector<V3> nq(fl.n);
+      for (int v = 0; v < fl.n; ++v) nq[v] = fl.normal[v].cross(fl.q[v]);
+      sweeps(fl, iterations, [&](Fields& f, int v) { smooth_cross_vertex(f, nq, v); }, check);
+    } else {
+      const PositionFrame frame = position_frame(fl);
+      sweeps(fl, iterations, [&](Fields& f, int v) { smooth_position_vertex(f, frame, v); }, check);
+    }
   }
 }
 

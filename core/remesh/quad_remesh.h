@@ -5,6 +5,8 @@
 // Catmull-Clark-style split into an all-quad cage. docs/remesh.md describes the method.
 #pragma once
 
+#include <cmath>
+#include <cstdint>
 #include <functional>
 
 #include "core/features/features.h"
@@ -63,5 +65,18 @@ struct QuadRemeshResult {
 /// Error(ErrorKind::Fit) if the cage could not be made with the input's topology.
 QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
                              const std::function<bool(double)>& progress = {});
+
+namespace remesh_detail {
+/// std::round (halves away from zero) without libm's call and without a branch on the fraction
+/// (its direction is a coin toss in the field sweeps, which round four times per neighbour): the
+/// same value for every double (test: RemeshRounding.*).
+inline double round_half_away(double x) {
+  if (!(std::abs(x) < 4503599627370496.0)) return x;  // 2^52: an integer already (or inf / NaN)
+  std::int64_t i = static_cast<std::int64_t>(x);  // towards zero
+  const double f = x - static_cast<double>(i);     // exact
+  i += static_cast<std::int64_t>(f >= 0.5) - static_cast<std::int64_t>(f <= -0.5);
+  return std::copysign(static_cast<double>(i), x);
+}
+}  // namespace remesh_detail
 
 }  // namespace subd2nurbs
