@@ -628,6 +628,8 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
             "faces_off_plane", r.planar.faces_off_plane, "faces_dropped", r.planar.faces_dropped, "vertices_moved", r.planar.vertices_moved);
   w.members("max_move", r.planar.max_move, "flatness_before", r.planar.flatness_before, "flatness_after",
             r.planar.flatness_after);
+  w.members("vertices_free", r.planar.vertices_free, "vertices_untangled", r.planar.vertices_untangled,
+            "faces_folded_before", r.planar.faces_folded_before, "faces_folded_after", r.planar.faces_folded_after);
   w.end_object();
   w.key("ms").begin_object();
   w.members("remesh", r.remesh_ms, "fit", r.fit_ms, "measure", r.measure_ms);

@@ -1,6 +1,7 @@
 #include "core/fit/planar_regions.h"
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -66,6 +67,92 @@ bool onto_planes(const std::vector<Plane>& planes, const std::vector<int>& ids, 
     if (std::abs(N.row(i).dot(x) - d[i]) > 1e-9 * diagonal) return false;
   out = {x[0], x[1], x[2]};
   return true;
+}
+
+/// Whether cage face f, on `pl`, turns strictly left at each corner seen from the plane's normal
+/// side (a strictly convex polygon, oriented as the region): false for an inverted, folded or
+/// non-convex face, whose limit can fold over its neighbours.
+bool convex_in_plane(const PolyMesh& m, int f, const std::vector<Point3>& x, const Plane& pl) {
+  const int b = m.face_begin(f), n = m.face_size(f);
+  for (int i = 0; i < n; ++i) {
+    const Point3& p = x[m.corner_vertex(b + (i + n - 1) % n)];
+    const Point3& q = x[m.corner_vertex(b + i)];
+    const Point3& r = x[m.corner_vertex(b + (i + 1) % n)];
+    if (!(dot(cross(sub(q, p), sub(r, q)), pl.normal) > 0)) return false;
+  }
+  return true;
+}
+
+/// The in-plane layout of each region's free vertices (FlattenStats::vertices_free): where the
+/// region has faces that are not strictly convex in the plane (the fit moves held vertices freely
+/// along their plane, and folds quads there), the free vertices are placed at the average of
+/// their edge neighbours (a discrete harmonic map with the other vertices fixed: Tutte's
+/// embedding), kept when fewer of the region's faces are then not convex. A free vertex only
+/// moves the limit of faces of its own region, within the plane: the limit surface stays the
+/// same region of the plane, only its parametrisation changes.
+void untangle_regions(const SubdivLevel& cage, const std::vector<int>& face_region, const std::vector<char>& free,
+                      const std::vector<int>& vertex_region, const std::vector<Plane>& planes, std::vector<Point3>& x,
+                      FlattenStats& s) {
+  const PolyMesh& m = cage.mesh;
+  const int nf = m.num_faces(), nv = m.num_vertices();
+  for (int r = 0; r < static_cast<int>(planes.size()); ++r) {
+    std::vector<int> index(nv, -1), vertices;
+    for (int v = 0; v < nv; ++v)
+      if (free[v] && vertex_region[v] == r) index[v] = static_cast<int>(vertices.size()), vertices.push_back(v);
+    if (vertices.empty()) continue;
+    s.vertices_free += static_cast<int>(vertices.size());
+    std::vector<int> faces;  // the region's faces with a free vertex
+    for (int f = 0; f < nf; ++f) {
+      if (face_region[f] != r) continue;
+      bool any = false;
+      for (int h = m.face_begin(f); h < m.face_end(f); ++h) any = any || index[m.corner_vertex(h)] >= 0;
+      if (any) faces.push_back(f);
+    }
+    auto not_convex = [&](const std::vector<Point3>& at) {
+      return static_cast<int>(std::count_if(faces.begin(), faces.end(), [&](int f) { return !convex_in_plane(m, f, at, planes[r]); }));
+    };
+    const int before = not_convex(x);
+    s.faces_folded_before += before;
+    if (before == 0) continue;
+    // The Laplacian of the free vertices, the fixed neighbours on the right-hand side. Every
+    // neighbour of a free vertex is on the plane (it is a vertex of a face of the region).
+    const int n = static_cast<int>(vertices.size());
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
+    for (int i = 0; i < n; ++i) {
+      double degree = 0;
+      for_each_vertex_edge(m, vertices[i], [&](int, int u) {
+        degree += 1;
+        if (index[u] >= 0) entries.emplace_back(i, index[u], -1.0);
+        else for (int k = 0; k < 3; ++k) rhs(i, k) += x[u][k];
+      });
+      entries.emplace_back(i, i, degree);
+    }
+    Eigen::SparseMatrix<double> L(n, n);
+    L.setFromTriplets(entries.begin(), entries.end());
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(L);
+    if (solver.info() != Eigen::Success) {
+      s.faces_folded_after += before;
+      continue;
+    }
+    const Eigen::MatrixXd sol = solver.solve(rhs);
+    std::vector<Point3> relaxed = x;
+    for (int i = 0; i < n; ++i) {
+      // Onto the plane again (the solve's rounding).
+      Point3 p{sol(i, 0), sol(i, 1), sol(i, 2)};
+      const double d = dot(sub(p, planes[r].point), planes[r].normal);
+      for (int k = 0; k < 3; ++k) p[k] -= d * planes[r].normal[k];
+      relaxed[vertices[i]] = p;
+    }
+    const int after = not_convex(relaxed);
+    if (after < before) {
+      for (int v : vertices) x[v] = relaxed[v];
+      s.vertices_untangled += n;
+      s.faces_folded_after += after;
+    } else {
+      s.faces_folded_after += before;
+    }
+  }
 }
 
 }  // namespace
@@ -339,6 +426,19 @@ FlattenStats flatten_planar_regions(const SubdivLevel& cage, const PlanarConstra
     if (move > 0) ++s.vertices_moved;
     s.max_move = std::max(s.max_move, move / diagonal);
   }
+  // The free vertices: smooth (no sharp edge, not on a boundary), held by one region, and in the
+  // limit support of that region's faces only.
+  std::vector<int> vertex_region(nv, -1);
+  for (int v = 0; v < nv; ++v)
+    if (constraints.vertex_regions[v].size() == 1) vertex_region[v] = constraints.vertex_regions[v][0];
+  std::vector<char> free(nv, 0);
+  for (int v = 0; v < nv; ++v)
+    free[v] = vertex_region[v] >= 0 && !m.is_boundary_vertex(v) && !m.is_unused_vertex(v) &&
+              vertex_rule(cage, v) == VertexRule::Smooth;
+  for (int f = 0; f < nf; ++f)
+    for (int v : limit_support(cage, f))
+      if (cage.face_hole[f] || constraints.face_region[f] != vertex_region[v]) free[v] = 0;
+  untangle_regions(cage, constraints.face_region, free, vertex_region, planes, moved, s);
 
   // The flatness of the regions' faces before and after.
   std::vector<char> used(regions.size(), 0);

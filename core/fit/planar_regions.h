@@ -69,6 +69,13 @@ struct FlattenStats {
   int faces_off_plane = 0;     ///< faces on a region's plane whose support is not (left as fitted)
   int faces_dropped = 0;       ///< faces of a region given up (planes that do not meet)
   int vertices_moved = 0;
+  /// Vertices held by one region whose position moves only that region's faces, within its plane
+  /// (smooth, in the limit support of that region's faces alone), and those of them laid out
+  /// again (the regions where faces were not convex in the plane: see flatten_planar_regions).
+  int vertices_free = 0, vertices_untangled = 0;
+  /// The regions' faces with a free vertex that are not strictly convex in the plane (inverted,
+  /// folded or concave quads, whose limit can fold): after the fit, and after the untangling.
+  int faces_folded_before = 0, faces_folded_after = 0;
   double max_move = 0;         ///< largest move, relative to the diagonal
   /// Largest distance of the flattened faces' limit samples to their planes, relative to the
   /// diagonal, before (the fit's) and after the vertices were moved.

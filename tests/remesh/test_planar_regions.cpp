@@ -218,5 +218,69 @@ TEST(PlanarRegions, DrilledBoxNarrowFacetsHoldNoFace) {
   check_flattened(test::drilled_box(0.4, 32, 4, 8), 300, 0, 0.4);
 }
 
+
+/// The fit moves a held vertex freely along its plane and can fold the quads there (plate_holes'
+/// top and bottom, issue #28): the folded faces' limit turns over, and the region's planar face is
+/// refused. One free vertex of the drilled box's top (z = 1: smooth, in the support of top faces
+/// only, by the analytic rule) is thrown past a neighbour, inverting faces. After the flattening
+/// every flattened face of the top must be a strictly convex quad in the plane and its limit
+/// must face +z (du x dv . z > 0 at 5 x 5 samples) and lie in z = 1: the analytic plane and its
+/// orientation are the oracle.
+TEST(PlanarRegions, FoldedFreeVertexUntangledInItsPlane) {
+  const MeshInput mesh = test::drilled_box(0.4, 32, 4, 8);
+  const QuadRemeshResult rr = remeshed(mesh, 300);
+  const SubdivLevel cage = SubdivLevel::from_input(rr.cage);
+  const PolyMesh& m = cage.mesh;
+  const std::vector<Point3>& on_mesh = rr.cage.positions;
+  const int nv = m.num_vertices(), nf = m.num_faces();
+  auto on_top = [&](const std::vector<int>& vs) {
+    return std::all_of(vs.begin(), vs.end(), [&](int v) { return std::abs(on_mesh[v][2] - 1) < 1e-12; });
+  };
+  std::vector<char> only_top(nv, 1);
+  for (int f = 0; f < nf; ++f) {
+    const std::vector<int> sup = limit_support(cage, f);
+    if (!on_top(sup))
+      for (int v : sup) only_top[v] = 0;
+  }
+  int moved = -1;
+  for (int v = 0; v < nv && moved < 0; ++v)
+    if (only_top[v] && std::abs(on_mesh[v][2] - 1) < 1e-12 && vertex_rule(cage, v) == VertexRule::Smooth &&
+        !m.is_boundary_vertex(v))
+      moved = v;
+  ASSERT_GE(moved, 0);
+  std::vector<Point3> positions = on_mesh;
+  int neighbour = -1;
+  for_each_vertex_edge(m, moved, [&](int, int u) { if (neighbour < 0) neighbour = u; });
+  for (int k = 0; k < 2; ++k) positions[moved][k] += 2.5 * (on_mesh[neighbour][k] - on_mesh[moved][k]);
+  const auto regions = detect_planar_regions(mesh.positions, triangles_of(mesh));
+  const double diag = std::sqrt(12.0);
+  const FlattenStats s =
+      flatten_planar_regions(cage, on_mesh, positions, mesh.positions, triangles_of(mesh), regions, diag);
+  EXPECT_GT(s.faces_folded_before, 0);
+  EXPECT_EQ(s.faces_folded_after, 0);
+  const LimitEvaluator limit(cage, positions);
+  int top_faces = 0;
+  for (int f = 0; f < nf; ++f) {
+    if (s.face_region[f] < 0 || !on_top(limit_support(cage, f))) continue;
+    ++top_faces;
+    const int b = m.face_begin(f), n = m.face_size(f);
+    for (int i = 0; i < n; ++i) {
+      const Point3& p = positions[m.corner_vertex(b + (i + n - 1) % n)];
+      const Point3& q = positions[m.corner_vertex(b + i)];
+      const Point3& r = positions[m.corner_vertex(b + (i + 1) % n)];
+      EXPECT_GT((q[0] - p[0]) * (r[1] - q[1]) - (q[1] - p[1]) * (r[0] - q[0]), 0) << "face " << f << " corner " << i;
+    }
+    for (int i = 0; i <= 4; ++i)
+      for (int j = 0; j <= 4; ++j) {
+        const LimitPoint lp = limit.evaluate_point(f, 0, 0.1 + 0.2 * i, 0.1 + 0.2 * j);
+        EXPECT_NEAR(lp.p[2], 1.0, 1e-14);
+        EXPECT_GT(lp.du[0] * lp.dv[1] - lp.du[1] * lp.dv[0], 0) << "face " << f;
+      }
+  }
+  EXPECT_GT(top_faces, 10);
+  std::printf("  %d top faces; %d faces not convex after the fold, %d after; %d free vertices, %d laid out again\n",
+              top_faces, s.faces_folded_before, s.faces_folded_after, s.vertices_free, s.vertices_untangled);
+}
+
 }  // namespace
 }  // namespace subd2nurbs
