@@ -114,41 +114,72 @@ void untangle_regions(const SubdivLevel& cage, const std::vector<int>& face_regi
     const int before = not_convex(x);
     s.faces_folded_before += before;
     if (before == 0) continue;
-    // The Laplacian of the free vertices, the fixed neighbours on the right-hand side. Every
-    // neighbour of a free vertex is on the plane (it is a vertex of a face of the region).
-    const int n = static_cast<int>(vertices.size());
-    std::vector<Eigen::Triplet<double>> entries;
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
-    for (int i = 0; i < n; ++i) {
-      double degree = 0;
-      for_each_vertex_edge(m, vertices[i], [&](int, int u) {
-        degree += 1;
-        if (index[u] >= 0) entries.emplace_back(i, index[u], -1.0);
-        else for (int k = 0; k < 3; ++k) rhs(i, k) += x[u][k];
-      });
-      entries.emplace_back(i, i, degree);
+    // The harmonic layout of `set` (free vertices of the region), the others fixed: the
+    // Laplacian of the set, the fixed neighbours on the right-hand side (every neighbour of a
+    // free vertex is on the plane: it is a vertex of a face of the region). Empty if singular.
+    auto layout = [&](const std::vector<int>& set) -> std::vector<Point3> {
+      std::vector<int> at(nv, -1);
+      for (int i = 0; i < static_cast<int>(set.size()); ++i) at[set[i]] = i;
+      const int n = static_cast<int>(set.size());
+      std::vector<Eigen::Triplet<double>> entries;
+      Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
+      for (int i = 0; i < n; ++i) {
+        double degree = 0;
+        for_each_vertex_edge(m, set[i], [&](int, int u) {
+          degree += 1;
+          if (at[u] >= 0) entries.emplace_back(i, at[u], -1.0);
+          else for (int k = 0; k < 3; ++k) rhs(i, k) += x[u][k];
+        });
+        entries.emplace_back(i, i, degree);
+      }
+      Eigen::SparseMatrix<double> L(n, n);
+      L.setFromTriplets(entries.begin(), entries.end());
+      const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(L);
+      if (solver.info() != Eigen::Success) return {};
+      const Eigen::MatrixXd sol = solver.solve(rhs);
+      std::vector<Point3> relaxed = x;
+      for (int i = 0; i < n; ++i) {
+        // Onto the plane again (the solve's rounding).
+        Point3 p{sol(i, 0), sol(i, 1), sol(i, 2)};
+        const double d = dot(sub(p, planes[r].point), planes[r].normal);
+        for (int k = 0; k < 3; ++k) p[k] -= d * planes[r].normal[k];
+        relaxed[set[i]] = p;
+      }
+      return relaxed;
+    };
+    // A layout is kept when fewer faces are folded and no face that was convex is folded by it:
+    // a harmonic map of a region whose outline is not convex (featuretype's letters) can push
+    // vertices across the outline, and the limit would then leave the mesh's region.
+    auto better = [&](const std::vector<Point3>& relaxed) {
+      if (relaxed.empty() || not_convex(relaxed) >= before) return false;
+      for (int f : faces)
+        if (convex_in_plane(m, f, x, planes[r]) && !convex_in_plane(m, f, relaxed, planes[r])) return false;
+      return true;
+    };
+    // First the whole region's free vertices; else only those near a fold (the vertices of the
+    // faces that are not convex, grown by two rings), the fit's layout kept elsewhere.
+    std::vector<int> set = vertices;
+    std::vector<Point3> relaxed = layout(set);
+    if (!better(relaxed)) {
+      std::vector<char> active(nv, 0);
+      for (int f : faces)
+        if (!convex_in_plane(m, f, x, planes[r]))
+          for (int h = m.face_begin(f); h < m.face_end(f); ++h) active[m.corner_vertex(h)] = 1;
+      for (int ring = 0; ring < 2; ++ring) {
+        std::vector<char> grown = active;
+        for (int v : vertices)
+          if (active[v]) for_each_vertex_edge(m, v, [&](int, int u) { grown[u] = 1; });
+        active.swap(grown);
+      }
+      set.clear();
+      for (int v : vertices)
+        if (active[v]) set.push_back(v);
+      relaxed = layout(set);
     }
-    Eigen::SparseMatrix<double> L(n, n);
-    L.setFromTriplets(entries.begin(), entries.end());
-    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(L);
-    if (solver.info() != Eigen::Success) {
-      s.faces_folded_after += before;
-      continue;
-    }
-    const Eigen::MatrixXd sol = solver.solve(rhs);
-    std::vector<Point3> relaxed = x;
-    for (int i = 0; i < n; ++i) {
-      // Onto the plane again (the solve's rounding).
-      Point3 p{sol(i, 0), sol(i, 1), sol(i, 2)};
-      const double d = dot(sub(p, planes[r].point), planes[r].normal);
-      for (int k = 0; k < 3; ++k) p[k] -= d * planes[r].normal[k];
-      relaxed[vertices[i]] = p;
-    }
-    const int after = not_convex(relaxed);
-    if (after < before) {
-      for (int v : vertices) x[v] = relaxed[v];
-      s.vertices_untangled += n;
-      s.faces_folded_after += after;
+    if (better(relaxed)) {
+      for (int v : set) x[v] = relaxed[v];
+      s.vertices_untangled += static_cast<int>(set.size());
+      s.faces_folded_after += not_convex(x);
     } else {
       s.faces_folded_after += before;
     }
