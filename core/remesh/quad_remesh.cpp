@@ -1106,6 +1106,26 @@ void augment_matching(const std::vector<std::array<int, 3>>& cand, std::vector<i
   }
 }
 
+// The vertex of triangle t that is neither a nor b (-1 if none).
+int third_vertex(const Tri& t, int a, int b) {
+  int v = -1;
+  for (int m = 0; m < 3; ++m)
+    if (t[m] != a && t[m] != b) v = t[m];
+  return v;
+}
+
+// Flips the edge a - b shared by triangles i = (a, b, c) and j = (b, a, dd):
+// -> (a, dd, c), (dd, b, c), with the directed-edge map `half` (edge -> triangle) kept up to date.
+void flip_pair(std::vector<Tri>& tris, std::unordered_map<std::uint64_t, int>& half, int i, int j, int a, int b,
+               int c, int dd) {
+  for (int t : {i, j})
+    for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
+  tris[i] = {a, dd, c};
+  tris[j] = {dd, b, c};
+  for (int t : {i, j})
+    for (int m = 0; m < 3; ++m) half[half_key(tris[t][m], tris[t][(m + 1) % 3])] = t;
+}
+
 // Edge flips on the coarse triangles towards regular valences (6 inside, 4 on the boundary;
 // corners free) and lattice edges: an interior edge that is no feature edge is flipped when the
 // new edge is a lattice edge (displacement (±1, 0), (0, ±1) or (±1, ±1)) where the old one was
@@ -1163,9 +1183,7 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
         auto it = half.find(half_key(b, a));
         if (it == half.end() || coarse_feature(a, b)) continue;
         const int j = it->second;
-        int dd = -1;
-        for (int m = 0; m < 3; ++m)
-          if (tris[j][m] != a && tris[j][m] != b) dd = tris[j][m];
+        const int dd = third_vertex(tris[j], a, b);
         if (dd < 0 || dd == c || count.count(edge_key(c, dd))) continue;
         const int before = excess(a, 0) + excess(b, 0) + excess(c, 0) + excess(dd, 0);
         const int after = excess(a, -1) + excess(b, -1) + excess(c, 1) + excess(dd, 1);
@@ -1178,13 +1196,7 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
         if (!(lo > 0) || n1.dot(old_n) <= 0.5 * n1.norm() * lo || n2.dot(old_n) <= 0.5 * n2.norm() * lo) continue;
         if (std::min(min_angle(a, dd, c), min_angle(dd, b, c)) < std::min(min_angle(a, b, c), min_angle(b, a, dd)))
           continue;  // the pair's smallest angle must not shrink (the cage's quads stay even)
-        // flip: (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c)
-        for (int t : {int(i), j})
-          for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
-        tris[i] = {a, dd, c};
-        tris[j] = {dd, b, c};
-        for (int t : {int(i), j})
-          for (int m = 0; m < 3; ++m) half[half_key(tris[t][m], tris[t][(m + 1) % 3])] = t;
+        flip_pair(tris, half, int(i), j, a, b, c, dd);  // (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c)
         count.erase(edge_key(a, b));
         count[edge_key(c, dd)] = 2;
         valence[a] -= 1;
@@ -1231,21 +1243,14 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
         auto it = half.find(half_key(b, a));
         if (it == half.end()) continue;
         const int j = it->second;
-        int dd = -1;
-        for (int m = 0; m < 3; ++m)
-          if (tris[j][m] != a && tris[j][m] != b) dd = tris[j][m];
+        const int dd = third_vertex(tris[j], a, b);
         if (dd < 0 || dd == c || half.count(half_key(c, dd)) || half.count(half_key(dd, c))) continue;
         if (fl.kind[dense_of[dd]] != 0) continue;  // the side's vertex (not across a wall one quad high)
         const V3 side = normal(b, a, dd), n1 = normal(a, dd, c), n2 = normal(dd, b, c), ear = normal(a, b, c);
         const double ls = side.norm();
         if (!(ls > 0) || n1.dot(side) <= 0.5 * n1.norm() * ls || n2.dot(side) <= 0.5 * n2.norm() * ls) continue;
         if (ear.dot(side) > 0.5 * ear.norm() * ls) continue;  // the ear lies on the side: left as it is
-        for (int t : {int(i), j})
-          for (int m = 0; m < 3; ++m) half.erase(half_key(tris[t][m], tris[t][(m + 1) % 3]));
-        tris[i] = {a, dd, c};
-        tris[j] = {dd, b, c};
-        for (int t : {int(i), j})
-          for (int m = 0; m < 3; ++m) half[half_key(tris[t][m], tris[t][(m + 1) % 3])] = t;
+        flip_pair(tris, half, int(i), j, a, b, c, dd);
         ++changed;
         break;
       }
