@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -216,6 +217,11 @@ struct Fields {
   std::vector<V3> tangent;        // feature tangent (kind 1), zero if none
   std::vector<V3> principal;      // principal curvature direction
   std::vector<double> principal_weight;
+  std::vector<std::array<int, 2>> chain;  // dense level: a chain vertex's feature neighbours (-1: none)
+  bool pin_arcs = false;                  // dense level: pin_tight_arcs (QuadRemeshOptions)
+  int arc_pins = 0;                       // dense level: vertices pinned by the last position solve
+  std::vector<char> pinned;               // position field: o stays at pin (ends of tight arcs, step 3)
+  std::vector<V3> pin;
   double s = 1;
 };
 
@@ -252,6 +258,7 @@ void build_adjacency(const Dense& d, Fields& fl) {
 void classify(const Dense& d, Fields& fl) {
   fl.kind.assign(fl.n, 0);
   fl.tangent.assign(fl.n, V3::Zero());
+  fl.chain.assign(fl.n, {-1, -1});
   for (int v = 0; v < fl.n; ++v) {
     std::vector<int> fn;
     for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
@@ -260,6 +267,7 @@ void classify(const Dense& d, Fields& fl) {
       fl.kind[v] = 2;
     } else if (!fn.empty()) {
       fl.kind[v] = 1;
+      if (fn.size() <= 2) fl.chain[v] = {fn[0], fn.size() == 2 ? fn[1] : -1};
       V3 t = fn.size() == 2 ? V3(d.p[fn[1]] - d.p[fn[0]]) : V3(d.p[v] - d.p[fn[0]]);
       t -= fl.normal[v] * fl.normal[v].dot(t);
       if (fn.size() <= 2 && t.norm() > 0) fl.tangent[v] = t.normalized();
@@ -402,6 +410,8 @@ void smooth_cross_vertex(Fields& fl, std::vector<V3>& nq, int v) {
 void constrain_position(Fields& fl, int v) {
   if (fl.kind[v] == 2) {
     fl.o[v] = fl.anchor[v];
+  } else if (fl.pinned[v]) {
+    fl.o[v] = fl.pin[v];
   } else if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
     V3 r = fl.o[v] - fl.anchor[v];
     fl.o[v] = fl.anchor[v] + fl.q[v] * fl.q[v].dot(r);
@@ -416,8 +426,8 @@ void init_position_field(Fields& fl, Check&& check) {
   std::vector<char> set(fl.n, 0);
   std::deque<int> queue;
   for (int v = 0; v < fl.n; ++v)
-    if (fl.kind[v] == 2) {
-      fl.o[v] = fl.anchor[v];
+    if (fl.kind[v] == 2 || fl.pinned[v]) {
+      fl.o[v] = fl.kind[v] == 2 ? fl.anchor[v] : fl.pin[v];
       constrain_position(fl, v);
       set[v] = 1;
       queue.push_back(v);
@@ -455,7 +465,7 @@ PositionFrame position_frame(const Fields& fl) {
 }
 
 void smooth_position_vertex(Fields& fl, const PositionFrame& frame, int v) {
-  if (fl.kind[v] == 2) return;
+  if (fl.kind[v] == 2 || fl.pinned[v]) return;
   const V3& n = fl.normal[v];
   const V3& p = fl.p[v];
   const V3& t = frame.t[v];
@@ -576,11 +586,159 @@ void sweeps(Fields& fl, int iterations, Sweep&& sweep, Check&& check) {
   }
 }
 
+// Lattice columns at feature arcs tighter than the lattice (docs/remesh.md step 3). Where a chain
+// turns by much within one lattice spacing s (a rim rounding a corner of the part in plan), the
+// extraction keeps chain vertices of the arc's own (step 4's chain rule) wherever the lattice
+// points fall, and a kept rim vertex with no lattice column under it leaves the side's vertices
+// beside it stuck (step 6c). A chain vertex is tight when its radius of curvature (its turn over
+// the mean of its two chain edges) is below kArcRadius x s; an arc is a run of tight vertices
+// along a chain, joined across gaps up to s / 2 (a faceted arc's split edges). An arc that turns
+// by kArcTurn or more, with a mean radius below kArcRadius x s, is pinned: the position field
+// keeps the lattice point of its middle vertex (an arc shorter than s / 2) or of its two end
+// vertices at the vertex itself, as at a corner, so that a lattice column runs down the side
+// from there. Left alone: closed tight loops (a small hole's rim), arcs within s / 2 of a corner,
+// and pins with no room for a row under them (below). Pins hold on the dense level only: carried
+// to the coarser levels they shifted fandisk's lattice elsewhere (docs/remesh.md step 3).
+constexpr double kArcRadius = 0.75;
+constexpr double kArcRoom = 0.75;  // another feature this near (x s): no row under the arc
+constexpr double kArcTurn = 1.17;  // radians (67 deg: a coarse chain edge turning more keeps a vertex, step 4)
+
+void pin_tight_arcs(Hierarchy& h) {
+  Fields& fl = h.levels[0];
+  const double s = fl.s;
+  for (Fields& level : h.levels) {
+    level.pinned.assign(level.n, 0);
+    level.pin = level.anchor;
+  }
+  fl.arc_pins = 0;
+  if (!fl.pin_arcs || fl.chain.size() != size_t(fl.n)) return;
+  std::vector<double> turn(fl.n, 0.0);
+  for (int v = 0; v < fl.n; ++v) {
+    const auto& c = fl.chain[v];
+    if (fl.kind[v] != 1 || c[0] < 0 || c[1] < 0) continue;
+    V3 a = fl.p[v] - fl.p[c[0]], b = fl.p[c[1]] - fl.p[v];
+    if (a.norm() > 0 && b.norm() > 0) turn[v] = std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
+  }
+  // Tight vertices: the chain's radius of curvature there (turn over the mean of the two chain
+  // edges) below kArcRadius x s.
+  std::vector<char> tight(fl.n, 0);
+  for (int v = 0; v < fl.n; ++v) {
+    const auto& c = fl.chain[v];
+    if (turn[v] <= 0) continue;
+    const double dual = 0.5 * ((fl.p[v] - fl.p[c[0]]).norm() + (fl.p[c[1]] - fl.p[v]).norm());
+    tight[v] = turn[v] * kArcRadius * s > dual;
+  }
+  // Arcs: runs of tight vertices along a chain, joined across gaps up to s / 2 (a faceted arc
+  // whose long edges were split has straight vertices between its facets' corners).
+  std::vector<char> seen(fl.n, 0);
+  std::vector<int> pins;
+  for (int v = 0; v < fl.n; ++v) {
+    if (!tight[v] || seen[v]) continue;
+    seen[v] = 1;
+    std::vector<int> ends(2, v);
+    std::vector<double> reach(2, 0.0);
+    std::vector<int> side[2];  // the chain vertices walked from v, each way, up to the arc's end
+    double total = turn[v];
+    bool closed = false, near_corner = false;
+    for (int k = 0; k < 2 && !closed; ++k) {
+      int prev = v, w = fl.chain[v][k];
+      double len = 0, gap = 0;
+      while (w >= 0) {
+        const double e = (fl.p[w] - fl.p[prev]).norm();
+        len += e;
+        gap += e;
+        if (w == v) {
+          closed = true;
+          break;
+        }
+        if (fl.kind[w] != 1) {
+          if (gap <= 0.5 * s) near_corner = true;
+          break;
+        }
+        if (tight[w]) {
+          if (seen[w]) {  // met the run from the other side: a closed loop
+            closed = true;
+            break;
+          }
+          seen[w] = 1;
+          total += turn[w];
+          side[k].push_back(w);
+          ends[k] = w;
+          reach[k] = len;
+          gap = 0;
+        } else if (gap > 0.5 * s) {
+          break;
+        } else {
+          side[k].push_back(w);
+        }
+        const auto& c = fl.chain[w];
+        int nx = c[0] == prev ? c[1] : c[0];
+        prev = w;
+        w = nx;
+      }
+    }
+    const double length = reach[0] + reach[1];
+    if (closed || near_corner || total < kArcTurn || length > kArcRadius * s * total) continue;
+    if (length < 0.5 * s) {  // a short arc: one column at its middle
+      std::vector<int> run(side[0].rbegin(), side[0].rend());
+      run.push_back(v);
+      run.insert(run.end(), side[1].begin(), side[1].end());
+      const int first = int(std::find(run.begin(), run.end(), ends[0]) - run.begin());
+      const int last = int(std::find(run.begin(), run.end(), ends[1]) - run.begin());
+      double at = 0, best_d = INFINITY;
+      int best = v;
+      for (int i = first; i <= last; ++i) {
+        if (i > first) at += (fl.p[run[i]] - fl.p[run[i - 1]]).norm();
+        if (std::abs(at - 0.5 * length) < best_d) best_d = std::abs(at - 0.5 * length), best = run[i];
+      }
+      pins.push_back(best);
+    } else {
+      pins.push_back(ends[0]);
+      pins.push_back(ends[1]);
+    }
+  }
+  // A pin with another feature curve within kArcRoom x s (a wall less than a row high under the
+  // rim, the other rim of a thin plate), or a surface facing away from it there (the far side of
+  // a thin part whose other outline is no feature): no row fits under it, so no column is made.
+  std::vector<int> kept;
+  for (int v : pins) {
+    std::vector<int> own{v};  // the chain within 2 s of v, both ways
+    for (int k = 0; k < 2; ++k) {
+      int prev = v, w = fl.chain[v][k];
+      double len = 0;
+      while (w >= 0 && w != v && len < 2 * s) {
+        len += (fl.p[w] - fl.p[prev]).norm();
+        own.push_back(w);
+        if (fl.kind[w] != 1) break;
+        const auto& c = fl.chain[w];
+        int nx = c[0] == prev ? c[1] : c[0];
+        prev = w;
+        w = nx;
+      }
+    }
+    std::sort(own.begin(), own.end());
+    bool room = true;
+    for (int w = 0; w < fl.n && room; ++w) {
+      if ((fl.p[w] - fl.p[v]).norm() >= kArcRoom * s) continue;
+      if (fl.kind[w] != 0 && !std::binary_search(own.begin(), own.end(), w)) room = false;
+      if (fl.normal[w].dot(fl.normal[v]) < -0.5) room = false;  // the far side of a thin part
+    }
+    if (room) kept.push_back(v);
+  }
+  pins = kept;
+  fl.arc_pins = static_cast<int>(pins.size());
+  for (int v : pins) {
+    fl.pinned[v] = 1;
+    fl.pin[v] = fl.p[v];
+  }
+}
+
 // Both fields solved coarse to fine: initialised on the coarsest level, smoothed there, carried
 // to each finer level (projected onto its tangent planes, constraints applied) and smoothed again.
 template <class Check>
 void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
   int top = static_cast<int>(h.levels.size()) - 1;
+  if (!cross) pin_tight_arcs(h);
   if (cross)
     init_cross_field(h.levels[top], check);
   else
@@ -1663,6 +1821,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     {
       Fields dense;
       dense.s = s;
+      dense.pin_arcs = options.pin_tight_arcs;
       build_adjacency(d, dense);
       classify(d, dense);
       curvature(d, dense, options.curvature_alignment);
@@ -1681,7 +1840,6 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       solve_fields(hier, iterations, false, [&]() { check(0.5); });
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
-
       Collapser col(d, fl, kChainSag);
       collapse_to_lattice(d, fl, s, col, check);
       std::vector<int> dense_of;
@@ -1713,6 +1871,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       check(0.92);
       if (options.relocate_stuck)  // after the pairing and the clean-up: their counts are kept (step 6c)
         st.relocations = relocate_stuck_vertices(d, fl, s, polygons, dense_of, coarse_feature);
+      st.arc_pins = fl.arc_pins;
       result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
       double ratio = split_faces * h * h / area;

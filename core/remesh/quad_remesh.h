@@ -24,6 +24,7 @@ struct QuadRemeshOptions {
   bool regularize_valence = true;    ///< edge flips on the coarse triangles before pairing (fewer extraordinary vertices)
   bool cleanup = true;  ///< quad-dominant clean-up of the coarse quads and triangles before the split (core/remesh/quad_cleanup.h)
   bool relocate_stuck = true;  ///< move coarse vertices stuck beside a feature curve away from it before the split (docs/remesh.md step 6c)
+  bool pin_tight_arcs = true;  ///< position field: lattice columns at the ends of feature arcs tighter than the lattice (docs/remesh.md step 3)
   /// Soft features (FeatureOptions::soft_angle_degrees): edges bending by more than this fraction
   /// of the feature angle, with the bend concentrated within the cage's edge length, are
   /// features too (used when features.soft_angle_degrees and soft_reach are 0; 0 = off).
@@ -45,6 +46,7 @@ struct QuadRemeshStats {
   int cleanup_rotations = 0;   ///< coarse edges rotated by the clean-up (cleanup)
   int cleanup_merges = 0;      ///< pairs of coarse triangles merged into quads by the clean-up
   int relocations = 0;         ///< coarse vertices stuck beside a feature curve moved away from it (relocate_stuck)
+  int arc_pins = 0;            ///< chain vertices whose lattice point the position field kept at themselves (pin_tight_arcs)
   double cleanup_seconds = 0;  ///< wall time of the clean-up (part of extract_seconds)
   int attempts = 0;            ///< position field + extraction runs (2: the first gave > 1.3x the faces asked for)
 };

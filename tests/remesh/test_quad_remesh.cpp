@@ -495,31 +495,37 @@ TEST(QuadRemesh, PlateHoles) { real_mesh("plate_holes.STL", 200, false); }
 // other vertices at least 0.4 x the crease edge's length from the rim (a square quad: 1). Without
 // the move a quad 0.27 as high as long stays (a sliver across which the limit normal of the crease
 // is ill-conditioned: fandisk's bottom rim); the move changes no count.
+// The lowest wall quad along the rims of test::rounded_slab (caps at z = +-h): over the cage's
+// quads with a crease edge on a cap's plane, the smallest height of its other two vertices above
+// or below that plane, over the edge's length (measured from the exact planes).
+static double lowest_wall_quad(const QuadRemeshResult& r, double h) {
+  std::set<std::pair<int, int>> crease;
+  for (const auto& c : r.cage.creases) crease.insert(std::minmax(c.v0, c.v1));
+  double worst = INFINITY;
+  for (int q = 0; q < r.cage.num_faces(); ++q) {
+    const int* f = &r.cage.face_indices[4 * q];
+    for (int k = 0; k < 4; ++k) {
+      const P3 &a = r.cage.positions[f[k]], &b = r.cage.positions[f[(k + 1) % 4]];
+      if (!crease.count(std::minmax(f[k], f[(k + 1) % 4])) || std::abs(std::abs(a[2]) - h) > 1e-9 ||
+          std::abs(b[2] - a[2]) > 1e-9)
+        continue;  // not a rim edge
+      const double length = std::hypot(b[0] - a[0], b[1] - a[1]);
+      for (int j : {f[(k + 2) % 4], f[(k + 3) % 4]}) {
+        const double off = std::abs(r.cage.positions[j][2] - a[2]);
+        if (off > 1e-9) worst = std::min(worst, off / length);  // a wall quad (not a cap's)
+      }
+    }
+  }
+  return worst;
+}
+
 TEST(QuadRemesh, NoSliverBesideATightRim) {
   const double rho = 0.06, h = 0.3;
   MeshInput m = test::rounded_slab(rho, h, 256, 16, 24);
-  auto lowest_wall_quad = [&](const QuadRemeshResult& r) {  // min height / length along the rims
-    std::set<std::pair<int, int>> crease;
-    for (const auto& c : r.cage.creases) crease.insert(std::minmax(c.v0, c.v1));
-    double worst = INFINITY;
-    for (int q = 0; q < r.cage.num_faces(); ++q) {
-      const int* f = &r.cage.face_indices[4 * q];
-      for (int k = 0; k < 4; ++k) {
-        const P3 &a = r.cage.positions[f[k]], &b = r.cage.positions[f[(k + 1) % 4]];
-        if (!crease.count(std::minmax(f[k], f[(k + 1) % 4])) || std::abs(std::abs(a[2]) - h) > 1e-9 ||
-            std::abs(b[2] - a[2]) > 1e-9)
-          continue;  // not a rim edge
-        const double length = std::hypot(b[0] - a[0], b[1] - a[1]);
-        for (int j : {f[(k + 2) % 4], f[(k + 3) % 4]}) {
-          const double off = std::abs(r.cage.positions[j][2] - a[2]);
-          if (off > 1e-9) worst = std::min(worst, off / length);  // a wall quad (not a cap's)
-        }
-      }
-    }
-    return worst;
-  };
+  auto lowest_wall_quad = [&](const QuadRemeshResult& r) { return subd2nurbs::lowest_wall_quad(r, h); };
   QuadRemeshOptions o;
   o.target_faces = 1000;
+  o.pin_tight_arcs = false;  // the lattice of before step 3's arc pins: it leaves the stuck vertex
   o.relocate_stuck = false;
   const QuadRemeshResult off = quad_remesh(m, o);
   o.relocate_stuck = true;
@@ -536,6 +542,36 @@ TEST(QuadRemesh, NoSliverBesideATightRim) {
   EXPECT_EQ(on.cage.num_faces(), off.cage.num_faces());
   EXPECT_EQ(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices);
   EXPECT_EQ(on.cage.creases.size(), off.cage.creases.size());
+}
+
+// docs/remesh.md step 3: the position field pins a lattice column at each tight arc of a feature
+// chain, so the side under a rim that rounds a corner of the part (radius 0.06, a fifth of the
+// lattice spacing 0.3 at 1000 quads) has a row under each kept rim vertex and no vertex stays
+// stuck beside the crease. Without the pins the lowest wall quad along a rim is a sliver (its
+// height a quarter of its length, docs/remesh.md step 6c); with them it is at least 0.4 of its
+// length without moving any vertex afterwards (relocate_stuck off).
+TEST(QuadRemesh, TightArcPinsALatticeColumn) {
+  const double rho = 0.06, h = 0.3;
+  MeshInput m = test::rounded_slab(rho, h, 256, 16, 24);
+  QuadRemeshOptions o;
+  o.target_faces = 1000;
+  o.relocate_stuck = false;
+  o.pin_tight_arcs = false;
+  const QuadRemeshResult off = quad_remesh(m, o);
+  o.pin_tight_arcs = true;
+  const QuadRemeshResult on = quad_remesh(m, o);
+  check_cage(m, off, 1000);
+  check_cage(m, on, 1000);
+  const double before = lowest_wall_quad(off, h), after = lowest_wall_quad(on, h);
+  std::printf("  %d arc pins; lowest wall quad along a rim: %.3f -> %.3f of its length; faces %d -> %d, "
+              "extraordinary %d -> %d\n",
+              on.stats.arc_pins, before, after, off.cage.num_faces(), on.cage.num_faces(),
+              off.stats.extraordinary_vertices, on.stats.extraordinary_vertices);
+  EXPECT_EQ(off.stats.arc_pins, 0);
+  EXPECT_GT(on.stats.arc_pins, 0);
+  EXPECT_LT(before, 0.4) << "the slab no longer has a stuck vertex without the pins: the test checks nothing";
+  EXPECT_GE(after, 0.4);
+  EXPECT_LE(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices);
 }
 
 }  // namespace subd2nurbs
