@@ -626,11 +626,18 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
   PlanarFaces planar;
   if (options.merge_planar) planar = find_planar_faces(ps, tolerances::kSameSurface);
   else planar.face_of_patch.assign(num_patches, -1);
+  result.split_planar_sets = planar.split;
+  constexpr int kMaxPlanarSplits = 4;
   // A planar face stands in the face list at its lowest patch; its other patches have none.
   // It is made first and checked alone (BRepCheck): where the set's boundary crosses itself in
   // the plane (a surface folded over itself), its patches are written as they are instead.
+  // A refused set whose loops cross (patches overlapping in the plane) is split at the crossings
+  // (core/patch/planar_faces.h, split_planar_face) and its parts are tried in turn, appended to
+  // the list; the patches left out are written as they are.
   std::vector<char> on_loop(num_curves, 0);
-  for (PlanarFace& f : planar.faces) {
+  std::vector<int> rounds(planar.faces.size(), 0);  // per planar face: splits it comes from
+  for (size_t i = 0; i < planar.faces.size(); ++i) {
+    const PlanarFace f = planar.faces[i];  // a copy: parts are appended below
     TopoDS_Face& face = faces[f.patches.front()];
     bool ok = false;
     guarded("planar face", f.patches.front(), [&] {
@@ -643,7 +650,18 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     });
     if (!ok) {
       for (int p : f.patches) planar.face_of_patch[p] = -1;
-      ++result.rejected_planar_faces;
+      std::vector<PlanarFace> parts;
+      if (rounds[i] < kMaxPlanarSplits) parts = split_planar_face(ps, f, tolerances::kSameSurface);
+      if (parts.empty()) {
+        ++result.rejected_planar_faces;
+        continue;
+      }
+      ++result.split_planar_sets;
+      for (PlanarFace& part : parts) {
+        for (int p : part.patches) planar.face_of_patch[p] = static_cast<int>(planar.faces.size());
+        planar.faces.push_back(std::move(part));
+        rounds.push_back(rounds[i] + 1);
+      }
       continue;
     }
     for (const auto& loop : f.loops)
