@@ -3,6 +3,7 @@
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <BRepCheck_Analyzer.hxx>
+#include <BRepCheck_Wire.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Line.hxx>
 #include <Geom_BSplineCurve.hxx>
@@ -19,6 +20,7 @@
 #include <TopExp.hxx>
 #include <TopTools_DataMapOfShapeInteger.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
@@ -640,10 +642,19 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     const PlanarFace f = planar.faces[i];  // a copy: parts are appended below
     TopoDS_Face& face = faces[f.patches.front()];
     bool ok = false;
+    std::vector<int> intersecting;  // loop curves whose edges BRepCheck finds intersecting
     guarded("planar face", f.patches.front(), [&] {
       make_planar_face(f, shared, builder, tol, face);
       ok = BRepCheck_Analyzer(face).IsValid();
       if (ok) return;
+      for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) {
+        TopoDS_Edge e1, e2;
+        BRepCheck_Wire check(TopoDS::Wire(w.Current()));
+        if (check.SelfIntersect(face, e1, e2) != BRepCheck_SelfIntersectingWire) continue;
+        for (const auto& loop : f.loops)
+          for (const LoopCurve& c : loop)
+            if (shared.edges[c.curve].IsSame(e1) || shared.edges[c.curve].IsSame(e2)) intersecting.push_back(c.curve);
+      }
       for (const auto& loop : f.loops)  // take the pcurves on the plane off the edges again
         for (const LoopCurve& c : loop) builder.UpdateEdge(shared.edges[c.curve], Handle(Geom2d_Curve)(), face, tol);
       face.Nullify();
@@ -651,7 +662,7 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     if (!ok) {
       for (int p : f.patches) planar.face_of_patch[p] = -1;
       std::vector<PlanarFace> parts;
-      if (rounds[i] < kMaxPlanarSplits) parts = split_planar_face(ps, f, tolerances::kSameSurface);
+      if (rounds[i] < kMaxPlanarSplits) parts = split_planar_face(ps, f, tolerances::kSameSurface, intersecting);
       if (parts.empty()) {
         ++result.rejected_planar_faces;
         continue;

@@ -427,9 +427,11 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
   return out;
 }
 
-std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance) {
+std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance,
+                                          const std::vector<int>& also) {
   std::vector<PlanarFace> out;
-  const std::vector<int> bad = crossing_curves(ps, f);
+  std::vector<int> bad = crossing_curves(ps, f);
+  bad.insert(bad.end(), also.begin(), also.end());
   if (bad.empty()) return out;
   int split = 0;
   split_at_crossings(ps, f, bad, plane_tolerance(ps, relative_tolerance).of(f.normal), kMaxSplits, out, split);

@@ -59,9 +59,11 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance);
 /// surface beside it leaves a patch out or turns one over, so the set is not one region of the
 /// plane; OCCT refuses its face) split into parts: the patches along the crossing curves
 /// (crossing_curves) are left out, to be written as they are, and each connected rest with one
-/// outer loop is a part (a rest whose loops still fail is split again, up to 4 rounds). Empty
+/// outer loop is a part (a rest whose loops still fail is split again, up to 4 rounds). `also`:
+/// more curves to leave out (those a checker found intersecting: OCCT's BRepCheck_Wire). Empty
 /// when no loop curve crosses. The parts' loops may still cross: check them again.
-std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance);
+std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance,
+                                          const std::vector<int>& also = {});
 
 /// The curves of `f`'s loops that cross a loop curve (another, or another piece of themselves)
 /// in f's plane, each curve sampled at 16 segments (curves that only meet at a corner do not
