@@ -3,6 +3,7 @@
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <BRepCheck_Analyzer.hxx>
+#include <BRepCheck_Wire.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_Line.hxx>
 #include <Geom_BSplineCurve.hxx>
@@ -19,6 +20,7 @@
 #include <TopExp.hxx>
 #include <TopTools_DataMapOfShapeInteger.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
@@ -626,24 +628,51 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
   PlanarFaces planar;
   if (options.merge_planar) planar = find_planar_faces(ps, tolerances::kSameSurface);
   else planar.face_of_patch.assign(num_patches, -1);
+  result.split_planar_sets = planar.split;
+  constexpr int kMaxPlanarSplits = 4;
   // A planar face stands in the face list at its lowest patch; its other patches have none.
   // It is made first and checked alone (BRepCheck): where the set's boundary crosses itself in
   // the plane (a surface folded over itself), its patches are written as they are instead.
+  // A refused set whose loops cross (patches overlapping in the plane) is split at the crossings
+  // (core/patch/planar_faces.h, split_planar_face) and its parts are tried in turn, appended to
+  // the list; the patches left out are written as they are.
   std::vector<char> on_loop(num_curves, 0);
-  for (PlanarFace& f : planar.faces) {
+  std::vector<int> rounds(planar.faces.size(), 0);  // per planar face: splits it comes from
+  for (size_t i = 0; i < planar.faces.size(); ++i) {
+    const PlanarFace f = planar.faces[i];  // a copy: parts are appended below
     TopoDS_Face& face = faces[f.patches.front()];
     bool ok = false;
+    std::vector<int> intersecting;  // loop curves whose edges BRepCheck finds intersecting
     guarded("planar face", f.patches.front(), [&] {
       make_planar_face(f, shared, builder, tol, face);
       ok = BRepCheck_Analyzer(face).IsValid();
       if (ok) return;
+      for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next()) {
+        TopoDS_Edge e1, e2;
+        BRepCheck_Wire check(TopoDS::Wire(w.Current()));
+        if (check.SelfIntersect(face, e1, e2) != BRepCheck_SelfIntersectingWire) continue;
+        for (const auto& loop : f.loops)
+          for (const LoopCurve& c : loop)
+            if (shared.edges[c.curve].IsSame(e1) || shared.edges[c.curve].IsSame(e2)) intersecting.push_back(c.curve);
+      }
       for (const auto& loop : f.loops)  // take the pcurves on the plane off the edges again
         for (const LoopCurve& c : loop) builder.UpdateEdge(shared.edges[c.curve], Handle(Geom2d_Curve)(), face, tol);
       face.Nullify();
     });
     if (!ok) {
       for (int p : f.patches) planar.face_of_patch[p] = -1;
-      ++result.rejected_planar_faces;
+      std::vector<PlanarFace> parts;
+      if (rounds[i] < kMaxPlanarSplits) parts = split_planar_face(ps, f, tolerances::kSameSurface, intersecting);
+      if (parts.empty()) {
+        ++result.rejected_planar_faces;
+        continue;
+      }
+      ++result.split_planar_sets;
+      for (PlanarFace& part : parts) {
+        for (int p : part.patches) planar.face_of_patch[p] = static_cast<int>(planar.faces.size());
+        planar.faces.push_back(std::move(part));
+        rounds.push_back(rounds[i] + 1);
+      }
       continue;
     }
     for (const auto& loop : f.loops)

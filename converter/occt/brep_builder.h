@@ -31,6 +31,8 @@ struct BrepResult {
   int merged_patches = 0;  ///< patches inside those planar faces
   int rejected_planar_faces = 0;  ///< coplanar sets whose planar face BRepCheck rejected (a boundary
                                   ///< crossing itself): written one face per patch instead
+  int split_planar_sets = 0;  ///< coplanar sets whose loops crossed in the plane (patches overlapping: a
+                              ///< fold): the patches along the crossings left out, the rest merged
 };
 
 struct BrepOptions {

@@ -1,6 +1,7 @@
 #include "core/patch/planar_faces.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <deque>
 #include <map>
@@ -139,7 +140,8 @@ double signed_area(const PatchSet& ps, const std::vector<LoopCurve>& loop, const
 }
 
 /// The boundary loops of the set `f.patches` (outer first), or false when it is not one region
-/// with holes bounded by simple loops.
+/// with holes bounded by simple loops. When the loops close but not exactly one of them turns
+/// counter-clockwise (an overlap in the plane), `f.loops` holds them all the same (unordered).
 bool make_loops(const PatchSet& ps, PlanarFace& f, double tolerance) {  // model units
   // Curves used once inside the set bound it; curves used twice (both ways) are inside it.
   std::map<int, std::vector<LoopCurve>> uses;
@@ -185,30 +187,177 @@ bool make_loops(const PatchSet& ps, PlanarFace& f, double tolerance) {  // model
     loops.push_back(std::move(loop));
   }
   // Exactly one loop turns counter-clockwise about the normal (the outer one), the others are holes.
-  int outer = -1;
-  for (size_t i = 0; i < loops.size(); ++i) {
-    if (signed_area(ps, loops[i], f) > 0) {
-      if (outer >= 0) return false;
-      outer = static_cast<int>(i);
-    }
-  }
-  if (outer < 0) return false;
-  std::swap(loops[0], loops[outer]);
+  int outer = -1, ccw = 0;
+  for (size_t i = 0; i < loops.size(); ++i)
+    if (signed_area(ps, loops[i], f) > 0) outer = static_cast<int>(i), ++ccw;
+  if (ccw == 1) std::swap(loops[0], loops[outer]);
   f.loops = std::move(loops);
-  return true;
+  return ccw == 1;
+}
+
+using Point2 = std::array<double, 2>;
+
+/// Twice the signed area of the triangle (a, b, c): > 0 when c is left of a -> b.
+double orient(const Point2& a, const Point2& b, const Point2& c) {
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
 }
 
 }  // namespace
 
-PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
-  const int n = static_cast<int>(ps.patches.size());
-  PlanarFaces out;
+std::vector<int> crossing_curves(const PatchSet& ps, const PlanarFace& f) {
+  // Every loop curve as a polyline in the plane's (x, y), 16 segments per curve.
+  constexpr int kSegments = 16;
+  const Point3 y_axis = cross(f.normal, f.x_axis);
+  struct Polyline {
+    int curve;
+    std::vector<Point2> pts;
+    Point2 lo, hi;  // bounding box
+  };
+  std::vector<Polyline> lines;
+  double extent = 0;
+  for (const auto& loop : f.loops)
+    for (const LoopCurve& c : loop) {
+      Polyline l{c.curve, {}, {HUGE_VAL, HUGE_VAL}, {-HUGE_VAL, -HUGE_VAL}};
+      for (int k = 0; k <= kSegments; ++k) {
+        const Point3 d = sub(evaluate(ps.curves[c.curve], static_cast<double>(k) / kSegments), f.origin);
+        const Point2 q{dot(d, f.x_axis), dot(d, y_axis)};
+        for (int i = 0; i < 2; ++i) {
+          l.lo[i] = std::min(l.lo[i], q[i]);
+          l.hi[i] = std::max(l.hi[i], q[i]);
+          extent = std::max(extent, std::abs(q[i]));
+        }
+        l.pts.push_back(q);
+      }
+      lines.push_back(std::move(l));
+    }
+  // Two segments cross when each one's ends lie strictly on both sides of the other's line.
+  // Segments that share an end (a curve's own consecutive segments, curves meeting at a corner)
+  // only touch; rounding is kept out by a margin relative to the face's extent.
+  const double eps = 1e-10 * extent * extent;
+  const double same = 1e-10 * extent;
+  auto close = [&](const Point2& a, const Point2& b) {
+    return std::abs(a[0] - b[0]) <= same && std::abs(a[1] - b[1]) <= same;
+  };
+  auto cross_strictly = [&](const Point2& a, const Point2& b, const Point2& c, const Point2& d) {
+    if (close(a, c) || close(a, d) || close(b, c) || close(b, d)) return false;
+    const double o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
+    return ((o1 > eps && o2 < -eps) || (o1 < -eps && o2 > eps)) && ((o3 > eps && o4 < -eps) || (o3 < -eps && o4 > eps));
+  };
+  std::vector<char> crossing(lines.size(), 0);
+  for (size_t i = 0; i < lines.size(); ++i)
+    for (size_t j = i; j < lines.size(); ++j) {
+      const Polyline &A = lines[i], &B = lines[j];
+      if (A.hi[0] < B.lo[0] || B.hi[0] < A.lo[0] || A.hi[1] < B.lo[1] || B.hi[1] < A.lo[1]) continue;
+      bool found = false;
+      for (int a = 0; a < kSegments && !found; ++a)
+        for (int b = (i == j ? a + 2 : 0); b < kSegments && !found; ++b)
+          found = cross_strictly(A.pts[a], A.pts[a + 1], B.pts[b], B.pts[b + 1]);
+      if (found) crossing[i] = crossing[j] = 1;
+    }
+  std::vector<int> out;
+  for (size_t i = 0; i < lines.size(); ++i)
+    if (crossing[i]) out.push_back(lines[i].curve);
+  // A loop that turns back on itself at a corner (a cusp: the curves leave the corner along the
+  // same line) runs along itself there: OCCT finds its curves intersecting beside the corner.
+  constexpr double kCusp = 150.0 * M_PI / 180.0;
+  for (const auto& loop : f.loops)
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const LoopCurve& in = loop[i];
+      const LoopCurve& next = loop[(i + 1) % loop.size()];
+      if (std::abs(left_turn(ps, in, next, f.normal)) > kCusp) {
+        out.push_back(in.curve);
+        out.push_back(next.curve);
+      }
+    }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+namespace {
+
+/// Adds the set `f` (its plane set, its loops not yet made) to `out` as one planar face when its
+/// boundary is one region with holes. When its loops close but are not that (more than one
+/// outer loop: patches overlapping in the plane), it is split at the crossings of its loops
+/// (split_at_crossings), up to `depth` rounds. Returns the number of sets it gave up on.
+int add_regions(const PatchSet& ps, PlanarFace f, double tolerance, int depth, std::vector<PlanarFace>& out,
+                int& split);
+
+/// The connected parts of `f.patches` left when the patches along the crossing curves `bad` are
+/// left out, each added by add_regions. Returns the number of parts it gave up on.
+int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vector<int>& bad, double tolerance,
+                       int depth, std::vector<PlanarFace>& out, int& split) {
+  ++split;
+  std::vector<char> dropped_curve(ps.curves.size(), 0);
+  for (int k : bad) dropped_curve[k] = 1;
+  std::vector<int> keep;
+  for (int p : f.patches) {
+    bool on_bad = false;
+    for (const LoopCurve& c : boundary_pieces(ps.patches[p])) on_bad = on_bad || dropped_curve[c.curve];
+    if (!on_bad) keep.push_back(p);
+  }
+  // Connected parts of the rest, across curves two of them share.
+  std::map<int, std::vector<int>> users;  // curve -> kept patches using it
+  for (int p : keep)
+    for (const LoopCurve& c : boundary_pieces(ps.patches[p])) users[c.curve].push_back(p);
+  std::map<int, std::vector<int>> next;  // patch -> neighbours in the rest
+  for (const auto& [k, list] : users)
+    for (int a : list)
+      for (int b : list)
+        if (a != b) next[a].push_back(b);
+  std::map<int, char> reached;
+  int gave_up = 0;
+  for (int seed : keep) {
+    if (reached[seed]) continue;
+    PlanarFace part;
+    part.origin = f.origin;
+    part.normal = f.normal;
+    part.x_axis = f.x_axis;
+    std::deque<int> queue{seed};
+    reached[seed] = 1;
+    while (!queue.empty()) {
+      const int p = queue.front();
+      queue.pop_front();
+      part.patches.push_back(p);
+      for (int q : next[p])
+        if (!reached[q]) reached[q] = 1, queue.push_back(q);
+    }
+    std::sort(part.patches.begin(), part.patches.end());
+    gave_up += add_regions(ps, std::move(part), tolerance, depth, out, split);
+  }
+  return gave_up;
+}
+
+int add_regions(const PatchSet& ps, PlanarFace f, double tolerance, int depth, std::vector<PlanarFace>& out,
+                int& split) {
+  if (make_loops(ps, f, tolerance)) {
+    out.push_back(std::move(f));
+    return 0;
+  }
+  if (f.loops.empty() || depth == 0) return 1;
+  const std::vector<int> bad = crossing_curves(ps, f);
+  if (bad.empty()) return 1;
+  return split_at_crossings(ps, f, bad, tolerance, depth - 1, out, split);
+}
+
+PlaneTolerance plane_tolerance(const PatchSet& ps, double relative_tolerance) {
   PlaneTolerance tolerance;
   tolerance.relative = relative_tolerance;
   tolerance.cap = relative_tolerance * ps.model_size;
   for (const NurbsPatch& patch : ps.patches)
     for (const Point3& q : patch.poles)
       for (int i = 0; i < 3; ++i) tolerance.scale[i] = std::max(tolerance.scale[i], std::abs(q[i]));
+  return tolerance;
+}
+
+constexpr int kMaxSplits = 4;  // rounds of leaving out the patches along crossing curves
+
+}  // namespace
+
+PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
+  const int n = static_cast<int>(ps.patches.size());
+  PlanarFaces out;
+  const PlaneTolerance tolerance = plane_tolerance(ps, relative_tolerance);
   out.face_of_patch.assign(n, -1);
   // Per patch: its plane, when its poles lie on one.
   std::vector<Point3> origin(n), net(n), normal(n);
@@ -262,14 +411,30 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
     f.x_axis = scaled(x, 1 / norm(x));
     bool flat = true;
     for (int p : f.patches) flat = flat && on_plane(ps.patches[p], f.origin, f.normal, tolerance);
-    if (!flat || !make_loops(ps, f, tolerance.of(f.normal))) {
+    if (!flat) {
       ++out.skipped;
       continue;
     }
-    const int index = static_cast<int>(out.faces.size());
-    for (int p : f.patches) out.face_of_patch[p] = index;
-    out.faces.push_back(std::move(f));
+    std::vector<PlanarFace> regions;
+    const double on_plane_tolerance = tolerance.of(f.normal);
+    out.skipped += add_regions(ps, std::move(f), on_plane_tolerance, kMaxSplits, regions, out.split);
+    for (PlanarFace& r : regions) {
+      const int index = static_cast<int>(out.faces.size());
+      for (int p : r.patches) out.face_of_patch[p] = index;
+      out.faces.push_back(std::move(r));
+    }
   }
+  return out;
+}
+
+std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance,
+                                          const std::vector<int>& also) {
+  std::vector<PlanarFace> out;
+  std::vector<int> bad = crossing_curves(ps, f);
+  bad.insert(bad.end(), also.begin(), also.end());
+  if (bad.empty()) return out;
+  int split = 0;
+  split_at_crossings(ps, f, bad, plane_tolerance(ps, relative_tolerance).of(f.normal), kMaxSplits, out, split);
   return out;
 }
 

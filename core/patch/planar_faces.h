@@ -38,6 +38,7 @@ struct PlanarFaces {
   std::vector<int> face_of_patch;  ///< per patch: its PlanarFace, or -1 (written as it is)
   int planar_patches = 0;          ///< patches whose poles lie on a plane (merged or not)
   int skipped = 0;                 ///< coplanar sets left as they are: their boundary touches itself
+  int split = 0;  ///< coplanar sets whose loops crossed in the plane, split by leaving out the patches along the crossings
 };
 
 /// The coplanar sets of patches of `ps` (a set may be one patch). A patch is planar when its poles lie on
@@ -50,7 +51,24 @@ struct PlanarFaces {
 /// (rounding scales with the coordinates along the normal: a part 1e8 long and 1e-8 thin), and
 /// never more than relative_tolerance x ps.model_size. A set whose boundary passes a corner
 /// twice (two regions touching at a point), or does not have exactly one outer loop, is left
-/// as it is (`skipped`).
+/// as it is (`skipped`), unless its loops cross (patches overlapping: see split_planar_face),
+/// when it is split as there (`split`).
 PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance);
+
+/// A planar face whose loops cross in its plane (its patches overlap there: a fold of the
+/// surface beside it leaves a patch out or turns one over, so the set is not one region of the
+/// plane; OCCT refuses its face) split into parts: the patches along the crossing curves
+/// (crossing_curves) are left out, to be written as they are, and each connected rest with one
+/// outer loop is a part (a rest whose loops still fail is split again, up to 4 rounds). `also`:
+/// more curves to leave out (those a checker found intersecting: OCCT's BRepCheck_Wire). Empty
+/// when no loop curve crosses. The parts' loops may still cross: check them again.
+std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance,
+                                          const std::vector<int>& also = {});
+
+/// The curves of `f`'s loops that cross a loop curve (another, or another piece of themselves)
+/// in f's plane, each curve sampled at 16 segments (curves that only meet at a corner do not
+/// cross), and the two curves of every corner where a loop turns back on itself (by more than
+/// 170 degrees: a cusp, the curves running along each other). Ascending.
+std::vector<int> crossing_curves(const PatchSet& ps, const PlanarFace& f);
 
 }  // namespace subd2nurbs

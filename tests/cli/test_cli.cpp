@@ -421,7 +421,7 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "{k: r['patches'][k] for k in ('total', 'regular', 'pccm', 'polar_caps')} == {'total': 24, 'regular': 0, 'pccm': 24, 'polar_caps': 0}",
       "r['patches']['poles'] >= 24 * 16 and r['patches']['pieces'] >= 24",
       "r['fans']['smooth'] == 8 and r['fans']['approximate'] == 0 and r['fans']['approximate_fans'] == []",
-      "r['brep'] == {'faces': 24, 'edges': 48, 'vertices': 26, 'type': 'solid', 'solids': 1, 'shells': 1, 'valid': True, 'tolerance': r['brep']['tolerance'], 'planar_faces': 0, 'merged_patches': 0, 'rejected_planar_faces': 0}",
+      "r['brep'] == {'faces': 24, 'edges': 48, 'vertices': 26, 'type': 'solid', 'solids': 1, 'shells': 1, 'valid': True, 'tolerance': r['brep']['tolerance'], 'planar_faces': 0, 'merged_patches': 0, 'rejected_planar_faces': 0, 'split_planar_sets': 0}",
       "r['continuity']['max_gap'] < 1e-12 and r['continuity']['max_normal_angle_deg'] < 1e-6",
       "abs(r['continuity']['max_gap_relative'] * r['model_size'] - r['continuity']['max_gap']) <= 1e-15 * r['model_size']",
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",

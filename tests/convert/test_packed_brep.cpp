@@ -4,11 +4,15 @@
 // per-quad B-rep of the same patches, and the crease lines packs must not cross.
 #include <gtest/gtest.h>
 
+#include <BRepBndLib.hxx>
+#include <BRepClass_FaceClassifier.hxx>
+#include <Bnd_Box.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom_Plane.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -18,6 +22,7 @@
 #include "converter/occt/shape_check.h"
 #include "core/patch/packing.h"
 #include "core/patch/planar_faces.h"
+#include "core/nurbs/nurbs_eval.h"
 #include "core/util/tolerances.h"
 #include "core/patch/patch_builder.h"
 
@@ -256,6 +261,65 @@ TEST(PlanarFaces, CurvedSurfacesAreNotMerged) {
     const PlanarFaces planar = find_planar_faces(packed.set, tolerances::kSameSurface);
     EXPECT_EQ(planar.faces.size(), 0u);
     EXPECT_EQ(planar.planar_patches, 0);
+  }
+}
+
+TEST(PlanarFaces, OverlapInThePlaneIsLeftOutNotTheWholeSet) {
+  // A flat 10 x 10 sheet with one inner vertex pulled past its neighbours: the patches around it
+  // fold over one another in the plane (the limit surface overlaps itself there), so the sheet's
+  // coplanar set has loops that cross. BRepCheck refuses such a set's planar face
+  // (SelfIntersectingWire); all its 100 patches used to be written one by one. Now the patches
+  // along the crossings are left out and the rest is merged. Oracles: OCCT's checker, and OCCT's
+  // face classifier: every point of every patch lies in a face of the result (a planar face over
+  // patches that overlap classifies the twice-covered points as outside; its area, by Green's
+  // theorem, would be the patches' all the same).
+  for (const Point3 moved : {Point3{7.2, 4.8, 0}, Point3{7.2, 5.5, 0}}) {
+    MeshInput in = grid(10, 10);
+    for (Point3& p : in.positions) p[2] = 0;
+    in.positions[4 * 11 + 4] = moved;  // vertex (4, 4)
+    const PatchBuild b = build(in);    // one patch per quad (packed, the flat grid is one face)
+    const PatchSet& set = b.set;
+    // The whole sheet is one coplanar set whose loops cross; its parts leave the crossing curves out.
+    const PlanarFaces planar = find_planar_faces(set, tolerances::kSameSurface);
+    ASSERT_EQ(planar.faces.size(), 1u);
+    const std::vector<int> crossing = crossing_curves(set, planar.faces[0]);
+    EXPECT_FALSE(crossing.empty());
+    const std::vector<PlanarFace> parts = split_planar_face(set, planar.faces[0], tolerances::kSameSurface);
+    ASSERT_GE(parts.size(), 1u);
+    for (const PlanarFace& part : parts)
+      for (int p : part.patches)
+        for (int side = 0; side < 4; ++side)
+          EXPECT_EQ(std::count(crossing.begin(), crossing.end(), set.patches[p].curves[side]), 0);
+    occt::BrepOptions merge;
+    merge.merge_planar = true;
+    const occt::BrepResult r = occt::build_brep(set, {}, merge);
+    ASSERT_TRUE(r.valid) << r.check_message;
+    EXPECT_EQ(r.rejected_planar_faces, 0);
+    EXPECT_GE(r.split_planar_sets, 1);
+    EXPECT_GE(r.planar_faces, 1);
+    EXPECT_LT(r.num_faces, 20) << "of " << set.patches.size() << " patches";  // most of the sheet is one plane
+    std::vector<TopoDS_Face> result_faces;
+    std::vector<Bnd_Box> boxes;
+    for (TopExp_Explorer x(r.shape, TopAbs_FACE); x.More(); x.Next()) {
+      result_faces.push_back(TopoDS::Face(x.Current()));
+      boxes.emplace_back();
+      BRepBndLib::Add(result_faces.back(), boxes.back());
+      boxes.back().Enlarge(1e-6);
+    }
+    int outside = 0;
+    for (const NurbsPatch& patch : set.patches)
+      for (double u : {0.25, 0.5, 0.75})
+        for (double v : {0.25, 0.5, 0.75}) {
+          const Point3 x = evaluate(patch, u, v).p;
+          bool in_a_face = false;
+          for (size_t k = 0; k < result_faces.size() && !in_a_face; ++k) {
+            if (boxes[k].IsOut(gp_Pnt(x[0], x[1], x[2]))) continue;
+            BRepClass_FaceClassifier c(result_faces[k], gp_Pnt(x[0], x[1], x[2]), 1e-7);
+            in_a_face = in_a_face || c.State() == TopAbs_IN || c.State() == TopAbs_ON;
+          }
+          outside += !in_a_face;
+        }
+    EXPECT_EQ(outside, 0);
   }
 }
 
