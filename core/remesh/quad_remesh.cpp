@@ -660,15 +660,23 @@ struct Collapser {
   std::vector<std::vector<int>> vf;
   std::unordered_set<std::uint64_t> feature;
   std::vector<double> dist;
-  std::vector<int> scratch_u, scratch_v;
+  std::vector<int> scratch_u, scratch_v, scratch_common, scratch_opposite;
   std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along the input's feature edges
   double chain_sag = 0;                 // see chord_follows_chain
+  // Change stamps: `epoch` counts the collapses made; touched[w] is the epoch of the last collapse
+  // x -> y that changed anything can_collapse reads around w (w = x or a neighbour of x: their
+  // faces, their lists of faces, their feature edges). can_collapse(u, v) reads only the faces of
+  // u and v, their vertices and the feature edges of u; for a vertex on no feature (no chain walk)
+  // its answer cannot change while neither u nor v is touched (collapse_to_lattice skips it).
+  long epoch = 0;
+  std::vector<long> touched;
 
   Collapser(const Dense& d, const Fields& fields, double max_chain_sag)
       : p(d.p), fl(fields), f(d.t), feature(d.feature), chain_sag(max_chain_sag) {
     int n = static_cast<int>(p.size());
     face_alive.assign(f.size(), 1);
     alive.assign(n, 1);
+    touched.assign(n, 0);
     vf.assign(n, {});
     for (size_t i = 0; i < f.size(); ++i)
       for (int v : f[i]) vf[v].push_back(int(i));
@@ -725,6 +733,21 @@ struct Collapser {
     return count;
   }
   bool is_feature(int a, int b) const { return feature.count(edge_key(a, b)) != 0; }
+  // Whether a face has the vertices a and b (searched in the shorter of their face lists).
+  bool share_face(int a, int b) const {
+    if (vf[b].size() < vf[a].size()) std::swap(a, b);
+    for (int fi : vf[a])
+      if (contains(f[fi], b)) return true;
+    return false;
+  }
+  // Whether a face has the vertices a, b and c (the same: the shortest list).
+  bool face_of(int a, int b, int c) const {
+    if (vf[b].size() < vf[a].size()) std::swap(a, b);
+    if (vf[c].size() < vf[a].size()) std::swap(a, c);
+    for (int fi : vf[a])
+      if (contains(f[fi], b) && contains(f[fi], c)) return true;
+    return false;
+  }
   bool boundary_vertex(int u, const std::vector<int>& nu) const {
     int tmp[2];
     for (int w : nu)
@@ -736,29 +759,36 @@ struct Collapser {
     return (at(1) - at(0)).cross(at(2) - at(0));
   }
 
-  bool can_collapse(int u, int v) {
+  // `chain_refused`: set when only the chain walk (chord_follows_chain, the one test that reads
+  // beyond u, v and their faces) refused: the tests are independent, so their order is free,
+  // and the walk comes last.
+  bool can_collapse(int u, int v, bool* chain_refused = nullptr) {
+    if (chain_refused) *chain_refused = false;
     if (fl.kind[u] == 2) return false;
+    if (fl.kind[u] == 1 && !is_feature(u, v)) return false;
     int shared[2];
     int count = faces_with(u, v, shared);
     if (count == 0 || count > 2) return false;
     std::vector<int>& nu = scratch_u;
     std::vector<int>& nv = scratch_v;
     neighbours(u, nu);
-    if (fl.kind[u] == 1) {
-      if (!is_feature(u, v)) return false;
+    if (fl.kind[u] == 1)
       for (int w : nu)
         if (w != v && is_feature(u, w) && is_feature(v, w)) return false;
-      if (!chord_follows_chain(u, v)) return false;
-    }
-    neighbours(v, nv);
-    std::vector<int> common, opposite;
-    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+    // the common neighbours of u and v (u's neighbours, sorted, that share a face with v; a
+    // cluster's centre has many faces: its own list is neither built nor sorted here)
+    std::vector<int>& common = scratch_common;
+    std::vector<int>& opposite = scratch_opposite;
+    common.clear();
+    opposite.clear();
+    for (int w : nu)
+      if (w != v && share_face(w, v)) common.push_back(w);
     for (int k = 0; k < count; ++k)
       for (int w : f[shared[k]])
         if (w != u && w != v) opposite.push_back(w);
     std::sort(opposite.begin(), opposite.end());
     if (common != opposite) return false;
-    if (count == 2 && boundary_vertex(u, nu) && boundary_vertex(v, nv)) return false;
+    if (count == 2 && boundary_vertex(u, nu) && (neighbours(v, nv), boundary_vertex(v, nv))) return false;
     for (int fi : vf[u]) {
       if (fi == shared[0] || (count == 2 && fi == shared[1])) continue;
       V3 before = face_normal(f[fi], -1, -1), after = face_normal(f[fi], u, v);
@@ -767,8 +797,11 @@ struct Collapser {
       int a = -1, b = -1;
       for (int w : f[fi])
         if (w != u) (a < 0 ? a : b) = w;
-      for (int gi : vf[v])
-        if (contains(f[gi], a) && contains(f[gi], b)) return false;
+      if (face_of(v, a, b)) return false;
+    }
+    if (fl.kind[u] == 1 && !chord_follows_chain(u, v)) {
+      if (chain_refused) *chain_refused = true;
+      return false;
     }
     return true;
   }
@@ -776,6 +809,9 @@ struct Collapser {
   void collapse(int u, int v) {
     std::vector<int> nu;
     neighbours(u, nu);
+    ++epoch;
+    touched[u] = epoch;
+    for (int w : nu) touched[w] = epoch;  // v among them
     std::vector<int> faces = vf[u];
     for (int fi : faces) {
       if (contains(f[fi], v)) {
@@ -1014,37 +1050,75 @@ void collapse_to_lattice(const Dense& d, const Fields& fl, double s, Collapser& 
     int r = find_root(cluster, u);
     if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
   }
+  // The vertices that are not their cluster's centre, in index order (the passes' order): a
+  // centre never moves in these passes and a collapsed vertex never comes back, so the others
+  // are never visited. A vertex whose last visit made no collapse (refused by a test other than
+  // the chain walk), and around which (it or its centre) nothing has been touched since, would
+  // answer the same: skipped
+  // (the same collapses in the same order as visiting every vertex every pass).
+  std::vector<int> centre(fl.n), pending;
+  for (int u = 0; u < fl.n; ++u) {
+    centre[u] = centre_of[find_root(cluster, u)];
+    if (centre[u] != u) pending.push_back(u);
+  }
+  std::vector<long> visited(fl.n, -1);  // epoch of the last visit that made no collapse
+  auto unchanged = [&](int u, int c) {
+    return visited[u] >= 0 && col.touched[u] <= visited[u] && col.touched[c] <= visited[u];
+  };
   for (int pass = 0; pass < 200; ++pass) {
     int changed = 0;
-    for (int u = 0; u < fl.n; ++u) {
-      int c = centre_of[find_root(cluster, u)];
+    size_t kept = 0;
+    for (size_t i = 0; i < pending.size(); ++i) {
+      const int u = pending[i];
+      if (!col.alive[u]) continue;
+      pending[kept++] = u;
+      const int c = centre[u];
+      if (unchanged(u, c)) continue;
       int tmp[2];
-      if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
-        continue;
-      if (col.can_collapse(u, c)) {
+      bool chain_refused = false;
+      if (!col.vf[u].empty() && col.faces_with(u, c, tmp) != 0 && col.can_collapse(u, c, &chain_refused)) {
         col.collapse(u, c);
         ++changed;
+      } else {
+        visited[u] = chain_refused ? -1 : col.epoch;  // the chain walk reads farther: asked again
       }
     }
+    pending.resize(kept);
     check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
     if (changed == 0) break;
   }
+  // The same skip in the second stage: a vertex none of whose faces' vertices has been touched
+  // since its last visit without a collapse (its neighbours, their faces and its candidates are
+  // as they were), unless the chain walk refused one of its candidates.
+  std::fill(visited.begin(), visited.end(), -1);
+  auto quiet = [&](int u) {
+    if (visited[u] < 0 || col.touched[u] > visited[u]) return false;
+    for (int fi : col.vf[u])
+      for (int w : col.f[fi])
+        if (col.touched[w] > visited[u]) return false;
+    return true;
+  };
   std::vector<int> nu, cands;
   for (int pass = 0; pass < 200; ++pass) {
     int changed = 0;
     for (int u = 0; u < fl.n; ++u) {
       if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
+      if (quiet(u)) continue;
+      visited[u] = col.epoch;  // (a collapse below removes u: never visited again)
       col.neighbours(u, nu);
       cands.clear();
       for (int v : nu)
         if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
       std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
-      for (int v : cands)
-        if (col.can_collapse(u, v)) {
+      for (int v : cands) {
+        bool chain_refused = false;
+        if (col.can_collapse(u, v, &chain_refused)) {
           col.collapse(u, v);
           ++changed;
           break;
         }
+        if (chain_refused) visited[u] = -1;
+      }
     }
     check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
     if (changed == 0) break;
