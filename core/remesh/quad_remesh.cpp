@@ -1689,6 +1689,71 @@ void check_cage(const MeshInput& mesh, QuadRemeshResult& result) {
   st.feature_chains_kept = result.features.chains;
 }
 
+// The size check with a target count (docs/remesh.md step 7). The cage's faces F(s) fall with the
+// lattice spacing s about as s^-2 (the lattice's cells), but the lattice's irregularities add
+// faces (clusters split where a collapse is refused, unpaired triangles: 0 .. 16 % at s = 2 h on
+// the smooth meshes measured, more at coarse sizes), F is noisy in s (+-8 % between nearby
+// spacings: the singularities land elsewhere), and feature curves keep vertices of their own
+// whatever the spacing. So the first run is at kPrior x 2 h; each next spacing aims at the
+// band's middle (kAimCentre x target) from the last run with F ~ s^-2, or, when the last two
+// runs lie on both sides of it, by the line through them in log s - log F (slope held within
+// 1 .. 3). It stops when the faces are within the band (kAimLow .. 1 x target), after
+// kCountAttempts runs, or at a feature floor (two runs above the target, the coarser one 0 .. 3 %
+// fewer faces). The spacing stays within 0.7 .. 2.5 x the first. Kept: a run within the
+// band; else the one nearest it, an excess over the target counting 4 x a shortfall.
+constexpr int kCountAttempts = 5;
+constexpr double kPrior = 1.05, kAimLow = 0.9, kAimCentre = 0.95;
+
+class SizeAim {
+ public:
+  SizeAim(int target, double s0) : target_(target), s0_(s0) {}
+
+  // Records a run; true when it is the best so far.
+  bool add(double s, int faces) {
+    runs_.push_back({s, faces});
+    const double m = miss(faces);
+    if (runs_.size() > 1 && !(m < best_miss_)) return false;
+    best_miss_ = m;
+    return true;
+  }
+
+  // Whether to run again; `s` the next spacing.
+  bool again(double& s) const {
+    const Run& last = runs_.back();
+    if (miss(last.faces) == 0 || static_cast<int>(runs_.size()) >= kCountAttempts) return false;
+    const double aim = kAimCentre * target_;
+    double slope = 2;  // F ~ s^-slope
+    if (runs_.size() > 1) {
+      const Run& before = runs_[runs_.size() - 2];
+      if (last.faces > target_ && before.faces > target_ && last.s > before.s &&
+          last.faces <= before.faces && last.faces > 0.97 * before.faces)
+        return false;  // a feature floor: a coarser lattice does not help
+      const double ds = std::log(last.s / before.s);
+      if ((last.faces > aim) != (before.faces > aim) && std::abs(ds) > 1e-6)
+        slope = std::clamp(-std::log(double(last.faces) / before.faces) / ds, 1.0, 3.0);
+    }
+    s = std::clamp(last.s * std::pow(last.faces / aim, 1 / slope), 0.7 * s0_, 2.5 * s0_);
+    for (const Run& r : runs_)
+      if (std::abs(r.s - s) <= 1e-9 * s) return false;  // at a limit already tried
+    return true;
+  }
+
+ private:
+  struct Run {
+    double s;
+    int faces;
+  };
+  // How far `faces` is from the band, relative to the target; an excess counts 4 x.
+  double miss(int faces) const {
+    const double r = double(faces) / target_;
+    return r > 1 ? 4 * (r - 1) : r < kAimLow ? kAimLow - r : 0;
+  }
+  int target_;
+  double s0_;
+  std::vector<Run> runs_;
+  double best_miss_ = INFINITY;
+};
+
 }  // namespace
 
 QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
@@ -1746,8 +1811,15 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     Fields& fl = hier.levels[0];
     int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
     solve_fields(hier, iterations, true, [&]() { check(0.25); });
-    // Position field and extraction; when the lattice's irregularities gave clearly more faces
-    // than asked for, once more with the spacing scaled by the square root of the excess.
+    // Position field and extraction, and the size check (docs/remesh.md step 7): with a target
+    // count (aim_at_target), until the faces are within the band (SizeAim), the spacing corrected
+    // from the runs so far, the run nearest the band kept; else once more, with the spacing
+    // scaled by the square root of the excess, when the faces clearly exceed the target.
+    const bool aim = options.target_faces > 0 && options.aim_at_target;
+    if (aim) s *= kPrior;
+    SizeAim size_aim(options.target_faces, s);
+    MeshInput best_cage;
+    QuadRemeshStats best_stats;
     for (int attempt = 0;; ++attempt) {
       result.cage = MeshInput{};
       auto t_position = Clock::now();
@@ -1789,13 +1861,28 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
         st.relocations = relocate_stuck_vertices(d, fl, s, polygons, dense_of, coarse_feature);
       result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
-      double ratio = split_faces * h * h / area;
       st.attempts = attempt + 1;
-      if (attempt == 0 && ratio > 1.3) {
-        s *= std::sqrt(ratio);
-        continue;
+      if (!aim) {
+        double ratio = split_faces * h * h / area;
+        if (attempt == 0 && ratio > 1.3) {
+          s *= std::sqrt(ratio);
+          continue;
+        }
+        break;
       }
-      break;
+      if (size_aim.add(s, result.cage.num_faces())) {
+        best_cage = result.cage;
+        best_stats = st;
+      }
+      if (!size_aim.again(s)) break;
+    }
+    if (aim && st.attempts > 1) {  // the kept run's cage and counts; the seconds and runs of all
+      result.cage = std::move(best_cage);
+      best_stats.attempts = st.attempts;
+      best_stats.field_seconds = st.field_seconds;
+      best_stats.extract_seconds = st.extract_seconds;
+      best_stats.cleanup_seconds = st.cleanup_seconds;
+      st = best_stats;
     }
 
     check_cage(mesh, result);
