@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -1575,11 +1576,10 @@ int relocate_stuck_vertices(const Dense& d, const Fields& fl, double s, const st
 // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface;
 // feature edges into two feature edges, feature corners tagged.
 template <class IsFeature>
-MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& fl,
+MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& fl, const Projector& proj,
                            const std::vector<std::vector<int>>& polygons, const std::vector<int>& dense_of,
                            IsFeature&& coarse_feature) {
   const int nc = static_cast<int>(dense_of.size());
-  Projector proj(d, fl);
   MeshInput cage;
   cage.options = mesh.options;
   for (int v = 0; v < nc; ++v) {
@@ -1820,6 +1820,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     SizeAim size_aim(options.target_faces, s);
     MeshInput best_cage;
     QuadRemeshStats best_stats;
+    std::optional<Projector> projector;  // the split's search structures: the dense mesh's, built once for all runs
     for (int attempt = 0;; ++attempt) {
       result.cage = MeshInput{};
       auto t_position = Clock::now();
@@ -1859,7 +1860,8 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       check(0.92);
       if (options.relocate_stuck)  // after the pairing and the clean-up: their counts are kept (step 6c)
         st.relocations = relocate_stuck_vertices(d, fl, s, polygons, dense_of, coarse_feature);
-      result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
+      if (!projector) projector.emplace(d, fl);
+      result.cage = split_into_quads(mesh, d, fl, *projector, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
       st.attempts = attempt + 1;
       if (!aim) {
