@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <deque>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -818,15 +819,23 @@ struct Collapser {
   std::vector<std::vector<int>> vf;
   std::unordered_set<std::uint64_t> feature;
   std::vector<double> dist;
-  std::vector<int> scratch_u, scratch_v;
+  std::vector<int> scratch_u, scratch_v, scratch_common, scratch_opposite;
   std::vector<std::vector<int>> chain;  // per dense vertex: its neighbours along the input's feature edges
   double chain_sag = 0;                 // see chord_follows_chain
+  // Change stamps: `epoch` counts the collapses made; touched[w] is the epoch of the last collapse
+  // x -> y that changed anything can_collapse reads around w (w = x or a neighbour of x: their
+  // faces, their lists of faces, their feature edges). can_collapse(u, v) reads only the faces of
+  // u and v, their vertices and the feature edges of u; for a vertex on no feature (no chain walk)
+  // its answer cannot change while neither u nor v is touched (collapse_to_lattice skips it).
+  long epoch = 0;
+  std::vector<long> touched;
 
   Collapser(const Dense& d, const Fields& fields, double max_chain_sag)
       : p(d.p), fl(fields), f(d.t), feature(d.feature), chain_sag(max_chain_sag) {
     int n = static_cast<int>(p.size());
     face_alive.assign(f.size(), 1);
     alive.assign(n, 1);
+    touched.assign(n, 0);
     vf.assign(n, {});
     for (size_t i = 0; i < f.size(); ++i)
       for (int v : f[i]) vf[v].push_back(int(i));
@@ -883,6 +892,21 @@ struct Collapser {
     return count;
   }
   bool is_feature(int a, int b) const { return feature.count(edge_key(a, b)) != 0; }
+  // Whether a face has the vertices a and b (searched in the shorter of their face lists).
+  bool share_face(int a, int b) const {
+    if (vf[b].size() < vf[a].size()) std::swap(a, b);
+    for (int fi : vf[a])
+      if (contains(f[fi], b)) return true;
+    return false;
+  }
+  // Whether a face has the vertices a, b and c (the same: the shortest list).
+  bool face_of(int a, int b, int c) const {
+    if (vf[b].size() < vf[a].size()) std::swap(a, b);
+    if (vf[c].size() < vf[a].size()) std::swap(a, c);
+    for (int fi : vf[a])
+      if (contains(f[fi], b) && contains(f[fi], c)) return true;
+    return false;
+  }
   bool boundary_vertex(int u, const std::vector<int>& nu) const {
     int tmp[2];
     for (int w : nu)
@@ -894,29 +918,36 @@ struct Collapser {
     return (at(1) - at(0)).cross(at(2) - at(0));
   }
 
-  bool can_collapse(int u, int v) {
+  // `chain_refused`: set when only the chain walk (chord_follows_chain, the one test that reads
+  // beyond u, v and their faces) refused: the tests are independent, so their order is free,
+  // and the walk comes last.
+  bool can_collapse(int u, int v, bool* chain_refused = nullptr) {
+    if (chain_refused) *chain_refused = false;
     if (fl.kind[u] == 2) return false;
+    if (fl.kind[u] == 1 && !is_feature(u, v)) return false;
     int shared[2];
     int count = faces_with(u, v, shared);
     if (count == 0 || count > 2) return false;
     std::vector<int>& nu = scratch_u;
     std::vector<int>& nv = scratch_v;
     neighbours(u, nu);
-    if (fl.kind[u] == 1) {
-      if (!is_feature(u, v)) return false;
+    if (fl.kind[u] == 1)
       for (int w : nu)
         if (w != v && is_feature(u, w) && is_feature(v, w)) return false;
-      if (!chord_follows_chain(u, v)) return false;
-    }
-    neighbours(v, nv);
-    std::vector<int> common, opposite;
-    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+    // the common neighbours of u and v (u's neighbours, sorted, that share a face with v; a
+    // cluster's centre has many faces: its own list is neither built nor sorted here)
+    std::vector<int>& common = scratch_common;
+    std::vector<int>& opposite = scratch_opposite;
+    common.clear();
+    opposite.clear();
+    for (int w : nu)
+      if (w != v && share_face(w, v)) common.push_back(w);
     for (int k = 0; k < count; ++k)
       for (int w : f[shared[k]])
         if (w != u && w != v) opposite.push_back(w);
     std::sort(opposite.begin(), opposite.end());
     if (common != opposite) return false;
-    if (count == 2 && boundary_vertex(u, nu) && boundary_vertex(v, nv)) return false;
+    if (count == 2 && boundary_vertex(u, nu) && (neighbours(v, nv), boundary_vertex(v, nv))) return false;
     for (int fi : vf[u]) {
       if (fi == shared[0] || (count == 2 && fi == shared[1])) continue;
       V3 before = face_normal(f[fi], -1, -1), after = face_normal(f[fi], u, v);
@@ -925,8 +956,11 @@ struct Collapser {
       int a = -1, b = -1;
       for (int w : f[fi])
         if (w != u) (a < 0 ? a : b) = w;
-      for (int gi : vf[v])
-        if (contains(f[gi], a) && contains(f[gi], b)) return false;
+      if (face_of(v, a, b)) return false;
+    }
+    if (fl.kind[u] == 1 && !chord_follows_chain(u, v)) {
+      if (chain_refused) *chain_refused = true;
+      return false;
     }
     return true;
   }
@@ -934,6 +968,9 @@ struct Collapser {
   void collapse(int u, int v) {
     std::vector<int> nu;
     neighbours(u, nu);
+    ++epoch;
+    touched[u] = epoch;
+    for (int w : nu) touched[w] = epoch;  // v among them
     std::vector<int> faces = vf[u];
     for (int fi : faces) {
       if (contains(f[fi], v)) {
@@ -1172,37 +1209,75 @@ void collapse_to_lattice(const Dense& d, const Fields& fl, double s, Collapser& 
     int r = find_root(cluster, u);
     if (centre_of[r] < 0 || col.higher(u, centre_of[r])) centre_of[r] = u;
   }
+  // The vertices that are not their cluster's centre, in index order (the passes' order): a
+  // centre never moves in these passes and a collapsed vertex never comes back, so the others
+  // are never visited. A vertex whose last visit made no collapse (refused by a test other than
+  // the chain walk), and around which (it or its centre) nothing has been touched since, would
+  // answer the same: skipped
+  // (the same collapses in the same order as visiting every vertex every pass).
+  std::vector<int> centre(fl.n), pending;
+  for (int u = 0; u < fl.n; ++u) {
+    centre[u] = centre_of[find_root(cluster, u)];
+    if (centre[u] != u) pending.push_back(u);
+  }
+  std::vector<long> visited(fl.n, -1);  // epoch of the last visit that made no collapse
+  auto unchanged = [&](int u, int c) {
+    return visited[u] >= 0 && col.touched[u] <= visited[u] && col.touched[c] <= visited[u];
+  };
   for (int pass = 0; pass < 200; ++pass) {
     int changed = 0;
-    for (int u = 0; u < fl.n; ++u) {
-      int c = centre_of[find_root(cluster, u)];
+    size_t kept = 0;
+    for (size_t i = 0; i < pending.size(); ++i) {
+      const int u = pending[i];
+      if (!col.alive[u]) continue;
+      pending[kept++] = u;
+      const int c = centre[u];
+      if (unchanged(u, c)) continue;
       int tmp[2];
-      if (c == u || !col.alive[u] || col.vf[u].empty() || col.faces_with(u, c, tmp) == 0)
-        continue;
-      if (col.can_collapse(u, c)) {
+      bool chain_refused = false;
+      if (!col.vf[u].empty() && col.faces_with(u, c, tmp) != 0 && col.can_collapse(u, c, &chain_refused)) {
         col.collapse(u, c);
         ++changed;
+      } else {
+        visited[u] = chain_refused ? -1 : col.epoch;  // the chain walk reads farther: asked again
       }
     }
+    pending.resize(kept);
     check(0.7 + 0.1 * std::min(1.0, pass / 10.0));
     if (changed == 0) break;
   }
+  // The same skip in the second stage: a vertex none of whose faces' vertices has been touched
+  // since its last visit without a collapse (its neighbours, their faces and its candidates are
+  // as they were), unless the chain walk refused one of its candidates.
+  std::fill(visited.begin(), visited.end(), -1);
+  auto quiet = [&](int u) {
+    if (visited[u] < 0 || col.touched[u] > visited[u]) return false;
+    for (int fi : col.vf[u])
+      for (int w : col.f[fi])
+        if (col.touched[w] > visited[u]) return false;
+    return true;
+  };
   std::vector<int> nu, cands;
   for (int pass = 0; pass < 200; ++pass) {
     int changed = 0;
     for (int u = 0; u < fl.n; ++u) {
       if (!col.alive[u] || fl.kind[u] == 2 || col.vf[u].empty()) continue;
+      if (quiet(u)) continue;
+      visited[u] = col.epoch;  // (a collapse below removes u: never visited again)
       col.neighbours(u, nu);
       cands.clear();
       for (int v : nu)
         if (col.higher(v, u) && (fl.o[u] - fl.o[v]).norm() < 0.5 * s) cands.push_back(v);
       std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(a, b); });
-      for (int v : cands)
-        if (col.can_collapse(u, v)) {
+      for (int v : cands) {
+        bool chain_refused = false;
+        if (col.can_collapse(u, v, &chain_refused)) {
           col.collapse(u, v);
           ++changed;
           break;
         }
+        if (chain_refused) visited[u] = -1;
+      }
     }
     check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
     if (changed == 0) break;
@@ -1659,11 +1734,10 @@ int relocate_stuck_vertices(const Dense& d, const Fields& fl, double s, const st
 // One split: every polygon into quads (corner, edge midpoints, centre) on the input surface;
 // feature edges into two feature edges, feature corners tagged.
 template <class IsFeature>
-MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& fl,
+MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& fl, const Projector& proj,
                            const std::vector<std::vector<int>>& polygons, const std::vector<int>& dense_of,
                            IsFeature&& coarse_feature) {
   const int nc = static_cast<int>(dense_of.size());
-  Projector proj(d, fl);
   MeshInput cage;
   cage.options = mesh.options;
   for (int v = 0; v < nc; ++v) {
@@ -1773,6 +1847,71 @@ void check_cage(const MeshInput& mesh, QuadRemeshResult& result) {
   st.feature_chains_kept = result.features.chains;
 }
 
+// The size check with a target count (docs/remesh.md step 7). The cage's faces F(s) fall with the
+// lattice spacing s about as s^-2 (the lattice's cells), but the lattice's irregularities add
+// faces (clusters split where a collapse is refused, unpaired triangles: 0 .. 16 % at s = 2 h on
+// the smooth meshes measured, more at coarse sizes), F is noisy in s (+-8 % between nearby
+// spacings: the singularities land elsewhere), and feature curves keep vertices of their own
+// whatever the spacing. So the first run is at kPrior x 2 h; each next spacing aims at the
+// band's middle (kAimCentre x target) from the last run with F ~ s^-2, or, when the last two
+// runs lie on both sides of it, by the line through them in log s - log F (slope held within
+// 1 .. 3). It stops when the faces are within the band (kAimLow .. 1 x target), after
+// kCountAttempts runs, or at a feature floor (two runs above the target, the coarser one 0 .. 3 %
+// fewer faces). The spacing stays within 0.7 .. 2.5 x the first. Kept: a run within the
+// band; else the one nearest it, an excess over the target counting 4 x a shortfall.
+constexpr int kCountAttempts = 5;
+constexpr double kPrior = 1.05, kAimLow = 0.9, kAimCentre = 0.95;
+
+class SizeAim {
+ public:
+  SizeAim(int target, double s0) : target_(target), s0_(s0) {}
+
+  // Records a run; true when it is the best so far.
+  bool add(double s, int faces) {
+    runs_.push_back({s, faces});
+    const double m = miss(faces);
+    if (runs_.size() > 1 && !(m < best_miss_)) return false;
+    best_miss_ = m;
+    return true;
+  }
+
+  // Whether to run again; `s` the next spacing.
+  bool again(double& s) const {
+    const Run& last = runs_.back();
+    if (miss(last.faces) == 0 || static_cast<int>(runs_.size()) >= kCountAttempts) return false;
+    const double aim = kAimCentre * target_;
+    double slope = 2;  // F ~ s^-slope
+    if (runs_.size() > 1) {
+      const Run& before = runs_[runs_.size() - 2];
+      if (last.faces > target_ && before.faces > target_ && last.s > before.s &&
+          last.faces <= before.faces && last.faces > 0.97 * before.faces)
+        return false;  // a feature floor: a coarser lattice does not help
+      const double ds = std::log(last.s / before.s);
+      if ((last.faces > aim) != (before.faces > aim) && std::abs(ds) > 1e-6)
+        slope = std::clamp(-std::log(double(last.faces) / before.faces) / ds, 1.0, 3.0);
+    }
+    s = std::clamp(last.s * std::pow(last.faces / aim, 1 / slope), 0.7 * s0_, 2.5 * s0_);
+    for (const Run& r : runs_)
+      if (std::abs(r.s - s) <= 1e-9 * s) return false;  // at a limit already tried
+    return true;
+  }
+
+ private:
+  struct Run {
+    double s;
+    int faces;
+  };
+  // How far `faces` is from the band, relative to the target; an excess counts 4 x.
+  double miss(int faces) const {
+    const double r = double(faces) / target_;
+    return r > 1 ? 4 * (r - 1) : r < kAimLow ? kAimLow - r : 0;
+  }
+  int target_;
+  double s0_;
+  std::vector<Run> runs_;
+  double best_miss_ = INFINITY;
+};
+
 }  // namespace
 
 QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
@@ -1831,8 +1970,16 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     Fields& fl = hier.levels[0];
     int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
     solve_fields(hier, iterations, true, [&]() { check(0.25); });
-    // Position field and extraction; when the lattice's irregularities gave clearly more faces
-    // than asked for, once more with the spacing scaled by the square root of the excess.
+    // Position field and extraction, and the size check (docs/remesh.md step 7): with a target
+    // count (aim_at_target), until the faces are within the band (SizeAim), the spacing corrected
+    // from the runs so far, the run nearest the band kept; else once more, with the spacing
+    // scaled by the square root of the excess, when the faces clearly exceed the target.
+    const bool aim = options.target_faces > 0 && options.aim_at_target;
+    if (aim) s *= kPrior;
+    SizeAim size_aim(options.target_faces, s);
+    MeshInput best_cage;
+    QuadRemeshStats best_stats;
+    std::optional<Projector> projector;  // the split's search structures: the dense mesh's, built once for all runs
     for (int attempt = 0;; ++attempt) {
       result.cage = MeshInput{};
       auto t_position = Clock::now();
@@ -1872,15 +2019,31 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       if (options.relocate_stuck)  // after the pairing and the clean-up: their counts are kept (step 6c)
         st.relocations = relocate_stuck_vertices(d, fl, s, polygons, dense_of, coarse_feature);
       st.arc_pins = fl.arc_pins;
-      result.cage = split_into_quads(mesh, d, fl, polygons, dense_of, coarse_feature);
+      if (!projector) projector.emplace(d, fl);
+      result.cage = split_into_quads(mesh, d, fl, *projector, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
-      double ratio = split_faces * h * h / area;
       st.attempts = attempt + 1;
-      if (attempt == 0 && ratio > 1.3) {
-        s *= std::sqrt(ratio);
-        continue;
+      if (!aim) {
+        double ratio = split_faces * h * h / area;
+        if (attempt == 0 && ratio > 1.3) {
+          s *= std::sqrt(ratio);
+          continue;
+        }
+        break;
       }
-      break;
+      if (size_aim.add(s, result.cage.num_faces())) {
+        best_cage = result.cage;
+        best_stats = st;
+      }
+      if (!size_aim.again(s)) break;
+    }
+    if (aim && st.attempts > 1) {  // the kept run's cage and counts; the seconds and runs of all
+      result.cage = std::move(best_cage);
+      best_stats.attempts = st.attempts;
+      best_stats.field_seconds = st.field_seconds;
+      best_stats.extract_seconds = st.extract_seconds;
+      best_stats.cleanup_seconds = st.cleanup_seconds;
+      st = best_stats;
     }
 
     check_cage(mesh, result);
