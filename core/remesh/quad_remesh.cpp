@@ -226,6 +226,33 @@ struct Fields {
   double s = 1;
 };
 
+// The cross field's index around each dense triangle (as Instant Meshes counts it): per edge
+// i -> j the quarter turns k_j - k_i between the members of the two crosses that agree best,
+// summed around the triangle, mod 4: 1 a singularity of index +1/4 (a valence-3 vertex), 3 one
+// of -1/4 (valence 5), 2 (half a turn) counted as +2.
+void count_singularities(const Dense& d, const Fields& fl, QuadRemeshStats& st) {
+  auto turns = [&](int i, int j) {
+    const V3 a[2] = {fl.q[i], fl.normal[i].cross(fl.q[i])};
+    const V3 b[2] = {fl.q[j], fl.normal[j].cross(fl.q[j])};
+    double best = -1;
+    int bi = 0, bj = 0;
+    for (int x = 0; x < 2; ++x)
+      for (int y = 0; y < 2; ++y) {
+        const double s = std::abs(a[x].dot(b[y]));
+        if (s > best) best = s, bi = x, bj = y;
+      }
+    if (a[bi].dot(b[bj]) < 0) bj += 2;
+    return bj - bi;
+  };
+  st.field_singularities = st.field_index_sum = 0;
+  for (const Tri& t : d.t) {
+    const int k = (((turns(t[0], t[1]) + turns(t[1], t[2]) + turns(t[2], t[0])) % 4) + 4) % 4;
+    if (k == 0) continue;
+    ++st.field_singularities;
+    st.field_index_sum += k == 3 ? -1 : k;
+  }
+}
+
 void build_adjacency(const Dense& d, Fields& fl) {
   int n = static_cast<int>(d.p.size());
   fl.n = n;
@@ -1970,6 +1997,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     Fields& fl = hier.levels[0];
     int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
     solve_fields(hier, iterations, true, [&]() { check(0.25); });
+    count_singularities(d, hier.levels[0], st);
     // Position field and extraction, and the size check (docs/remesh.md step 7): with a target
     // count (aim_at_target), until the faces are within the band (SizeAim), the spacing corrected
     // from the runs so far, the run nearest the band kept; else once more, with the spacing

@@ -45,6 +45,13 @@ struct QuadRemeshStats {
   int feature_chains_in = 0, feature_chains_kept = 0, corners = 0;
   int euler_input = 0, euler_cage = 0, boundaries_input = 0, boundaries_cage = 0, components_input = 0,
       components_cage = 0;
+  /// The cross field's singularities on the dense mesh (its triangles around which the field turns
+  /// by a quarter turn or more, Instant Meshes' index): each is an extraordinary vertex the field
+  /// asks for; the cage's others are made by the extraction (docs/remesh.md step 2).
+  int field_singularities = 0;
+  /// Their indices summed, in quarter turns (+1: a valence-3 singularity, -1: valence 5). On a
+  /// closed mesh 4 x its Euler characteristic (Poincare-Hopf: the test QuadRemesh.FieldSingularitiesSumToEuler).
+  int field_index_sum = 0;
   double field_seconds = 0, extract_seconds = 0;  ///< wall time per stage
   int dense_vertices = 0;      ///< vertices of the input after long edges were split (the fields' domain)
   int coarse_triangles = 0;    ///< triangles left unpaired after the extraction (each becomes 3 quads)
