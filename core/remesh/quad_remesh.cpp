@@ -176,19 +176,32 @@ V3 any_perpendicular(const V3& n) {
   return (a - n * n.dot(a)).normalized();
 }
 
-// The members of {q0, n0 x q0} and {±q1, ±n1 x q1} that agree best (4-fold symmetry).
-std::pair<V3, V3> match_cross(const V3& q0, const V3& n0, const V3& q1, const V3& n1) {
-  V3 a[2] = {q0, n0.cross(q0)};
-  V3 b[2] = {q1, n1.cross(q1)};
+// Which members of the crosses {a0, a1} and {±b0, ±b1} agree best (4-fold symmetry): a[i] and
+// sign x b[j] (the first best in the order i, j).
+struct CrossMatch {
+  int i = 0, j = 0;
+  double sign = 1;
+};
+[[gnu::always_inline]] inline CrossMatch best_cross_match(const V3& a0, const V3& a1, const V3& b0, const V3& b1) {
+  const V3* a[2] = {&a0, &a1};
+  const V3* b[2] = {&b0, &b1};
   double best = -1;
-  int bi = 0, bj = 0;
+  CrossMatch m;
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j) {
-      double s = std::abs(a[i].dot(b[j]));
-      if (s > best) best = s, bi = i, bj = j;
+      double s = std::abs(a[i]->dot(*b[j]));
+      if (s > best) best = s, m.i = i, m.j = j;
     }
-  double sign = a[bi].dot(b[bj]) < 0 ? -1.0 : 1.0;
-  return {a[bi], sign * b[bj]};
+  m.sign = a[m.i]->dot(*b[m.j]) < 0 ? -1.0 : 1.0;
+  return m;
+}
+
+// The members of {q0, n0 x q0} and {±q1, ±n1 x q1} that agree best (4-fold symmetry).
+std::pair<V3, V3> match_cross(const V3& q0, const V3& n0, const V3& q1, const V3& n1) {
+  const V3 a[2] = {q0, n0.cross(q0)};
+  const V3 b[2] = {q1, n1.cross(q1)};
+  const CrossMatch m = best_cross_match(a[0], a[1], b[0], b[1]);
+  return {a[m.i], m.sign * b[m.j]};
 }
 
 // The point nearest the midpoint of p0, p1 on both tangent planes.
@@ -231,18 +244,9 @@ struct Fields {
 // summed around the triangle, mod 4: 1 a singularity of index +1/4 (a valence-3 vertex), 3 one
 // of -1/4 (valence 5), 2 (half a turn) counted as +2.
 void count_singularities(const Dense& d, const Fields& fl, QuadRemeshStats& st) {
-  auto turns = [&](int i, int j) {
-    const V3 a[2] = {fl.q[i], fl.normal[i].cross(fl.q[i])};
-    const V3 b[2] = {fl.q[j], fl.normal[j].cross(fl.q[j])};
-    double best = -1;
-    int bi = 0, bj = 0;
-    for (int x = 0; x < 2; ++x)
-      for (int y = 0; y < 2; ++y) {
-        const double s = std::abs(a[x].dot(b[y]));
-        if (s > best) best = s, bi = x, bj = y;
-      }
-    if (a[bi].dot(b[bj]) < 0) bj += 2;
-    return bj - bi;
+  auto turns = [&](int i, int j) {  // b's member's quarter turns (0 .. 3) less a's (0, 1)
+    const CrossMatch m = best_cross_match(fl.q[i], fl.normal[i].cross(fl.q[i]), fl.q[j], fl.normal[j].cross(fl.q[j]));
+    return m.j + (m.sign < 0 ? 2 : 0) - m.i;
   };
   st.field_singularities = st.field_index_sum = 0;
   for (const Tri& t : d.t) {
@@ -395,17 +399,9 @@ void init_cross_field(Fields& fl, Check&& check) {
 
 // match_cross with n1 x q1 given (`nq1`).
 std::pair<V3, V3> match_cross_given(const V3& q0, const V3& n0, const V3& q1, const V3& nq1) {
-  V3 a[2] = {q0, n0.cross(q0)};
-  const V3* b[2] = {&q1, &nq1};
-  double best = -1;
-  int bi = 0, bj = 0;
-  for (int i = 0; i < 2; ++i)
-    for (int j = 0; j < 2; ++j) {
-      double s = std::abs(a[i].dot(*b[j]));
-      if (s > best) best = s, bi = i, bj = j;
-    }
-  double sign = a[bi].dot(*b[bj]) < 0 ? -1.0 : 1.0;
-  return {a[bi], sign * *b[bj]};
+  const V3 a[2] = {q0, n0.cross(q0)};
+  const CrossMatch m = best_cross_match(a[0], a[1], q1, nq1);
+  return {a[m.i], m.sign * (m.j == 0 ? q1 : nq1)};
 }
 
 // One vertex's cross field step; `nq` holds normal x q of every vertex, kept up to date.
@@ -631,6 +627,12 @@ constexpr double kArcRadius = 0.75;
 constexpr double kArcRoom = 0.75;  // another feature this near (x s): no row under the arc
 constexpr double kArcTurn = 1.17;  // radians (67 deg: a coarse chain edge turning more keeps a vertex, step 4)
 
+// The chain neighbour of w other than prev (-1: the chain ends at w).
+int chain_next(const Fields& fl, int prev, int w) {
+  const auto& c = fl.chain[w];
+  return c[0] == prev ? c[1] : c[0];
+}
+
 void pin_tight_arcs(Hierarchy& h) {
   Fields& fl = h.levels[0];
   const double s = fl.s;
@@ -699,10 +701,9 @@ void pin_tight_arcs(Hierarchy& h) {
         } else {
           side[k].push_back(w);
         }
-        const auto& c = fl.chain[w];
-        int nx = c[0] == prev ? c[1] : c[0];
+        const int next = chain_next(fl, prev, w);
         prev = w;
-        w = nx;
+        w = next;
       }
     }
     const double length = reach[0] + reach[1];
@@ -738,10 +739,9 @@ void pin_tight_arcs(Hierarchy& h) {
         len += (fl.p[w] - fl.p[prev]).norm();
         own.push_back(w);
         if (fl.kind[w] != 1) break;
-        const auto& c = fl.chain[w];
-        int nx = c[0] == prev ? c[1] : c[0];
+        const int next = chain_next(fl, prev, w);
         prev = w;
-        w = nx;
+        w = next;
       }
     }
     std::sort(own.begin(), own.end());
