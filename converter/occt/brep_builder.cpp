@@ -662,7 +662,7 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     if (!ok) {
       for (int p : f.patches) planar.face_of_patch[p] = -1;
       std::vector<PlanarFace> parts;
-      if (rounds[i] < kMaxPlanarSplits) parts = split_planar_face(ps, f, tolerances::kSameSurface, intersecting);
+      if (rounds[i] < kMaxPlanarSplits) parts = split_planar_face(ps, f, intersecting);
       if (parts.empty()) {
         ++result.rejected_planar_faces;
         continue;

@@ -280,13 +280,12 @@ namespace {
 /// boundary is one region with holes. When its loops close but are not that (more than one
 /// outer loop: patches overlapping in the plane), it is split at the crossings of its loops
 /// (split_at_crossings), up to `depth` rounds. Returns the number of sets it gave up on.
-int add_regions(const PatchSet& ps, PlanarFace f, double tolerance, int depth, std::vector<PlanarFace>& out,
-                int& split);
+int add_regions(const PatchSet& ps, PlanarFace f, int depth, std::vector<PlanarFace>& out, int& split);
 
 /// The connected parts of `f.patches` left when the patches along the crossing curves `bad` are
 /// left out, each added by add_regions. Returns the number of parts it gave up on.
-int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vector<int>& bad, double tolerance,
-                       int depth, std::vector<PlanarFace>& out, int& split) {
+int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vector<int>& bad, int depth,
+                       std::vector<PlanarFace>& out, int& split) {
   ++split;
   std::vector<char> dropped_curve(ps.curves.size(), 0);
   for (int k : bad) dropped_curve[k] = 1;
@@ -309,10 +308,11 @@ int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vecto
   int gave_up = 0;
   for (int seed : keep) {
     if (reached[seed]) continue;
-    PlanarFace part;
+    PlanarFace part;  // f's plane
     part.origin = f.origin;
     part.normal = f.normal;
     part.x_axis = f.x_axis;
+    part.tolerance = f.tolerance;
     std::deque<int> queue{seed};
     reached[seed] = 1;
     while (!queue.empty()) {
@@ -323,31 +323,20 @@ int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vecto
         if (!reached[q]) reached[q] = 1, queue.push_back(q);
     }
     std::sort(part.patches.begin(), part.patches.end());
-    gave_up += add_regions(ps, std::move(part), tolerance, depth, out, split);
+    gave_up += add_regions(ps, std::move(part), depth, out, split);
   }
   return gave_up;
 }
 
-int add_regions(const PatchSet& ps, PlanarFace f, double tolerance, int depth, std::vector<PlanarFace>& out,
-                int& split) {
-  if (make_loops(ps, f, tolerance)) {
+int add_regions(const PatchSet& ps, PlanarFace f, int depth, std::vector<PlanarFace>& out, int& split) {
+  if (make_loops(ps, f, f.tolerance)) {
     out.push_back(std::move(f));
     return 0;
   }
   if (f.loops.empty() || depth == 0) return 1;
   const std::vector<int> bad = crossing_curves(ps, f);
   if (bad.empty()) return 1;
-  return split_at_crossings(ps, f, bad, tolerance, depth - 1, out, split);
-}
-
-PlaneTolerance plane_tolerance(const PatchSet& ps, double relative_tolerance) {
-  PlaneTolerance tolerance;
-  tolerance.relative = relative_tolerance;
-  tolerance.cap = relative_tolerance * ps.model_size;
-  for (const NurbsPatch& patch : ps.patches)
-    for (const Point3& q : patch.poles)
-      for (int i = 0; i < 3; ++i) tolerance.scale[i] = std::max(tolerance.scale[i], std::abs(q[i]));
-  return tolerance;
+  return split_at_crossings(ps, f, bad, depth - 1, out, split);
 }
 
 constexpr int kMaxSplits = 4;  // rounds of leaving out the patches along crossing curves
@@ -357,7 +346,12 @@ constexpr int kMaxSplits = 4;  // rounds of leaving out the patches along crossi
 PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
   const int n = static_cast<int>(ps.patches.size());
   PlanarFaces out;
-  const PlaneTolerance tolerance = plane_tolerance(ps, relative_tolerance);
+  PlaneTolerance tolerance;
+  tolerance.relative = relative_tolerance;
+  tolerance.cap = relative_tolerance * ps.model_size;
+  for (const NurbsPatch& patch : ps.patches)
+    for (const Point3& q : patch.poles)
+      for (int i = 0; i < 3; ++i) tolerance.scale[i] = std::max(tolerance.scale[i], std::abs(q[i]));
   out.face_of_patch.assign(n, -1);
   // Per patch: its plane, when its poles lie on one.
   std::vector<Point3> origin(n), net(n), normal(n);
@@ -415,9 +409,9 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
       ++out.skipped;
       continue;
     }
+    f.tolerance = tolerance.of(f.normal);
     std::vector<PlanarFace> regions;
-    const double on_plane_tolerance = tolerance.of(f.normal);
-    out.skipped += add_regions(ps, std::move(f), on_plane_tolerance, kMaxSplits, regions, out.split);
+    out.skipped += add_regions(ps, std::move(f), kMaxSplits, regions, out.split);
     for (PlanarFace& r : regions) {
       const int index = static_cast<int>(out.faces.size());
       for (int p : r.patches) out.face_of_patch[p] = index;
@@ -427,14 +421,13 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
   return out;
 }
 
-std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance,
-                                          const std::vector<int>& also) {
+std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, const std::vector<int>& also) {
   std::vector<PlanarFace> out;
   std::vector<int> bad = crossing_curves(ps, f);
   bad.insert(bad.end(), also.begin(), also.end());
   if (bad.empty()) return out;
   int split = 0;
-  split_at_crossings(ps, f, bad, plane_tolerance(ps, relative_tolerance).of(f.normal), kMaxSplits, out, split);
+  split_at_crossings(ps, f, bad, kMaxSplits, out, split);
   return out;
 }
 

@@ -27,6 +27,7 @@ struct PlanarFace {
   Point3 origin{};           ///< a point of the plane (the poles' mean)
   Point3 normal{};           ///< unit; the side the patches' normals X_u x X_v point to
   Point3 x_axis{};           ///< unit, in the plane (y = normal x x_axis)
+  double tolerance = 0;      ///< model units: how far its poles and boundary curves may lie off the plane
   /// The region's boundary: loops[0] the outer loop, counter-clockwise seen from the normal
   /// side (the way the patches' own sides run), the others holes (clockwise). Each loop is
   /// closed: a curve's end corner is the next one's start corner.
@@ -62,13 +63,12 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance);
 /// outer loop is a part (a rest whose loops still fail is split again, up to 4 rounds). `also`:
 /// more curves to leave out (those a checker found intersecting: OCCT's BRepCheck_Wire). Empty
 /// when no loop curve crosses. The parts' loops may still cross: check them again.
-std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, double relative_tolerance,
-                                          const std::vector<int>& also = {});
+std::vector<PlanarFace> split_planar_face(const PatchSet& ps, const PlanarFace& f, const std::vector<int>& also = {});
 
 /// The curves of `f`'s loops that cross a loop curve (another, or another piece of themselves)
 /// in f's plane, each curve sampled at 16 segments (curves that only meet at a corner do not
 /// cross), and the two curves of every corner where a loop turns back on itself (by more than
-/// 170 degrees: a cusp, the curves running along each other). Ascending.
+/// 150 degrees: a cusp, the curves running along each other). Ascending.
 std::vector<int> crossing_curves(const PatchSet& ps, const PlanarFace& f);
 
 }  // namespace subd2nurbs

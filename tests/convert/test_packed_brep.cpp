@@ -284,7 +284,7 @@ TEST(PlanarFaces, OverlapInThePlaneIsLeftOutNotTheWholeSet) {
     ASSERT_EQ(planar.faces.size(), 1u);
     const std::vector<int> crossing = crossing_curves(set, planar.faces[0]);
     EXPECT_FALSE(crossing.empty());
-    const std::vector<PlanarFace> parts = split_planar_face(set, planar.faces[0], tolerances::kSameSurface);
+    const std::vector<PlanarFace> parts = split_planar_face(set, planar.faces[0]);
     ASSERT_GE(parts.size(), 1u);
     for (const PlanarFace& part : parts)
       for (int p : part.patches)
