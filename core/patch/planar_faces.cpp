@@ -276,6 +276,38 @@ std::vector<int> crossing_curves(const PatchSet& ps, const PlanarFace& f) {
 
 namespace {
 
+/// Per patch, the patches that share a curve with it, among those `in` marks.
+std::vector<std::vector<int>> curve_neighbours(const PatchSet& ps, const std::vector<char>& in) {
+  std::vector<std::vector<int>> neighbours(ps.patches.size());
+  for (const BoundaryCurve& c : ps.curves)
+    for (const CurveUse& a : c.uses)
+      for (const CurveUse& b : c.uses)
+        if (a.patch != b.patch && in[a.patch] && in[b.patch]) neighbours[a.patch].push_back(b.patch);
+  return neighbours;
+}
+
+/// The patches reached breadth first from `seed` across `neighbours` that `accept` admits (not
+/// yet `reached`: marked as they are reached), ascending.
+template <class Accept>
+std::vector<int> grow(int seed, const std::vector<std::vector<int>>& neighbours, std::vector<char>& reached,
+                      Accept&& accept) {
+  std::vector<int> set;
+  std::deque<int> queue{seed};
+  reached[seed] = 1;
+  while (!queue.empty()) {
+    const int p = queue.front();
+    queue.pop_front();
+    set.push_back(p);
+    for (int q : neighbours[p]) {
+      if (reached[q] || !accept(q)) continue;
+      reached[q] = 1;
+      queue.push_back(q);
+    }
+  }
+  std::sort(set.begin(), set.end());
+  return set;
+}
+
 /// Adds the set `f` (its plane set, its loops not yet made) to `out` as one planar face when its
 /// boundary is one region with holes. When its loops close but are not that (more than one
 /// outer loop: patches overlapping in the plane), it is split at the crossings of its loops
@@ -296,15 +328,10 @@ int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vecto
     if (!on_bad) keep.push_back(p);
   }
   // Connected parts of the rest, across curves two of them share.
-  std::map<int, std::vector<int>> users;  // curve -> kept patches using it
-  for (int p : keep)
-    for (const LoopCurve& c : boundary_pieces(ps.patches[p])) users[c.curve].push_back(p);
-  std::map<int, std::vector<int>> next;  // patch -> neighbours in the rest
-  for (const auto& [k, list] : users)
-    for (int a : list)
-      for (int b : list)
-        if (a != b) next[a].push_back(b);
-  std::map<int, char> reached;
+  std::vector<char> kept(ps.patches.size(), 0);
+  for (int p : keep) kept[p] = 1;
+  const std::vector<std::vector<int>> neighbours = curve_neighbours(ps, kept);
+  std::vector<char> reached(ps.patches.size(), 0);
   int gave_up = 0;
   for (int seed : keep) {
     if (reached[seed]) continue;
@@ -313,16 +340,7 @@ int split_at_crossings(const PatchSet& ps, const PlanarFace& f, const std::vecto
     part.normal = f.normal;
     part.x_axis = f.x_axis;
     part.tolerance = f.tolerance;
-    std::deque<int> queue{seed};
-    reached[seed] = 1;
-    while (!queue.empty()) {
-      const int p = queue.front();
-      queue.pop_front();
-      part.patches.push_back(p);
-      for (int q : next[p])
-        if (!reached[q]) reached[q] = 1, queue.push_back(q);
-    }
-    std::sort(part.patches.begin(), part.patches.end());
+    part.patches = grow(seed, neighbours, reached, [](int) { return true; });
     gave_up += add_regions(ps, std::move(part), depth, out, split);
   }
   return gave_up;
@@ -367,29 +385,14 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
     out.planar_patches += planar[p];
   }
   // Neighbours across shared curves, grown breadth first from the lowest patch of each set.
-  std::vector<std::vector<int>> neighbours(n);
-  for (const BoundaryCurve& c : ps.curves)
-    for (const CurveUse& a : c.uses)
-      for (const CurveUse& b : c.uses)
-        if (a.patch != b.patch && planar[a.patch] && planar[b.patch]) neighbours[a.patch].push_back(b.patch);
+  const std::vector<std::vector<int>> neighbours = curve_neighbours(ps, planar);
   std::vector<char> reached(n, 0);
   for (int seed = 0; seed < n; ++seed) {
     if (!planar[seed] || reached[seed]) continue;
     PlanarFace f;
-    std::deque<int> queue{seed};
-    reached[seed] = 1;
-    while (!queue.empty()) {
-      const int p = queue.front();
-      queue.pop_front();
-      f.patches.push_back(p);
-      for (int q : neighbours[p]) {
-        if (reached[q] || dot(normal[q], normal[seed]) <= 0) continue;
-        if (!on_plane(ps.patches[q], origin[seed], normal[seed], tolerance)) continue;
-        reached[q] = 1;
-        queue.push_back(q);
-      }
-    }
-    std::sort(f.patches.begin(), f.patches.end());
+    f.patches = grow(seed, neighbours, reached, [&](int q) {
+      return dot(normal[q], normal[seed]) > 0 && on_plane(ps.patches[q], origin[seed], normal[seed], tolerance);
+    });
     // The set's plane: the mean of its poles, the sum of its nets' normals.
     Point3 sum{0, 0, 0}, nsum{0, 0, 0};
     size_t count = 0;
