@@ -9,6 +9,7 @@
 #include <deque>
 #include <numeric>
 #include <optional>
+#include <queue>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -837,6 +838,282 @@ std::vector<int> follow_chain(const std::vector<std::vector<int>>& chain, int st
   return path;
 }
 
+// --- cancelling the position field's dislocations (docs/remesh.md step 3b) ------------------
+// Per dense edge u -> v the position field gives the lattice translation from u's lattice
+// point to v's, in u's lattice frame (q_u, n_u x q_u) and units of s: x = (o_v - o_u) . (q_u,
+// n_u x q_u) / s, rounded t = round(x), the residual r = x - t. Around a dense triangle whose
+// cross field does not turn, the translations carried into one frame sum to zero unless the
+// lattice has a dislocation there: a lattice row that ends (a stretched lattice: a torus's
+// parallels are shorter inside than outside, a scan's bulges). The extraction turns each
+// dislocation into a pair of extraordinary vertices, or, where the rounding is ambiguous, a
+// knot of coarse vertices closer than the spacing that the fit folds. As QuadriFlow does with
+// its flow, dislocations are cancelled in pairs: a unit of the sum is carried from its
+// triangle across edges to the nearest triangle with the opposite sum, each edge crossed
+// changing its translation by the unit (the dual path of least added |r|^2, found breadth first
+// by cost), so that every triangle passed still sums to zero and the two ends do too. Then the
+// lattice points near the changed edges are re-solved with the translations held (the
+// lattice stretches to take up the row it lost or gained) and each vertex takes the point of
+// that lattice nearest itself. Triangles within kDislocationFeatureReach x s of a feature take no
+// part: near feature curves the chain rules of step 4 fix the lattice, and moving it there cost
+// feature angles (fandisk's default cage: 4.5 -> 11 degrees at 0.5 s).
+constexpr int kDislocationVisits = 4000;         // triangles a carry may search
+constexpr double kDislocationFeatureReach = 1.5;  // x s
+constexpr int kRestretchRings = 8;               // around the changed edges' vertices
+constexpr int kRestretchIterations = 30;
+
+// Quarter turns k with (x, y) in v's lattice frame = rotate_turns((x, y), k) in u's frame.
+int frame_turns(const Fields& fl, const std::vector<V3>& nq, int u, int v) {
+  const CrossMatch m = best_cross_match(fl.q[u], nq[u], fl.q[v], nq[v]);
+  if (m.i == m.j) return m.sign > 0 ? 0 : 2;
+  if (m.i == 0) return m.sign > 0 ? 3 : 1;  // u's first axis along v's second
+  return m.sign > 0 ? 1 : 3;                // u's second axis along v's first
+}
+
+using I2 = std::array<int, 2>;
+// (x, y) turned by k quarter turns counter-clockwise: 1 gives (-y, x).
+I2 rotate_turns(const I2& x, int k) {
+  switch (((k % 4) + 4) % 4) {
+    case 1: return {-x[1], x[0]};
+    case 2: return {-x[0], -x[1]};
+    case 3: return {x[1], -x[0]};
+    default: return x;
+  }
+}
+
+struct Translations {
+  std::vector<I2> t;         // per adjacency entry i of v (neighbour adj[i]), in v's frame
+  std::vector<int> changed;  // vertices of the edges whose translation was changed
+  int before = 0, left = 0;  // dislocated triangles before and after the cancelling
+};
+
+class DislocationCanceller {
+ public:
+  DislocationCanceller(const Dense& d, const Fields& fl) : d_(d), fl_(fl) {
+    nq_.resize(fl.n);
+    for (int v = 0; v < fl.n; ++v) nq_[v] = fl.normal[v].cross(fl.q[v]);
+    tr_.t.resize(fl.adj.size());
+    x_.resize(fl.adj.size());
+    for (int u = 0; u < fl.n; ++u)
+      for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i) {
+        const int v = fl.adj[i];
+        const V3 dv = (fl.o[v] - fl.o[u]) / fl.s;
+        x_[i] = {dv.dot(fl.q[u]), dv.dot(nq_[u])};
+      }
+    for (int u = 0; u < fl.n; ++u)  // rounded on u < v; v's entry the same translation seen from v
+      for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i)
+        if (u < fl.adj[i]) set(u, i, {int(round_half_away(x_[i][0])), int(round_half_away(x_[i][1]))});
+    for (size_t f = 0; f < d.t.size(); ++f)
+      for (int k = 0; k < 3; ++k) edge_faces_[edge_key(d.t[f][k], d.t[f][(k + 1) % 3])].push_back(int(f));
+  }
+
+  Translations cancel() {
+    const int nf = static_cast<int>(d_.t.size());
+    curls_.assign(nf, I2{0, 0});
+    closed_.assign(nf, 1);
+    std::vector<int> charged;
+    for (int f = 0; f < nf; ++f) {
+      closed_[f] = curl(f, curls_[f]);
+      if (closed_[f] && curls_[f] != I2{0, 0}) charged.push_back(f);
+    }
+    tr_.before = static_cast<int>(charged.size());
+    blocked_ = near_features();
+    for (int f = 0; f < nf; ++f) blocked_[f] = blocked_[f] || !closed_[f];
+    for (int f : charged)
+      for (int axis = 0; axis < 2 && !blocked_[f]; ++axis)
+        while (curls_[f][axis] != 0) {
+          I2 unit{0, 0};
+          unit[axis] = curls_[f][axis] > 0 ? 1 : -1;
+          if (!carry(f, unit)) break;
+        }
+    for (int f = 0; f < nf; ++f) tr_.left += closed_[f] && curls_[f] != I2{0, 0};
+    return std::move(tr_);
+  }
+
+ private:
+  int entry(int u, int v) const {
+    auto b = fl_.adj.begin() + fl_.offsets[u], e = fl_.adj.begin() + fl_.offsets[u + 1];
+    return static_cast<int>(std::lower_bound(b, e, v) - fl_.adj.begin());
+  }
+  // Entry i of u (to v) becomes t, and v's entry to u the same translation seen from v.
+  void set(int u, int i, const I2& t) {
+    const int v = fl_.adj[i];
+    tr_.t[i] = t;
+    const I2 back = rotate_turns(t, frame_turns(fl_, nq_, v, u));
+    tr_.t[entry(v, u)] = {-back[0], -back[1]};
+  }
+
+  // The sum of the translations around triangle f in its first vertex's frame; false where the
+  // cross field turns around it (a field singularity: the sum does not close).
+  bool curl(int f, I2& c) const {
+    const Tri& t = d_.t[f];
+    const int k01 = frame_turns(fl_, nq_, t[0], t[1]), k02 = frame_turns(fl_, nq_, t[0], t[2]);
+    const int k12 = frame_turns(fl_, nq_, t[1], t[2]);
+    if (((k01 + k12 - k02) % 4 + 4) % 4 != 0) return false;
+    const I2& a = tr_.t[entry(t[0], t[1])];
+    const I2 b = rotate_turns(tr_.t[entry(t[1], t[2])], k01);
+    const I2 e = rotate_turns(tr_.t[entry(t[2], t[0])], k02);
+    c = {a[0] + b[0] + e[0], a[1] + b[1] + e[1]};
+    return true;
+  }
+
+  // Triangles with a vertex within kDislocationFeatureReach x s of a feature vertex (along edges).
+  std::vector<char> near_features() const {
+    const double reach = kDislocationFeatureReach * fl_.s;
+    std::vector<double> dist(fl_.n, INFINITY);
+    using Item = std::pair<double, int>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+    for (int v = 0; v < fl_.n; ++v)
+      if (fl_.kind[v] != 0) dist[v] = 0, queue.push({0.0, v});
+    while (!queue.empty()) {
+      const auto [dv, v] = queue.top();
+      queue.pop();
+      if (dv > dist[v] || dv > reach) continue;
+      for (int i = fl_.offsets[v]; i < fl_.offsets[v + 1]; ++i) {
+        const int w = fl_.adj[i];
+        const double nd = dv + (fl_.p[w] - fl_.p[v]).norm();
+        if (nd < dist[w]) dist[w] = nd, queue.push({nd, w});
+      }
+    }
+    std::vector<char> near(d_.t.size(), 0);
+    for (size_t f = 0; f < d_.t.size(); ++f)
+      for (int k = 0; k < 3; ++k) near[f] = near[f] || dist[d_.t[f][k]] < reach;
+    return near;
+  }
+
+  // Carries the unit sum c (in f0's first vertex's frame) from f0 to the nearest triangle whose
+  // sum has the opposite component, by the dual path of least cost; true if both shrank.
+  bool carry(int f0, const I2& c) {
+    struct Step {
+      double cost;
+      int f;
+    };
+    auto later = [](const Step& a, const Step& b) { return a.cost > b.cost || (a.cost == b.cost && a.f > b.f); };
+    std::vector<Step> heap{{0.0, f0}};
+    std::unordered_map<int, double> best{{f0, 0.0}};
+    std::unordered_map<int, std::pair<int, int>> from;  // triangle -> (previous triangle, its edge crossed)
+    std::unordered_map<int, I2> carried{{f0, c}};        // the unit in each reached triangle's frame
+    int visits = 0, found = -1;
+    while (!heap.empty() && visits < kDislocationVisits) {
+      std::pop_heap(heap.begin(), heap.end(), later);
+      const Step s = heap.back();
+      heap.pop_back();
+      if (s.cost > best[s.f]) continue;
+      ++visits;
+      const I2 cf = carried[s.f];
+      if (s.f != f0 && curls_[s.f][0] * cf[0] + curls_[s.f][1] * cf[1] < 0) {
+        found = s.f;
+        break;
+      }
+      const Tri& t = d_.t[s.f];
+      for (int k = 0; k < 3; ++k) {
+        const int u = t[k], v = t[(k + 1) % 3];
+        const std::uint64_t key = edge_key(u, v);
+        if (d_.feature.count(key)) continue;
+        const auto& faces = edge_faces_.at(key);
+        if (faces.size() != 2) continue;
+        const int g = faces[0] == s.f ? faces[1] : faces[0];
+        if (blocked_[g]) continue;
+        // t(u -> v) - delta (u's frame) changes f's sum by -rotate(delta, k_au) = -cf and g's
+        // (which runs v -> u) by +rotate(delta, k_bu): the unit moves on into g.
+        const I2 delta = rotate_turns(cf, 4 - frame_turns(fl_, nq_, t[0], u));
+        const int i = entry(u, v);
+        const double r0 = x_[i][0] - tr_.t[i][0], r1 = x_[i][1] - tr_.t[i][1];
+        const double added = 2 * (r0 * delta[0] + r1 * delta[1]) + delta[0] * delta[0] + delta[1] * delta[1];
+        const double cost = s.cost + std::max(0.0, added) + 0.05;
+        auto it = best.find(g);
+        if (it != best.end() && it->second <= cost) continue;
+        best[g] = cost;
+        from[g] = {s.f, k};
+        carried[g] = rotate_turns(delta, frame_turns(fl_, nq_, d_.t[g][0], u));
+        heap.push_back({cost, g});
+        std::push_heap(heap.begin(), heap.end(), later);
+      }
+    }
+    if (found < 0) return false;
+    std::vector<int> path{found};
+    while (path.back() != f0) path.push_back(from[path.back()].first);
+    std::vector<std::pair<int, I2>> undo;  // (entry, old translation) of both directions
+    for (size_t i = 0; i + 1 < path.size(); ++i) {
+      const int g = path[i], f = path[i + 1];
+      const Tri& t = d_.t[f];
+      const int k = from[g].second;
+      const int u = t[k], v = t[(k + 1) % 3];
+      const I2 delta = rotate_turns(carried[f], 4 - frame_turns(fl_, nq_, t[0], u));
+      const int iu = entry(u, v), iv = entry(v, u);
+      undo.push_back({iu, tr_.t[iu]});
+      undo.push_back({iv, tr_.t[iv]});
+      set(u, iu, {tr_.t[iu][0] - delta[0], tr_.t[iu][1] - delta[1]});
+    }
+    // Every triangle passed keeps its sum, the two ends' shrink (else undone: the frames
+    // disagreed along the path).
+    bool ok = true;
+    std::vector<I2> now(path.size());
+    for (size_t i = 0; i < path.size() && ok; ++i)
+      ok = curl(path[i], now[i]) && (path[i] == f0 || path[i] == found || now[i] == curls_[path[i]]);
+    auto size = [](const I2& a) { return std::abs(a[0]) + std::abs(a[1]); };
+    if (ok && size(now.back()) + size(now.front()) >= size(curls_[f0]) + size(curls_[found])) ok = false;
+    if (!ok) {
+      for (auto it = undo.rbegin(); it != undo.rend(); ++it) tr_.t[it->first] = it->second;
+      return false;
+    }
+    curls_[f0] = now.back();
+    curls_[found] = now.front();
+    for (size_t i = 0; i + 1 < path.size(); ++i) {
+      const Tri& t = d_.t[path[i + 1]];
+      const int k = from[path[i]].second;
+      tr_.changed.push_back(t[k]);
+      tr_.changed.push_back(t[(k + 1) % 3]);
+    }
+    return true;
+  }
+
+  const Dense& d_;
+  const Fields& fl_;
+  std::vector<V3> nq_;
+  std::vector<std::array<double, 2>> x_;  // the unrounded translation per adjacency entry
+  Translations tr_;
+  std::vector<I2> curls_;
+  std::vector<char> closed_, blocked_;
+  std::unordered_map<std::uint64_t, std::vector<int>> edge_faces_;
+};
+
+// The position field re-solved near the changed edges (kRestretchRings around their vertices)
+// with the translations held: each vertex's lattice point the mean of where its neighbours'
+// lattice points and the edges' translations put it, on its tangent plane (feature vertices on
+// their chain's line; corners and pins held), Gauss-Seidel sweeps both ways; then each vertex
+// there takes the point of the stretched lattice nearest itself.
+void restretch_positions(Fields& fl, const Translations& tr) {
+  std::vector<char> active(fl.n, 0);
+  std::vector<int> region, front;
+  for (int v : tr.changed)
+    if (!active[v]) active[v] = 1, front.push_back(v);
+  region = front;
+  for (int r = 0; r < kRestretchRings; ++r) {
+    std::vector<int> next;
+    for (int v : front)
+      for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+        if (!active[fl.adj[i]]) active[fl.adj[i]] = 1, next.push_back(fl.adj[i]);
+    region.insert(region.end(), next.begin(), next.end());
+    front.swap(next);
+  }
+  std::sort(region.begin(), region.end());
+  for (int it = 0; it < kRestretchIterations; ++it)
+    for (int pass = 0; pass < 2; ++pass)
+      for (size_t k = 0; k < region.size(); ++k) {
+        const int v = pass == 0 ? region[k] : region[region.size() - 1 - k];
+        if (fl.kind[v] == 2 || fl.pinned[v] || fl.offsets[v + 1] == fl.offsets[v]) continue;
+        const V3 t = fl.normal[v].cross(fl.q[v]);
+        V3 sum = V3::Zero();
+        for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i)
+          sum += fl.o[fl.adj[i]] - fl.s * (tr.t[i][0] * fl.q[v] + tr.t[i][1] * t);
+        V3 o = sum / double(fl.offsets[v + 1] - fl.offsets[v]);
+        o -= fl.normal[v] * fl.normal[v].dot(o - fl.p[v]);
+        if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) o = fl.anchor[v] + fl.q[v] * fl.q[v].dot(o - fl.anchor[v]);
+        fl.o[v] = o;
+      }
+  for (int v : region) constrain_position(fl, v);
+}
+
 // --- extraction by edge collapses -------------------------------------------------------------
 struct Collapser {
   const std::vector<V3>& p;
@@ -1219,7 +1496,7 @@ Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area
 // along their chains); each grows from its centre, the vertex of highest priority, by collapsing
 // its neighbours into it ring by ring; then any vertex into a same-point neighbour of higher priority.
 template <class Check>
-void collapse_to_lattice(const Dense& d, const Fields& fl, double s, Collapser& col, Check&& check) {
+void collapse_to_lattice(const Dense& d, const Fields& fl, double s, bool merge_knots, Collapser& col, Check&& check) {
   auto same_point = [&](int u, int v) { return (fl.o[u] - fl.o[v]).norm() < 0.5 * s; };
   std::vector<int> cluster(fl.n);
   std::iota(cluster.begin(), cluster.end(), 0);
@@ -1307,6 +1584,34 @@ void collapse_to_lattice(const Dense& d, const Fields& fl, double s, Collapser& 
       }
     }
     check(0.7 + 0.2 * std::min(1.0, pass / 10.0));
+    if (changed == 0) break;
+  }
+  // Stage 3 (merge_knots, with cancel_dislocations): a free vertex, away from features, still
+  // beside a same-point neighbour (a knot: neither could collapse into its centre or a
+  // neighbour of higher priority) takes that neighbour in, the neighbour of lowest priority
+  // first, whatever their priorities (bob's limit scan: of the 38 same-point pairs left, 13
+  // refused by the link condition and 11 by a face turning over one way round, 14 collapsible
+  // the other way).
+  for (int pass = 0; merge_knots && pass < 20; ++pass) {
+    int changed = 0;
+    for (int u = 0; u < fl.n; ++u) {
+      if (!col.alive[u] || col.vf[u].empty() || fl.kind[u] != 0) continue;
+      col.neighbours(u, nu);
+      cands.clear();
+      bool by_feature = false;
+      for (int v : nu) by_feature = by_feature || fl.kind[v] != 0;
+      if (by_feature) continue;
+      for (int v : nu)
+        if (same_point(u, v)) cands.push_back(v);
+      std::sort(cands.begin(), cands.end(), [&](int a, int b) { return col.higher(b, a); });
+      for (int v : cands)
+        if (col.can_collapse(v, u)) {
+          col.collapse(v, u);
+          ++changed;
+          break;
+        }
+    }
+    check(0.9);
     if (changed == 0) break;
   }
 }
@@ -2016,7 +2321,13 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
       Collapser col(d, fl, kChainSag);
-      collapse_to_lattice(d, fl, s, col, check);
+      if (options.cancel_dislocations) {
+        const Translations tr = DislocationCanceller(d, fl).cancel();
+        st.position_dislocations = tr.before;
+        st.position_dislocations_left = tr.left;
+        restretch_positions(fl, tr);
+      }
+      collapse_to_lattice(d, fl, s, options.cancel_dislocations, col, check);
       std::vector<int> dense_of;
       std::vector<Tri> tris = coarse_triangles(col, fl.n, dense_of);
       auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };

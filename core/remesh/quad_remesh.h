@@ -25,6 +25,7 @@ struct QuadRemeshOptions {
   bool cleanup = true;  ///< quad-dominant clean-up of the coarse quads and triangles before the split (core/remesh/quad_cleanup.h)
   bool relocate_stuck = true;  ///< move coarse vertices stuck beside a feature curve away from it before the split (docs/remesh.md step 6c)
   bool pin_tight_arcs = true;  ///< position field: lattice columns at the ends of feature arcs tighter than the lattice (docs/remesh.md step 3)
+  bool cancel_dislocations = false;  ///< position field: cancel its dislocations in pairs away from features, and merge the knots the extraction leaves (docs/remesh.md step 3b; off: mixed on the CAD parts)
   /// With target_faces: the size check aims the cage's faces at the target (docs/remesh.md step 7:
   /// up to 5 runs of the position field and the extraction, the spacing corrected each time,
   /// until the faces are within 0.9 .. 1.0 x target; the run nearest that band is kept). Off by
@@ -61,6 +62,8 @@ struct QuadRemeshStats {
   int cleanup_merges = 0;      ///< pairs of coarse triangles merged into quads by the clean-up
   int relocations = 0;         ///< coarse vertices stuck beside a feature curve moved away from it (relocate_stuck)
   int arc_pins = 0;            ///< chain vertices whose lattice point the position field kept at themselves (pin_tight_arcs)
+  int position_dislocations = 0;       ///< dense triangles around which the lattice translations do not sum to zero (cancel_dislocations; before)
+  int position_dislocations_left = 0;  ///< ... and after the cancelling (those near features are left alone)
   double cleanup_seconds = 0;  ///< wall time of the clean-up (part of extract_seconds)
   int attempts = 0;            ///< position field + extraction runs (the size check, docs/remesh.md step 7)
 };
