@@ -385,20 +385,27 @@ bool pack_surface(const PatchSet& quads, const Rect& rect, double knot_tolerance
   const Point3 origin = quads.patches[rect.cells[0] >> 2].pole(0, 0);
   S.cells.reserve(rect.cells.size());
   for (int c : rect.cells) S.cells.push_back(cell_spline(quads.patches[c >> 2], c & 3, origin));
-  // Each column's (row's) knots: the union of its quads' own.
-  S.col_knots.assign(S.w, {});
-  S.row_knots.assign(S.h, {});
+  // Each column's (row's) knots: the union of its quads' own, each value as often as the quad
+  // that has it most often (a quad at an extraordinary vertex has double knots on its zone
+  // lines, where Construction Q joins C1).
+  std::vector<std::map<double, int>> col(S.w), row(S.h);
   for (int j = 0; j < S.h; ++j)
     for (int i = 0; i < S.w; ++i) {
-      const std::vector<double> ku = interior(S.cell(i, j).U), kv = interior(S.cell(i, j).V);
-      S.col_knots[i].insert(S.col_knots[i].end(), ku.begin(), ku.end());
-      S.row_knots[j].insert(S.row_knots[j].end(), kv.begin(), kv.end());
+      for (const auto& [K, into] : {std::pair{&S.cell(i, j).U, &col[i]}, std::pair{&S.cell(i, j).V, &row[j]}}) {
+        std::map<double, int> own;
+        for (double x : interior(*K)) ++own[x];
+        for (const auto& [x, m] : own) (*into)[x] = std::max((*into)[x], m);
+      }
     }
-  for (auto* list : {&S.col_knots, &S.row_knots})
-    for (std::vector<double>& k : *list) {
-      std::sort(k.begin(), k.end());
-      k.erase(std::unique(k.begin(), k.end()), k.end());
-    }
+  auto flatten = [](const std::map<double, int>& mults) {
+    std::vector<double> flat;
+    for (const auto& [x, m] : mults) flat.insert(flat.end(), m, x);
+    return flat;
+  };
+  S.col_knots.resize(S.w);
+  S.row_knots.resize(S.h);
+  for (int i = 0; i < S.w; ++i) S.col_knots[i] = flatten(col[i]);
+  for (int j = 0; j < S.h; ++j) S.row_knots[j] = flatten(row[j]);
   const std::vector<double> ju = S.jumps(true), jv = S.jumps(false);
   std::vector<char> keep_u(S.w, 1), keep_v(S.h, 1);
   for (int i = 1; i < S.w; ++i) keep_u[i] = ju[i] > knot_tolerance;
@@ -418,6 +425,8 @@ bool pack_surface(const PatchSet& quads, const Rect& rect, double knot_tolerance
   removed = std::count(keep_u.begin() + 1, keep_u.end(), 0) + std::count(keep_v.begin() + 1, keep_v.end(), 0);
   out = NurbsPatch{};
   out.kind = PatchKind::RegularBSpline;
+  for (int c : rect.cells)
+    if (quads.patches[c >> 2].kind == PatchKind::Pccm) out.kind = PatchKind::Pccm;
   out.knots_u = knot_vector(S.pack.U);
   out.knots_v = knot_vector(S.pack.V);
   out.num_poles_u = S.pack.nu;
@@ -912,7 +921,11 @@ PackedSet pack_patches(const PatchBuild& b, int max_edges) {
     bool simple = true;  // a regular patch's knots are simple inside (the limit is C2)
     for (const KnotVector* kv : {&q.knots_u, &q.knots_v})
       for (size_t i = 1; i + 1 < kv->mults.size(); ++i) simple = simple && kv->mults[i] == 1;
-    patch_ok[p] = b.coarse_face[p] >= 0 && q.kind == PatchKind::RegularBSpline && simple && q.weights.empty() &&
+    // A quad at an extraordinary vertex joins across its sides that are C2 (never its fan
+    // rays, which are G1): its own knots, nested towards the vertex and double on the zone
+    // lines, run through its column and row of the pack.
+    const bool kind_ok = q.kind == PatchKind::Pccm || (q.kind == PatchKind::RegularBSpline && simple);
+    patch_ok[p] = b.coarse_face[p] >= 0 && kind_ok && q.weights.empty() &&
                   !split && q.knots_u.knots.front() == 0 && q.knots_u.knots.back() == 1 &&
                   q.knots_v.knots.front() == 0 && q.knots_v.knots.back() == 1;
   }

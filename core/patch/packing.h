@@ -3,12 +3,15 @@
 //
 // A pack is a rectangle of mu x mv coarse quads, laid out as a grid with consistent
 // orientation, whose quads are regular patches (the exact limit: polynomial B-splines with
-// simple knots, a single span unless a semi-sharp crease runs nearby) and whose interior edges
-// are smooth C2 curves with no sharpness (never a fan ray, a crease of any sharpness, a
-// boundary or a polar cap's side). Its surface is the one bicubic B-spline over
-// [0, mu] x [0, mv] (one unit per quad, the same parameter speed as the quads' own [0,1]^2)
-// whose knots are a simple knot at every integer, minus the cell lines across which the
-// surface is one polynomial, plus in each column (row) the union of its quads' own knots.
+// simple knots, a single span unless a semi-sharp crease runs nearby) or patches at an
+// extraordinary vertex (Construction Q: knots nested towards the vertex, double on the zone
+// lines), and whose interior edges are smooth C2 curves with no sharpness (never a fan ray, a
+// crease of any sharpness, a boundary or a polar cap's side). Every edge at an extraordinary
+// vertex is a fan ray, so such a vertex is always a corner of the packs around it. Its surface
+// is the one bicubic B-spline over [0, mu] x [0, mv] (one unit per quad, the same parameter
+// speed as the quads' own [0,1]^2) whose knots are a simple knot at every integer, minus the
+// cell lines across which the surface is one polynomial, plus in each column (row) the union
+// of its quads' own knots, each value as often as the quad that has it most often.
 // Poles are blossoms of the quads' polynomial pieces, and the surface is then checked to
 // reproduce every piece of every quad (Bezier nets compared), so a pack is exactly the union
 // of its quads.
@@ -57,8 +60,9 @@ struct PackedSet {
 /// about E spans costs it E^2 (a 1024-sided capsule's side: 2 x 2048 edges, > 20 minutes).
 constexpr int kMaxPackEdges = 128;
 
-/// Packs a build: a patch may join a pack when it is a one-span regular patch of a coarse quad,
-/// across a curve claimed C2 whose coarse edge has no sharpness at all. Knot lines whose
+/// Packs a build: a patch may join a pack when it is a regular patch of a coarse quad with
+/// simple knots or a patch at an extraordinary vertex (PatchKind::Pccm), polynomial, across a
+/// curve claimed C2 whose coarse edge has no sharpness at all. Knot lines whose
 /// third-derivative jump is at most tolerances::kKnotRemoval of the model size are dropped; a
 /// pack must reproduce each quad within tolerances::kSameSurface, else its quads stay alone.
 /// No pack has more than `max_edges` edges on its boundary (a seam counted twice).

@@ -84,7 +84,9 @@ TEST(CliStep, SampleReadsBackAsAValidSolid) {
   EXPECT_TRUE(s.valid) << s.check_message;
   EXPECT_EQ(s.solids, 1);
   EXPECT_EQ(s.shells, 1);
-  EXPECT_EQ(s.faces, 24);  // one per cage quad
+  // One per side: a side's 2 x 2 quads, each at a corner of the box (valence 3), join across
+  // the side's own edges (C2); the box's edges are fan rays (G1) and stay edges.
+  EXPECT_EQ(s.faces, 6);
   EXPECT_EQ(s.free_edges, 0);
   EXPECT_GT(s.volume, 0);
   // The cage spans [-1, 1]^3 and the limit surface lies inside its hull: a sphere-like body.

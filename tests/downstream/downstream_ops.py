@@ -75,9 +75,12 @@ def half_space_box(body, axis, frac):
 
 
 # Relative volume tolerance of the booleans' sums: FreeCAD's Volume integrates the pieces of
-# cut B-spline faces to a few 1e-5 relative only (measured up to 4.5e-5); 2e-4 leaves room
-# and still catches a missing, doubled or inside-out piece.
-VOL_REL = 2e-4
+# cut B-spline faces with a fixed number of points, to a few 1e-5 relative only (measured up to
+# 4.5e-5), and to 3.2e-4 on capped_cylinder_nopolar since packs take in the quads at
+# extraordinary vertices (their nested knots run across the pack): the same cut and common
+# integrated adaptively (BRepGProp::VolumeProperties with eps 1e-7) add up to vol(A) within
+# 2.5e-8. 1e-3 leaves room and still catches a missing, doubled or inside-out piece.
+VOL_REL = 1e-3
 
 
 def op_check(body):

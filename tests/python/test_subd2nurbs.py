@@ -232,7 +232,7 @@ class Conversion(unittest.TestCase):
     def test_round_trip_numpy_to_brep_text_measured_by_occt(self):
         for n in (3, 5, 6):
             v, f = prism_cage(n)
-            r = s2n.convert(s2n.Cage(v, f), level=0)
+            r = s2n.convert(s2n.Cage(v, f), level=0, faces="per-quad")
             m = s2n.brep_summary(r.brep_text)
             expected_faces = 2 * n + 4 * n  # one face per corner of every face (n-gons split)
             self.assertTrue(m["valid"], m["check_message"])
