@@ -3,9 +3,9 @@
 # faces, polar caps on and off) to BREP, then runs downstream_ops.py in FreeCAD (headless):
 # booleans, offsets, hollow, cut-then-shell, fillet, sections, mesh, STEP round trip, on our
 # bodies and on OCCT's own.
-# Usage: run_downstream.sh SUBD2NURBS FREECADCMD CORPUS_DIR SAMPLES_DIR
+# Usage: run_downstream.sh SUBD2NURBS FREECADCMD CORPUS_DIR SAMPLES_DIR MESH_DIR
 set -euo pipefail
-exe=$(realpath "$1"); freecadcmd=$2; corpus=$(realpath "$3"); samples=$(realpath "$4")
+exe=$(realpath "$1"); freecadcmd=$2; corpus=$(realpath "$3"); samples=$(realpath "$4"); meshes=$(realpath "$5")
 here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -25,6 +25,10 @@ convert cube_creases "$corpus/catmark_cube_creases2.obj"
 # shell and the inward offsets run at half of it (docs/downstream.md).
 convert torus_creases0 "$corpus/catmark_torus_creases0.obj"
 convert torus_creases1 "$corpus/catmark_torus_creases1.obj"
+# A real cage (Bob, 334 quads, 20 extraordinary vertices, genus 1): packs as large as real
+# models get, taking in the quads at extraordinary vertices with their nested knots, where the
+# test shapes above stay small (docs/downstream.md).
+convert bob_packed "$meshes/bob_controlmesh.obj"
 export S2N_BODIES="$bodies" S2N_OUT="$work"
 export HOME="$work"  # FreeCAD writes its user config under $HOME
 cd "$work"
