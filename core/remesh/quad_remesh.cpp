@@ -114,12 +114,30 @@ struct Dense {
   std::vector<char> corner;
 };
 
+// Directed edge (half_key(a, b)) -> the triangle that has it.
+std::unordered_map<std::uint64_t, int> half_edges(const std::vector<Tri>& tris) {
+  std::unordered_map<std::uint64_t, int> half;
+  half.reserve(tris.size() * 3);
+  for (size_t f = 0; f < tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) half[half_key(tris[f][k], tris[f][(k + 1) % 3])] = int(f);
+  return half;
+}
+
+// Per triangle, the triangle across each of its edges t[k] -> t[k + 1] (-1: none).
+std::vector<std::array<int, 3>> triangles_across(const std::vector<Tri>& tris) {
+  const std::unordered_map<std::uint64_t, int> half = half_edges(tris);
+  std::vector<std::array<int, 3>> across(tris.size(), {-1, -1, -1});
+  for (size_t f = 0; f < tris.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      auto it = half.find(half_key(tris[f][(k + 1) % 3], tris[f][k]));
+      if (it != half.end()) across[f][k] = it->second;
+    }
+  return across;
+}
+
 void split_long_edges(Dense& d, double lmax) {
   for (int pass = 0; pass < 400; ++pass) {
-    std::unordered_map<std::uint64_t, int> half;
-    half.reserve(d.t.size() * 3);
-    for (size_t f = 0; f < d.t.size(); ++f)
-      for (int k = 0; k < 3; ++k) half[half_key(d.t[f][k], d.t[f][(k + 1) % 3])] = int(f);
+    const std::unordered_map<std::uint64_t, int> half = half_edges(d.t);
     struct Cand {
       double length;
       std::uint64_t key;
@@ -902,8 +920,7 @@ class DislocationCanceller {
     for (int u = 0; u < fl.n; ++u)  // rounded on u < v; v's entry the same translation seen from v
       for (int i = fl.offsets[u]; i < fl.offsets[u + 1]; ++i)
         if (u < fl.adj[i]) set(u, i, {int(round_half_away(x_[i][0])), int(round_half_away(x_[i][1]))});
-    for (size_t f = 0; f < d.t.size(); ++f)
-      for (int k = 0; k < 3; ++k) edge_faces_[edge_key(d.t[f][k], d.t[f][(k + 1) % 3])].push_back(int(f));
+    across_ = triangles_across(d.t);
   }
 
   Translations cancel() {
@@ -1007,12 +1024,8 @@ class DislocationCanceller {
       const Tri& t = d_.t[s.f];
       for (int k = 0; k < 3; ++k) {
         const int u = t[k], v = t[(k + 1) % 3];
-        const std::uint64_t key = edge_key(u, v);
-        if (d_.feature.count(key)) continue;
-        const auto& faces = edge_faces_.at(key);
-        if (faces.size() != 2) continue;
-        const int g = faces[0] == s.f ? faces[1] : faces[0];
-        if (blocked_[g]) continue;
+        const int g = across_[s.f][k];
+        if (g < 0 || d_.feature.count(edge_key(u, v)) || blocked_[g]) continue;
         // t(u -> v) - delta (u's frame) changes f's sum by -rotate(delta, k_au) = -cf and g's
         // (which runs v -> u) by +rotate(delta, k_bu): the unit moves on into g.
         const I2 delta = rotate_turns(cf, 4 - frame_turns(fl_, nq_, t[0], u));
@@ -1074,7 +1087,7 @@ class DislocationCanceller {
   Translations tr_;
   std::vector<I2> curls_;
   std::vector<char> closed_, blocked_;
-  std::unordered_map<std::uint64_t, std::vector<int>> edge_faces_;
+  std::vector<std::array<int, 3>> across_;  // per triangle: the triangle across its edge k (-1: none)
 };
 
 // The position field re-solved near the changed edges (kRestretchRings around their vertices)
@@ -1361,15 +1374,7 @@ struct Projector {
       face_normal.push_back(l > 0 ? V3(fn / l) : V3::Zero());
     }
     mark.assign(d.t.size(), -1);
-    std::unordered_map<std::uint64_t, int> half;
-    for (size_t i = 0; i < d.t.size(); ++i)
-      for (int k = 0; k < 3; ++k) half[half_key(d.t[i][k], d.t[i][(k + 1) % 3])] = int(i);
-    across.assign(d.t.size(), {-1, -1, -1});
-    for (size_t i = 0; i < d.t.size(); ++i)
-      for (int k = 0; k < 3; ++k) {
-        auto it = half.find(half_key(d.t[i][(k + 1) % 3], d.t[i][k]));
-        if (it != half.end()) across[i][k] = it->second;
-      }
+    across = triangles_across(d.t);
   }
 
   // The closest point to x on the part of the dense mesh that a coarse polygon (or edge) with
@@ -1704,13 +1709,10 @@ template <class IsFeature>
 int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
                             IsFeature&& coarse_feature) {
   const int nc = static_cast<int>(dense_of.size());
-  std::unordered_map<std::uint64_t, int> half;  // directed edge -> triangle
+  std::unordered_map<std::uint64_t, int> half = half_edges(tris);
   std::unordered_map<std::uint64_t, int> count;  // undirected edge -> faces
   for (size_t i = 0; i < tris.size(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
-      count[edge_key(tris[i][k], tris[i][(k + 1) % 3])] += 1;
-    }
+    for (int k = 0; k < 3; ++k) count[edge_key(tris[i][k], tris[i][(k + 1) % 3])] += 1;
   std::vector<int> valence(nc, 0);
   std::vector<char> boundary(nc, 0);
   for (const auto& [key, n] : count) {
@@ -1792,9 +1794,7 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
 template <class IsFeature>
 int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
               IsFeature&& coarse_feature) {
-  std::unordered_map<std::uint64_t, int> half;  // directed edge -> triangle
-  for (size_t i = 0; i < tris.size(); ++i)
-    for (int k = 0; k < 3; ++k) half[half_key(tris[i][k], tris[i][(k + 1) % 3])] = int(i);
+  std::unordered_map<std::uint64_t, int> half = half_edges(tris);
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
   int flips = 0;
