@@ -258,15 +258,22 @@ struct Fields {
   double s = 1;
 };
 
+// Quarter turns k with (x, y) in v's lattice frame = rotate_turns((x, y), k) in u's frame.
+int frame_turns(const Fields& fl, const std::vector<V3>& nq, int u, int v) {
+  const CrossMatch m = best_cross_match(fl.q[u], nq[u], fl.q[v], nq[v]);
+  if (m.i == m.j) return m.sign > 0 ? 0 : 2;
+  if (m.i == 0) return m.sign > 0 ? 3 : 1;  // u's first axis along v's second
+  return m.sign > 0 ? 1 : 3;                // u's second axis along v's first
+}
+
 // The cross field's index around each dense triangle (as Instant Meshes counts it): per edge
-// i -> j the quarter turns k_j - k_i between the members of the two crosses that agree best,
-// summed around the triangle, mod 4: 1 a singularity of index +1/4 (a valence-3 vertex), 3 one
-// of -1/4 (valence 5), 2 (half a turn) counted as +2.
+// i -> j the quarter turns between the members of the two crosses that agree best (j's frame
+// against i's: -frame_turns(i, j)), summed around the triangle, mod 4: 1 a singularity of index
+// +1/4 (a valence-3 vertex), 3 one of -1/4 (valence 5), 2 (half a turn) counted as +2.
 void count_singularities(const Dense& d, const Fields& fl, QuadRemeshStats& st) {
-  auto turns = [&](int i, int j) {  // b's member's quarter turns (0 .. 3) less a's (0, 1)
-    const CrossMatch m = best_cross_match(fl.q[i], fl.normal[i].cross(fl.q[i]), fl.q[j], fl.normal[j].cross(fl.q[j]));
-    return m.j + (m.sign < 0 ? 2 : 0) - m.i;
-  };
+  std::vector<V3> nq(fl.n);
+  for (int v = 0; v < fl.n; ++v) nq[v] = fl.normal[v].cross(fl.q[v]);
+  auto turns = [&](int i, int j) { return -frame_turns(fl, nq, i, j); };
   st.field_singularities = st.field_index_sum = 0;
   for (const Tri& t : d.t) {
     const int k = (((turns(t[0], t[1]) + turns(t[1], t[2]) + turns(t[2], t[0])) % 4) + 4) % 4;
@@ -450,14 +457,20 @@ void smooth_cross_vertex(Fields& fl, std::vector<V3>& nq, int v) {
   }
 }
 
+// A feature vertex's lattice point kept on the line through it along its chain (q there is the
+// chain's tangent): o projected onto that line; any other vertex's o as it is.
+V3 on_chain_line(const Fields& fl, int v, const V3& o) {
+  if (fl.kind[v] != 1 || !(fl.tangent[v].norm() > 0)) return o;
+  return fl.anchor[v] + fl.q[v] * fl.q[v].dot(o - fl.anchor[v]);
+}
+
 void constrain_position(Fields& fl, int v) {
   if (fl.kind[v] == 2) {
     fl.o[v] = fl.anchor[v];
   } else if (fl.pinned[v]) {
     fl.o[v] = fl.pin[v];
-  } else if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) {
-    V3 r = fl.o[v] - fl.anchor[v];
-    fl.o[v] = fl.anchor[v] + fl.q[v] * fl.q[v].dot(r);
+  } else {
+    fl.o[v] = on_chain_line(fl, v, fl.o[v]);
   }
   V3 t = fl.normal[v].cross(fl.q[v]);
   fl.o[v] = round_lattice(fl.p[v], fl.o[v], fl.q[v], t, fl.s);
@@ -879,14 +892,6 @@ constexpr double kDislocationFeatureReach = 1.5;  // x s
 constexpr int kRestretchRings = 8;               // around the changed edges' vertices
 constexpr int kRestretchIterations = 30;
 
-// Quarter turns k with (x, y) in v's lattice frame = rotate_turns((x, y), k) in u's frame.
-int frame_turns(const Fields& fl, const std::vector<V3>& nq, int u, int v) {
-  const CrossMatch m = best_cross_match(fl.q[u], nq[u], fl.q[v], nq[v]);
-  if (m.i == m.j) return m.sign > 0 ? 0 : 2;
-  if (m.i == 0) return m.sign > 0 ? 3 : 1;  // u's first axis along v's second
-  return m.sign > 0 ? 1 : 3;                // u's second axis along v's first
-}
-
 using I2 = std::array<int, 2>;
 // (x, y) turned by k quarter turns counter-clockwise: 1 gives (-y, x).
 I2 rotate_turns(const I2& x, int k) {
@@ -1121,8 +1126,7 @@ void restretch_positions(Fields& fl, const Translations& tr) {
           sum += fl.o[fl.adj[i]] - fl.s * (tr.t[i][0] * fl.q[v] + tr.t[i][1] * t);
         V3 o = sum / double(fl.offsets[v + 1] - fl.offsets[v]);
         o -= fl.normal[v] * fl.normal[v].dot(o - fl.p[v]);
-        if (fl.kind[v] == 1 && fl.tangent[v].norm() > 0) o = fl.anchor[v] + fl.q[v] * fl.q[v].dot(o - fl.anchor[v]);
-        fl.o[v] = o;
+        fl.o[v] = on_chain_line(fl, v, o);
       }
   for (int v : region) constrain_position(fl, v);
 }
