@@ -116,6 +116,23 @@ QuadRemeshResult remesh(const MeshInput& m, int target) {
   return quad_remesh(m, o);
 }
 
+// The remesh of m at `target` quads with the option `flag` off and then on (the other options
+// as in o), both cages checked (check_cage): what a step's own test compares.
+struct OffOn {
+  QuadRemeshResult off, on;
+};
+OffOn off_and_on(const MeshInput& m, QuadRemeshOptions o, bool QuadRemeshOptions::*flag, int target) {
+  o.target_faces = target;
+  OffOn r;
+  o.*flag = false;
+  r.off = quad_remesh(m, o);
+  o.*flag = true;
+  r.on = quad_remesh(m, o);
+  check_cage(m, r.off, target);
+  check_cage(m, r.on, target);
+  return r;
+}
+
 double radius(const std::array<double, 3>& p) { return std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]); }
 
 TEST(QuadRemesh, SphereKeepsTopologyAndLiesOnTheSphere) {
@@ -360,14 +377,7 @@ TEST(QuadRemesh, NoEarAlongARoundedRim) {
 TEST(QuadRemesh, ValenceFlipsKeepTopologyAndLowerIrregularity) {
   for (int shape = 0; shape < 2; ++shape) {
     MeshInput m = shape == 0 ? test::torus(2, 0.7, 90, 36) : test::drilled_box(0.4, 64, 8, 16);
-    QuadRemeshOptions o;
-    o.target_faces = 400;
-    o.regularize_valence = false;
-    QuadRemeshResult off = quad_remesh(m, o);
-    o.regularize_valence = true;
-    QuadRemeshResult on = quad_remesh(m, o);
-    check_cage(m, off, 400);
-    check_cage(m, on, 400);
+    const auto [off, on] = off_and_on(m, {}, &QuadRemeshOptions::regularize_valence, 400);
     EXPECT_EQ(off.stats.flips, 0);
     EXPECT_GT(on.stats.flips, 0);
     EXPECT_LE(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices) << "shape " << shape;
@@ -398,14 +408,7 @@ TEST(QuadRemesh, CleanupLowersExtraordinaryVerticesAndKeepsFeatures) {
   };
   for (int shape = 0; shape < 2; ++shape) {
     MeshInput m = shape == 0 ? test::torus(2, 0.7, 90, 36) : test::drilled_box(0.4, 64, 8, 16);
-    QuadRemeshOptions o;
-    o.target_faces = 400;
-    o.cleanup = false;
-    QuadRemeshResult off = quad_remesh(m, o);
-    o.cleanup = true;
-    QuadRemeshResult on = quad_remesh(m, o);
-    check_cage(m, off, 400);
-    check_cage(m, on, 400);
+    const auto [off, on] = off_and_on(m, {}, &QuadRemeshOptions::cleanup, 400);
     EXPECT_EQ(off.stats.cleanup_rotations + off.stats.cleanup_merges, 0);
     EXPECT_GT(on.stats.cleanup_rotations + on.stats.cleanup_merges, 0);
     if (shape == 0)
@@ -579,14 +582,8 @@ TEST(QuadRemesh, NoSliverBesideATightRim) {
   MeshInput m = test::rounded_slab(rho, h, 256, 16, 24);
   auto lowest_wall_quad = [&](const QuadRemeshResult& r) { return subd2nurbs::lowest_wall_quad(r, h); };
   QuadRemeshOptions o;
-  o.target_faces = 1000;
   o.pin_tight_arcs = false;  // the lattice of before step 3's arc pins: it leaves the stuck vertex
-  o.relocate_stuck = false;
-  const QuadRemeshResult off = quad_remesh(m, o);
-  o.relocate_stuck = true;
-  const QuadRemeshResult on = quad_remesh(m, o);
-  check_cage(m, off, 1000);
-  check_cage(m, on, 1000);
+  const auto [off, on] = off_and_on(m, o, &QuadRemeshOptions::relocate_stuck, 1000);
   const double before = lowest_wall_quad(off), after = lowest_wall_quad(on);
   std::printf("  %d stuck vertices moved; lowest wall quad along a rim: %.3f -> %.3f of its length\n",
               on.stats.relocations, before, after);
@@ -609,14 +606,8 @@ TEST(QuadRemesh, TightArcPinsALatticeColumn) {
   const double rho = 0.06, h = 0.3;
   MeshInput m = test::rounded_slab(rho, h, 256, 16, 24);
   QuadRemeshOptions o;
-  o.target_faces = 1000;
   o.relocate_stuck = false;
-  o.pin_tight_arcs = false;
-  const QuadRemeshResult off = quad_remesh(m, o);
-  o.pin_tight_arcs = true;
-  const QuadRemeshResult on = quad_remesh(m, o);
-  check_cage(m, off, 1000);
-  check_cage(m, on, 1000);
+  const auto [off, on] = off_and_on(m, o, &QuadRemeshOptions::pin_tight_arcs, 1000);
   const double before = lowest_wall_quad(off, h), after = lowest_wall_quad(on, h);
   std::printf("  %d arc pins; lowest wall quad along a rim: %.3f -> %.3f of its length; faces %d -> %d, "
               "extraordinary %d -> %d\n",
@@ -670,14 +661,7 @@ TEST(QuadRemesh, DislocationsCancelInPairsOnATorus) {
   for (const int target : {300, 600, 1000})
     for (int shape = 0; shape < 2; ++shape) {
       const MeshInput mesh = shape == 0 ? m : test::torus(3, 1, 96, 32);
-      QuadRemeshOptions o;
-      o.target_faces = target;
-      o.cancel_dislocations = false;
-      const QuadRemeshResult off = quad_remesh(mesh, o);
-      o.cancel_dislocations = true;
-      const QuadRemeshResult on = quad_remesh(mesh, o);
-      check_cage(mesh, off, target);
-      check_cage(mesh, on, target);
+      const auto [off, on] = off_and_on(mesh, {}, &QuadRemeshOptions::cancel_dislocations, target);
       EXPECT_EQ(on.stats.field_singularities, 0);
       EXPECT_EQ(off.stats.position_dislocations, 0);  // not counted when off
       ev_off += off.stats.extraordinary_vertices;
