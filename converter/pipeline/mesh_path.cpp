@@ -501,6 +501,7 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   std::string size_rule = "given";
   if (settings.target_faces > 0) {
     ro.target_faces = settings.target_faces;
+    ro.aim_at_target = settings.aim_at_target;
   } else if (settings.edge_length > 0) {
     ro.edge_length = settings.edge_length;
   } else {

@@ -44,6 +44,10 @@ constexpr int kMinMeshTriangles = 200;
 struct MeshPathSettings {
   InputKind input = InputKind::Auto;
   int target_faces = 0;        ///< quads of the cage wanted; 0 with edge_length 0: automatic
+  /// With target_faces: rerun the remesh at corrected spacings until the cage has 0.9 .. 1.0 x
+  /// target_faces quads (at most 5 runs; a feature floor may keep it above: docs/remesh.md step 7);
+  /// otherwise target_faces is approximate (often 10 .. 30 % over). Ignored without target_faces.
+  bool aim_at_target = false;
   double edge_length = 0;      ///< the cage's edge length in model units (used when target_faces is 0)
   /// With the automatic size: the two-sided max distance between the fitted limit surface and
   /// the mesh to reach, relative to the bounding-box diagonal; the cage is remeshed at a size
