@@ -330,7 +330,7 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
     r.set = [](Settings& s, const SettingValue& v) { s.mesh.aim_at_target = flag(v); };
     r.get = [](const Settings& s) -> SettingValue { return s.mesh.aim_at_target; };
   }
-{
+  {
     SettingRow& r = add_row(t, "edge_length", SettingType::Number, {});
     r.default_text = "from target_faces";
     r.help = "Mesh input: the cage's edge length in model units, instead of target_faces";

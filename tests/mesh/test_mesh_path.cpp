@@ -600,6 +600,16 @@ struct CapsuleCase {
   double chord = shape.chord_error(mesh);
 };
 
+/// `subd2nurbs convert STL -o DIR/NAME.json --report DIR/NAME.report.json -q ARGS`, expected to
+/// succeed: the report's text.
+std::string convert_with_report(const TempDir& dir, const std::string& stl, const std::string& name,
+                                const std::string& args) {
+  const CommandResult r = run_command(kExe + " convert " + quote(stl) + " -o " + quote(dir.file(name + ".json")) +
+                                      " --report " + quote(dir.file(name + ".report.json")) + " -q " + args);
+  EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err;
+  return read_text(dir.file(name + ".report.json"));
+}
+
 /// The size rule makes the cage finer until the fit tolerance is met (issue #28 item 3). The
 /// tolerance asked for is 0.7 x the distance the automatic size reaches (the report of a run with
 /// fit_tolerance 0), so the automatic size misses it whatever the remesher does. With it the kept
@@ -667,10 +677,7 @@ TEST(MeshPath, AimAtTargetHonoursTheCount) {
   const std::string stl = dir.file("capsule.stl");
   write_stl(k.mesh, stl);
   auto quads = [&](const std::string& name, const std::string& args) {
-    const CommandResult r = run_command(kExe + " convert " + quote(stl) + " -o " + quote(dir.file(name + ".json")) +
-                                        " --report " + quote(dir.file(name + ".report.json")) + " -q " + args);
-    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err;
-    return json_number(read_text(dir.file(name + ".report.json")), {"mesh", "cage", "faces"});
+    return json_number(convert_with_report(dir, stl, name, args), {"mesh", "cage", "faces"});
   };
   for (const int n : {200, 400}) {
     const double loose = quads("loose", "--target-faces " + std::to_string(n));
@@ -688,11 +695,7 @@ TEST(MeshPath, FitToleranceOffGivenSizeAndCoarsening) {
   const std::string stl = dir.file("capsule.stl");
   write_stl(k.mesh, stl);
   auto run = [&](const std::string& name, const std::string& args) {
-    const CommandResult r = run_command(kExe + " convert " + quote(stl) + " -o " + quote(dir.file(name + ".json")) +
-                                        " --report " + quote(dir.file(name + ".report.json")) + " --keep-cage " +
-                                        quote(dir.file(name + ".obj")) + " -q " + args);
-    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.err;
-    return read_text(dir.file(name + ".report.json"));
+    return convert_with_report(dir, stl, name, "--keep-cage " + quote(dir.file(name + ".obj")) + " " + args);
   };
   const std::string off = run("off", "--fit-tolerance 0");
   EXPECT_NE(off.find("\"rule\": \"automatic\""), std::string::npos);
