@@ -134,38 +134,20 @@ def obj_stats(path):
     return quads, len(faces) - quads, ev, loops
 
 
-def limit_scan(exe, cage, n, out, tmp):
-    """A dense triangulation of `cage`'s exact limit surface: an n x n grid per quad, evaluated
-    by `subd2nurbs limit`, written as STL (the shared edges' points weld)."""
-    faces = [l for l in open(cage) if l.startswith("f ")]
-    grids = []  # (face, sub-face or None): a quad is one grid, an n-gon n (its ptex sub-faces)
-    for f, line in enumerate(faces):
+def limit_grid(cage, ts):
+    """Queries for `subd2nurbs limit`: (u, v) = (ts[i], ts[j]) for every i, j (i outer) on each
+    ptex face of `cage` in order (a quad is one, an n-gon n: its sub-faces): (prefixes "f" or
+    "f s", an array of (u, v))."""
+    import numpy
+    prefixes, uv = [], []
+    for f, line in enumerate(l for l in open(cage) if l.startswith("f ")):
         size = len(line.split()) - 1
-        grids.extend([(f, None)] if size == 4 else [(f, s) for s in range(size)])
-    queries = os.path.join(tmp, "queries.txt")
-    with open(queries, "w") as q:
-        for f, sub in grids:
-            prefix = "%d" % f if sub is None else "%d %d" % (f, sub)
-            for i in range(n + 1):
-                for j in range(n + 1):
-                    q.write("%s %.17g %.17g\n" % (prefix, i / n, j / n))
-    _, _, text, _, _ = run([exe, "limit", cage, queries], tmp)
-    pts = [tuple(map(float, l.split()[:3])) for l in text.splitlines() if l.strip()]
-    k = n + 1
-    with open(out, "w") as s:
-        s.write("solid scan\n")
-        for g in range(len(grids)):
-            base = g * k * k
-            for i in range(n):
-                for j in range(n):
-                    a, b, c, d = base + i * k + j, base + (i + 1) * k + j, base + (i + 1) * k + j + 1, base + i * k + j + 1
-                    for tri in ((a, b, c), (a, c, d)) if (i + j) % 2 == 0 else ((a, b, d), (b, c, d)):
-                        s.write(" facet normal 0 0 0\n  outer loop\n")
-                        for v in tri:
-                            s.write("   vertex %.17g %.17g %.17g\n" % pts[v])
-                        s.write("  endloop\n endfacet\n")
-        s.write("endsolid scan\n")
-    return len(faces)
+        for prefix in (["%d" % f] if size == 4 else ["%d %d" % (f, s) for s in range(size)]):
+            for u in ts:
+                for v in ts:
+                    prefixes.append(prefix)
+                    uv.append((u, v))
+    return prefixes, numpy.array(uv)
 
 
 def limit_eval(exe, cage, prefixes, uv, tmp):
@@ -180,44 +162,59 @@ def limit_eval(exe, cage, prefixes, uv, tmp):
     return a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12]
 
 
-def limit_grid(cage, n):
-    """The cell centres of an n x n grid per quad or n-gon sub-face of `cage`: (prefixes, uv)."""
-    import numpy
-    prefixes, uv = [], []
-    for f, line in enumerate(l for l in open(cage) if l.startswith("f ")):
-        size = len(line.split()) - 1
-        for prefix in (["%d" % f] if size == 4 else ["%d %d" % (f, s) for s in range(size)]):
+def limit_scan(exe, cage, n, out, tmp):
+    """A dense triangulation of `cage`'s exact limit surface: an n x n grid per quad (per sub-face
+    of an n-gon), evaluated by `subd2nurbs limit`, written as STL (the shared edges' points weld).
+    Returns the cage's face count."""
+    prefixes, uv = limit_grid(cage, [i / n for i in range(n + 1)])
+    pts, _, _, _ = limit_eval(exe, cage, prefixes, uv, tmp)
+    k = n + 1
+    with open(out, "w") as s:
+        s.write("solid scan\n")
+        for g in range(len(prefixes) // (k * k)):
+            base = g * k * k
             for i in range(n):
                 for j in range(n):
-                    prefixes.append(prefix)
-                    uv.append(((i + 0.5) / n, (j + 0.5) / n))
-    return prefixes, numpy.array(uv)
+                    a, b, c, d = base + i * k + j, base + (i + 1) * k + j, base + (i + 1) * k + j + 1, base + i * k + j + 1
+                    for tri in ((a, b, c), (a, c, d)) if (i + j) % 2 == 0 else ((a, b, d), (b, c, d)):
+                        s.write(" facet normal 0 0 0\n  outer loop\n")
+                        for v in tri:
+                            s.write("   vertex %.17g %.17g %.17g\n" % tuple(pts[v]))
+                        s.write("  endloop\n endfacet\n")
+        s.write("endsolid scan\n")
+    return sum(1 for l in open(cage) if l.startswith("f "))
 
 
-def distance_to_limit(exe, fitted, original, tmp, n=12, n_ref=12, steps=4, seeds=4):
+def distance_to_limit(exe, fitted, original, tmp, n=12, steps=4, seeds=4):
     """The two-sided distance between the limit surface of `fitted` (our or QuadriFlow's fitted
     cage) and the exact limit surface of `original` (the cage the scan was made from), relative to
-    the original limit's bounding-box diagonal: (max, rms). Each side's points (cell centres of an
-    n x n grid per face) are projected onto the other side's exact limit: from each of the `seeds`
-    nearest points of its n_ref x n_ref grid, Gauss-Newton steps on that face's (u, v) (kept in
-    [0, 1]); the nearest surface point among the seeds and every step (each is a point of that
-    surface, so the result never underestimates the distance). The identity (a cage against itself) gives 0 to rounding."""
+    the original limit's bounding-box diagonal: (max, rms). Each surface is sampled once, at the
+    cell centres of an n x n grid per ptex face; each sample is projected onto the other surface:
+    from each of the `seeds` nearest samples of that surface, Gauss-Newton steps on that ptex
+    face's (u, v) (kept in [0, 1]); the nearest surface point among the seeds and every step (each
+    is a point of that surface, so the result never underestimates the distance). A cage against
+    itself gives 0 to rounding."""
     import numpy
     from scipy.spatial import cKDTree
 
+    ts = [(i + 0.5) / n for i in range(n)]
+
+    def sampled(cage):
+        prefixes, uv = limit_grid(cage, ts)
+        return cage, prefixes, uv, limit_eval(exe, cage, prefixes, uv, tmp)[0]
+
     def one_way(points, other):
-        prefixes, uv = limit_grid(other, n_ref)
-        dense, _, _, _ = limit_eval(exe, other, prefixes, uv, tmp)
-        # seeds: the nearest grid points (several: the foot point may lie on a neighbouring face,
+        cage, prefixes, uv, samples = other
+        # seeds: the nearest samples (several: the foot point may lie on a neighbouring face,
         # where a seed's face, its (u, v) clamped to [0, 1], stops at the border)
-        _, k = cKDTree(dense).query(points, k=seeds)
+        _, k = cKDTree(samples).query(points, k=seeds)
         k = k.reshape(-1)
         target = numpy.repeat(points, seeds, axis=0)
         pre = [prefixes[i] for i in k]
         at = uv[k].copy()
         best = numpy.full(len(target), numpy.inf)  # every iterate is a point of the surface: an upper bound
         for _ in range(steps):
-            x, _, du, dv = limit_eval(exe, other, pre, at, tmp)
+            x, _, du, dv = limit_eval(exe, cage, pre, at, tmp)
             r = target - x
             best = numpy.minimum(best, numpy.linalg.norm(r, axis=1))
             a11, a12, a22 = (du * du).sum(1), (du * dv).sum(1), (dv * dv).sum(1)
@@ -227,16 +224,13 @@ def distance_to_limit(exe, fitted, original, tmp, n=12, n_ref=12, steps=4, seeds
             step_u = numpy.where(ok, (a22 * b1 - a12 * b2) / numpy.where(ok, det, 1), 0)
             step_v = numpy.where(ok, (a11 * b2 - a12 * b1) / numpy.where(ok, det, 1), 0)
             at = numpy.clip(at + numpy.stack([step_u, step_v], 1), 0, 1)
-        x, _, _, _ = limit_eval(exe, other, pre, at, tmp)
+        x, _, _, _ = limit_eval(exe, cage, pre, at, tmp)
         best = numpy.minimum(best, numpy.linalg.norm(target - x, axis=1))
         return best.reshape(-1, seeds).min(1)
 
-    prefixes, uv = limit_grid(fitted, n)
-    ours, _, _, _ = limit_eval(exe, fitted, prefixes, uv, tmp)
-    prefixes, uv = limit_grid(original, n)
-    ref, _, _, _ = limit_eval(exe, original, prefixes, uv, tmp)
-    diag = numpy.linalg.norm(ref.max(0) - ref.min(0))
-    d = numpy.concatenate([one_way(ours, original), one_way(ref, fitted)])
+    ours, ref = sampled(fitted), sampled(original)
+    diag = numpy.linalg.norm(ref[3].max(0) - ref[3].min(0))
+    d = numpy.concatenate([one_way(ours[3], ref), one_way(ref[3], ours)])
     return float(d.max() / diag), float(numpy.sqrt((d ** 2).mean()) / diag)
 
 
@@ -365,8 +359,8 @@ def print_table(results, reps):
     if known:
         print("Scans of a known cage's limit surface: the fitted cage's limit surface against that exact limit "
               "(not the scan's chords), two-sided, relative to its diagonal (12 x 12 points per face projected onto "
-              "the other surface by Gauss-Newton steps from the 4 nearest of its 12 x 12). The B-rep adds the conversion's own "
-              "deviation from the limit, at most its tolerance (1e-4 by default).\n")
+              "the other surface by Gauss-Newton steps from the 4 nearest of its 12 x 12). The B-rep adds the "
+              "conversion's own deviation from the limit, at most its tolerance (1e-4 by default).\n")
         print("| mesh | original cage faces | ours: quads | max | rms | QuadriFlow after our fit: quads | max | rms |")
         print("|---|---|---|---|---|---|---|---|")
         for res in known:
