@@ -25,31 +25,25 @@
 #         freecadcmd -c "exec(open('scripts/cut_shell_grid.py').read())"
 import json
 import os
+import sys
 
 import FreeCAD
 import Part
-from FreeCAD import Vector
+
+sys.path.insert(0, os.path.join(os.getcwd(), "tests", "downstream"))  # run from the repository's root
+from cut_helpers import bspline_face_solid, frame, half_space_box  # noqa: E402
 
 FRACTIONS = (0.35, 0.45, 0.55, 0.65)
 
 
 def grid(body, thickness):
     """The outcome string of the 12 cuts (x, y, z groups separated by spaces) and passed / tried."""
-    bb = body.BoundBox
-    diag = bb.DiagonalLength
-    lo = [bb.XMin, bb.YMin, bb.ZMin]
-    hi = [bb.XMax, bb.YMax, bb.ZMax]
+    diag = frame(body)[2]
     groups = []
     for axis in range(3):
         group = ""
         for frac in FRACTIONS:
-            c = lo[axis] + frac * (hi[axis] - lo[axis])
-            m = 0.1 * diag
-            origin = [l - m for l in lo]
-            size = [h - l + 2 * m for l, h in zip(lo, hi)]
-            origin[axis] = c
-            size[axis] = hi[axis] - c + m
-            box = Part.makeBox(size[0], size[1], size[2], Vector(*origin))
+            box, c = half_space_box(body, axis, frac)
             try:
                 part = body.cut(box)
             except Exception:
@@ -94,14 +88,6 @@ def with_occt_edges(body):
     return solid
 
 
-def bspline_face_solid(analytic):
-    """One closed analytic face as OCCT's B-spline surface, made a face by OCCT."""
-    solid = Part.Solid(Part.Shell([Part.Face(analytic.Faces[0].Surface.toBSpline())]))
-    if solid.Volume < 0:
-        solid.reverse()
-    return solid
-
-
 for item in os.environ.get("S2N_BODIES", "").split():
     name, path = item.split("=", 1)
     shape = Part.Shape()
@@ -132,4 +118,6 @@ ellipsoid = bspline_face_solid(Part.makeSphere(1.0)).transformGeometry(squash).S
 add("OCCT ellipsoid as a B-spline face", ellipsoid, 0.02 * ellipsoid.BoundBox.DiagonalLength)
 
 table = ["| body | thickness / diagonal | x, y, z at 35/45/55/65 % | passed |", "|---|---|---|---|"] + rows
-open(os.environ.get("S2N_TABLE", "cut_shell_grid.md"), "w").write("\n".join(table) + "\n")
+out = os.environ.get("S2N_TABLE", "cut_shell_grid.md")
+open(out, "w").write("\n".join(table) + "\n")
+os.remove(out + ".part")  # the rows so far, written as they came (a run takes minutes)

@@ -6,6 +6,7 @@
 #   S2N_BODIES   space-separated "name=path" of our bodies (BREP or STEP files)
 #   S2N_OUT      a scratch folder (the STEP round trip writes there)
 #   S2N_RESULTS  optional: write the per-body, per-operation outcome as JSON there
+#   S2N_HELPERS  the folder of cut_helpers.py (default: tests/downstream under the working folder)
 #   S2N_COMPARE  "1" (default): fail unless every operation succeeds on our bodies (but the
 #                KNOWN failures, which OCCT's own B-spline bodies share) and our success rate
 #                is at least OCCT's on its own bodies converted to B-splines, on every operation
@@ -19,6 +20,9 @@ import sys
 import FreeCAD
 import Part
 from FreeCAD import Vector
+
+sys.path.insert(0, os.environ.get("S2N_HELPERS", os.path.join(os.getcwd(), "tests", "downstream")))
+from cut_helpers import bspline_face_solid, frame, half_space_box  # noqa: E402
 
 
 def log(message):
@@ -53,25 +57,6 @@ def valid(shape, what):
 def close(a, b, rel, what):
     require(abs(a - b) <= rel * max(abs(a), abs(b), 1e-300),
             "%s: %.9g vs %.9g (rel %.2g > %.2g)" % (what, a, b, abs(a - b) / max(abs(a), abs(b), 1e-300), rel))
-
-
-def frame(body):
-    bb = body.BoundBox
-    lo = [bb.XMin, bb.YMin, bb.ZMin]
-    hi = [bb.XMax, bb.YMax, bb.ZMax]
-    return lo, hi, bb.DiagonalLength
-
-
-def half_space_box(body, axis, frac):
-    """A box over the part of the body beyond the plane axis = lo + frac * extent."""
-    lo, hi, diag = frame(body)
-    c = lo[axis] + frac * (hi[axis] - lo[axis])
-    m = 0.1 * diag
-    origin = [l - m for l in lo]
-    size = [h - l + 2 * m for l, h in zip(lo, hi)]
-    origin[axis] = c
-    size[axis] = hi[axis] - c + m
-    return Part.makeBox(size[0], size[1], size[2], Vector(*origin)), c
 
 
 # Relative volume tolerance of the booleans' sums: FreeCAD's Volume integrates the pieces of
@@ -260,16 +245,6 @@ def run_body(name, body, radii=None):
             outcome[op] = "fail: %s: %s" % (type(e).__name__, str(e)[:200])
         log("  %-18s %-10s %s" % (name, op, outcome[op]))
     return outcome
-
-
-def bspline_face_solid(body):
-    """A one-face closed body's surface as OCCT's B-spline surface, made a face by OCCT itself
-    (MakeFace: line pcurves, as ours), unlike toNurbs(), whose B-spline pcurves fail on their own
-    (docs/downstream.md "Cut-then-shell over a grid of cuts")."""
-    solid = Part.Solid(Part.Shell([Part.Face(body.Faces[0].Surface.toBSpline())]))
-    if solid.Volume < 0:
-        solid.reverse()
-    return solid
 
 
 results = {"ours": {}, "occt": {}, "occt_nurbs": {}, "occt_bspline_faces": {}}

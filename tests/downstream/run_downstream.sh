@@ -29,7 +29,7 @@ convert torus_creases1 "$corpus/catmark_torus_creases1.obj"
 # models get, taking in the quads at extraordinary vertices with their nested knots, where the
 # test shapes above stay small (docs/downstream.md).
 convert bob_packed "$meshes/bob_controlmesh.obj"
-export S2N_BODIES="$bodies" S2N_OUT="$work"
+export S2N_BODIES="$bodies" S2N_OUT="$work" S2N_HELPERS="$here"  # S2N_HELPERS: cut_helpers.py
 export HOME="$work"  # FreeCAD writes its user config under $HOME
 cd "$work"
 "$freecadcmd" -c "exec(open('$here/downstream_ops.py').read())"
