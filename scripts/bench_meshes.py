@@ -134,17 +134,18 @@ def obj_stats(path):
     return quads, len(faces) - quads, ev, loops
 
 
-def limit_grid(cage, ts):
+def limit_grid(cage, ts, sub_ts=None):
     """Queries for `subd2nurbs limit`: (u, v) = (ts[i], ts[j]) for every i, j (i outer) on each
-    ptex face of `cage` in order (a quad is one, an n-gon n: its sub-faces): (prefixes "f" or
-    "f s", an array of (u, v))."""
+    ptex face of `cage` in order (a quad is one, an n-gon n: its sub-faces, on which sub_ts is
+    used instead when given): (prefixes "f" or "f s", an array of (u, v))."""
     import numpy
     prefixes, uv = [], []
     for f, line in enumerate(l for l in open(cage) if l.startswith("f ")):
         size = len(line.split()) - 1
+        grid = ts if size == 4 or sub_ts is None else sub_ts
         for prefix in (["%d" % f] if size == 4 else ["%d %d" % (f, s) for s in range(size)]):
-            for u in ts:
-                for v in ts:
+            for u in grid:
+                for v in grid:
                     prefixes.append(prefix)
                     uv.append((u, v))
     return prefixes, numpy.array(uv)
@@ -163,24 +164,28 @@ def limit_eval(exe, cage, prefixes, uv, tmp):
 
 
 def limit_scan(exe, cage, n, out, tmp):
-    """A dense triangulation of `cage`'s exact limit surface: an n x n grid per quad (per sub-face
-    of an n-gon), evaluated by `subd2nurbs limit`, written as STL (the shared edges' points weld).
-    Returns the cage's face count."""
-    prefixes, uv = limit_grid(cage, [i / n for i in range(n + 1)])
+    """A dense triangulation of `cage`'s exact limit surface: an n x n grid per quad and an
+    n/2 x n/2 grid per sub-face of an n-gon (a sub-face's sides are half a cage edge, so the points
+    on an edge shared with a quad are the same: no T-junctions), evaluated by `subd2nurbs limit`,
+    written as STL (the shared edges' points weld). n must be even. Returns the cage's face count."""
+    assert n % 2 == 0, "limit_scan: n must be even (n-gon sub-faces get n / 2)"
+    prefixes, uv = limit_grid(cage, [i / n for i in range(n + 1)], [i / (n // 2) for i in range(n // 2 + 1)])
     pts, _, _, _ = limit_eval(exe, cage, prefixes, uv, tmp)
-    k = n + 1
     with open(out, "w") as s:
         s.write("solid scan\n")
-        for g in range(len(prefixes) // (k * k)):
-            base = g * k * k
-            for i in range(n):
-                for j in range(n):
+        base = 0
+        while base < len(prefixes):
+            m = n if " " not in prefixes[base] else n // 2  # "f" a quad, "f s" a sub-face
+            k = m + 1
+            for i in range(m):
+                for j in range(m):
                     a, b, c, d = base + i * k + j, base + (i + 1) * k + j, base + (i + 1) * k + j + 1, base + i * k + j + 1
                     for tri in ((a, b, c), (a, c, d)) if (i + j) % 2 == 0 else ((a, b, d), (b, c, d)):
                         s.write(" facet normal 0 0 0\n  outer loop\n")
                         for v in tri:
                             s.write("   vertex %.17g %.17g %.17g\n" % tuple(pts[v]))
                         s.write("  endloop\n endfacet\n")
+            base += k * k
         s.write("endsolid scan\n")
     return sum(1 for l in open(cage) if l.startswith("f "))
 
