@@ -256,19 +256,23 @@ def main():
     tmp = tempfile.mkdtemp()
     qf_script = os.path.join(tmp, "qf.py")
     open(qf_script, "w").write(QF_SCRIPT)
-    meshes = []  # (name, our input, blender input, extra options, original cage faces or None)
+    meshes = []  # (name, our input, blender input, extra options, (original cage, its faces) or None)
     fandisk_ply = os.path.join(tmp, "fandisk.ply")
     off_to_ply(os.path.join(REAL, "fandisk.off"), fandisk_ply)
     meshes.append(("fandisk", os.path.join(REAL, "fandisk.off"), fandisk_ply, [], None))
     for name in ("plate_holes.STL", "featuretype.STL"):
         meshes.append((name, os.path.join(REAL, name), os.path.join(REAL, name), [], None))
-    scan = os.path.join(tmp, "bob_limit.stl")
-    # 334 quads x 10 x 10 x 2 = 66 800 triangles (a scan of the size of the Stanford bunny), a cage
-    # of 2 x the original's faces asked for
-    original_cage_path = os.path.join(REAL, "bob_controlmesh.obj")
-    cage_faces = limit_scan(exe, original_cage_path, 10, scan, tmp)
-    meshes.append(("bob limit scan", scan, scan, ["--input", "mesh", "--target-faces", str(2 * cage_faces)],
-                   cage_faces))
+    # Scans of known limits, a cage of 2 x the original's faces asked for. Bob: 334 quads x 10 x 10
+    # x 2 = 66 800 triangles (a scan of the size of the Stanford bunny). Blub: 100 quads x 16 x 16 x
+    # 2 and the 44 sub-faces of its 8 triangles and 4 pentagons x 8 x 8 x 2 = 56 832 triangles, a
+    # smooth shape whose limit bends to radii of ~1e-3 of its diagonal (docs/meshes.md "Limits").
+    for name, cage_file, n in (("bob limit scan", "bob_controlmesh.obj", 10),
+                               ("blub limit scan", "blub_control_mesh.obj", 16)):
+        scan = os.path.join(tmp, cage_file.replace(".obj", "_limit.stl"))
+        original_cage_path = os.path.join(REAL, cage_file)
+        cage_faces = limit_scan(exe, original_cage_path, n, scan, tmp)
+        meshes.append((name, scan, scan, ["--input", "mesh", "--target-faces", str(2 * cage_faces)],
+                       (original_cage_path, cage_faces)))
     only = os.environ.get("BENCH_MESHES_ONLY")
     if only:
         meshes = [m for m in meshes if m[0] == only]
@@ -294,7 +298,7 @@ def main():
                    "triangles": m["input_triangles"], "boundaries_in": None}
             if original and rep == 0:  # a scan of a known cage's limit: our fitted limit against that
                 # limit (once: the cages are deterministic)
-                row["limit_max"], row["limit_rms"] = distance_to_limit(exe, cage, original_cage_path, tmp)
+                row["limit_max"], row["limit_rms"] = distance_to_limit(exe, cage, original[0], tmp)
             qf_obj = os.path.join(tmp, "qf.obj")
             qf_wall, qf_rss, out, _, code = run(["blender", "-b", "--python", qf_script, "--", blend_src, qf_obj,
                                       str(row["quads"])], tmp, check=False)
@@ -309,7 +313,7 @@ def main():
                 if code == 0:
                     row["qf_distance"] = two_sided(json.load(open(fit_report))["after"])
                     if original and rep == 0:
-                        row["qf_limit_max"], row["qf_limit_rms"] = distance_to_limit(exe, fitted, original_cage_path,
+                        row["qf_limit_max"], row["qf_limit_rms"] = distance_to_limit(exe, fitted, original[0],
                                                                                      tmp)
                     _, _, _, _, code = run([exe, "convert", fitted, "-o", step, "--report", report, "-q"], tmp,
                                            check=False)
@@ -319,7 +323,7 @@ def main():
                     row["qf_error"] = err.strip().splitlines()[-1] if err.strip() else "exit %d" % code
             rows.append(row)
             print("%s rep %d: %s" % (name, rep, json.dumps(row)), file=sys.stderr)
-        results.append({"mesh": name, "original_cage_faces": original, "runs": rows})
+        results.append({"mesh": name, "original_cage_faces": original[1] if original else None, "runs": rows})
     if os.environ.get("BENCH_MESHES_RAW"):
         json.dump(results, open(os.environ["BENCH_MESHES_RAW"], "w"), indent=1)
     print_table(results, reps)
