@@ -31,7 +31,7 @@ import FreeCAD
 import Part
 
 sys.path.insert(0, os.path.join(os.getcwd(), "tests", "downstream"))  # run from the repository's root
-from cut_helpers import bspline_face_solid, frame, half_space_box  # noqa: E402
+from cut_helpers import bspline_face_solid, faces_at_cut, frame, half_space_box  # noqa: E402
 
 FRACTIONS = (0.35, 0.45, 0.55, 0.65)
 
@@ -53,8 +53,7 @@ def grid(body, thickness):
                 group += "-"
                 continue
             part = part.Solids[0]
-            flats = [f for f in part.Faces if f.Surface.__class__.__name__ == "Plane"
-                     and abs(f.CenterOfMass[axis] - c) < 1e-6 * diag]
+            flats = faces_at_cut(part, axis, c, diag)
             try:
                 shell = part.makeThickness(flats, -thickness, 1e-6 * diag)
                 ok = (shell.isValid() and len(shell.Solids) == 1

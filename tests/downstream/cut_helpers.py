@@ -1,5 +1,6 @@
 # Shared by the downstream suite (downstream_ops.py) and scripts/cut_shell_grid.py, both run by
-# freecadcmd: the cutting box, and OCCT's own B-spline face of a one-face closed body.
+# freecadcmd: the cutting box and the faces it leaves, and OCCT's own B-spline face of a one-face
+# closed body.
 import Part
 from FreeCAD import Vector
 
@@ -21,6 +22,12 @@ def half_space_box(body, axis, frac):
     origin[axis] = c
     size[axis] = hi[axis] - c + m
     return Part.makeBox(size[0], size[1], size[2], Vector(*origin)), c
+
+
+def faces_at_cut(part, axis, c, diag):
+    """The planar faces a cut at axis = c left on `part` (the faces a shell removes)."""
+    return [f for f in part.Faces if f.Surface.__class__.__name__ == "Plane"
+            and abs(f.CenterOfMass[axis] - c) < 1e-6 * diag]
 
 
 def bspline_face_solid(body):

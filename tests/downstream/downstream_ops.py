@@ -22,7 +22,7 @@ import Part
 from FreeCAD import Vector
 
 sys.path.insert(0, os.environ.get("S2N_HELPERS", os.path.join(os.getcwd(), "tests", "downstream")))
-from cut_helpers import bspline_face_solid, frame, half_space_box  # noqa: E402
+from cut_helpers import bspline_face_solid, faces_at_cut, frame, half_space_box  # noqa: E402
 
 
 def log(message):
@@ -139,8 +139,7 @@ def op_cut_shell(body):
     for axis in (0, 2):
         box, c = half_space_box(body, axis, 0.55)
         part = solid_of(body.cut(box))
-        flats = [f for f in part.Faces if f.Surface.__class__.__name__ == "Plane"
-                 and abs(f.CenterOfMass[axis] - c) < 1e-6 * diag]
+        flats = faces_at_cut(part, axis, c, diag)
         require(flats, "cut: no flat face at the cut")
         t = thickness(body, 0.02, "inward")
         shell = part.makeThickness(flats, -t, 1e-6 * diag)
