@@ -302,7 +302,9 @@ MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const
   rep.remesh_ms = ms_since(t);
   rep.remesh = rr.stats;
   rep.feature_edges_in = static_cast<int>(rr.features.edges.size());
-  rep.corners_in = static_cast<int>(rr.features.corners.size());
+  rep.corners_in = static_cast<int>(rr.features.corners.size() - rr.features.darts.size());
+  rep.faded_edges_in = rr.features.faded_edges;
+  rep.fading_ends_in = static_cast<int>(rr.features.darts.size());
   rep.feature_chains_in = rr.features.chains;
   features = std::move(rr.features);
 
@@ -597,7 +599,7 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   w.members("reason", r.route.reason, "input_vertices", r.input_vertices, "input_triangles", r.input_triangles);
   w.key("features").begin_object();
   w.members("angle_deg", r.feature_angle, "edges", r.feature_edges_in, "corners", r.corners_in, "chains",
-            r.feature_chains_in);
+            r.feature_chains_in, "faded_edges", r.faded_edges_in, "fading_ends", r.fading_ends_in);
   w.end_object();
   w.key("cage");
   write_stats(w, r.remesh);
@@ -645,7 +647,11 @@ std::string mesh_path_summary(const MeshPathReport& r) {
   const QuadRemeshStats& c = r.remesh;
   o << "  mesh       " << r.input_triangles << " triangles, " << r.feature_edges_in << " feature edges in "
     << r.feature_chains_in << " curves, " << r.corners_in << " corners (feature angle " << short_number(r.feature_angle)
-    << " deg)\n";
+    << " deg)";
+  if (r.faded_edges_in > 0)
+    o << "; " << r.faded_edges_in << " of the edges continue creases that fade below it, " << r.fading_ends_in
+      << (r.fading_ends_in == 1 ? " fading end" : " fading ends");
+  o << "\n";
   o << "  cage       " << c.faces << " quads, " << c.extraordinary_vertices << " extraordinary vertices, "
     << c.feature_edges << " feature edges kept, remeshed in " << short_number(r.remesh_ms / 1000) << " s\n";
   o << "  fit        " << r.fit.fit.iterations << " iterations (" << to_string(r.fit.fit.stop) << "), to the mesh: "

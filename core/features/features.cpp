@@ -112,6 +112,7 @@ double segment_distance(const Vec& x, const Vec& a, const Vec& b) {
 struct BentEdge {
   int a, b;
   double angle;  // degrees
+  int sign = 0;  // +1 convex, -1 concave (set for the fading edges only)
 };
 
 // The soft features (FeatureOptions::soft_angle_degrees): from `bent` (interior edges that are not
@@ -219,6 +220,82 @@ void add_soft_features(const MeshInput& mesh, const FeatureOptions& options, con
     }
 }
 
+// Continues each open chain end of `edges` (a vertex on one feature edge) along its line through
+// the `fading` edges (the straightest continuation, within 30 degrees of the chain's last edge),
+// up to another feature curve (then a junction) or to where the bend falls below the fade angle
+// (then a dart: recorded, sorted, in `darts`). Returns the number of edges added; `edges` stays sorted.
+template <class BendSign, class IsTagged>
+int continue_fading_chains(const MeshInput& mesh, const std::vector<BentEdge>& fading, BendSign&& bend_sign,
+                           IsTagged&& is_tagged, std::vector<std::array<int, 2>>& edges, std::vector<int>& darts) {
+  const int n = mesh.num_vertices();
+  const auto& p = mesh.positions;
+  std::vector<std::vector<int>> feature_at(n), fading_at(n);
+  for (const auto& e : edges) feature_at[e[0]].push_back(e[1]), feature_at[e[1]].push_back(e[0]);
+  for (int i = 0; i < static_cast<int>(fading.size()); ++i)
+    fading_at[fading[i].a].push_back(i), fading_at[fading[i].b].push_back(i);
+  auto unit = [&](int a, int b) {
+    Vec d = sub(p[b], p[a]);
+    const double l = norm(d);
+    return l > 0 ? Vec{d[0] / l, d[1] / l, d[2] / l} : Vec{0, 0, 0};
+  };
+  const double kAlong = std::cos(30.0 * kPi / 180.0);  // an edge within 30 degrees of the line continues it
+  std::vector<std::array<int, 2>> added;
+  std::vector<char> taken(fading.size(), 0);
+  std::vector<int> ends;  // the chains' open ends before any is continued
+  for (int v = 0; v < n; ++v)
+    if (feature_at[v].size() == 1 && !is_tagged(v, feature_at[v][0])) ends.push_back(v);  // a user's crease ends where it ends
+  for (int end : ends) {
+    if (feature_at[end].size() != 1) continue;  // joined by a chain continued before
+    int prev = feature_at[end][0], cur = end;
+    const int sign = bend_sign(prev, cur);  // the curve's: convex or concave
+    double last = 180;                      // the bend of the last edge taken
+    std::vector<int> walk;                  // the fading edges taken, in order
+    bool joined = false;
+    while (!joined && walk.size() < fading.size()) {
+      const Vec d = unit(prev, cur);
+      int best = -1, next = -1;
+      double best_cos = kAlong;
+      for (int g : fading_at[cur]) {
+        if (taken[g]) continue;
+        const int w = fading[g].a == cur ? fading[g].b : fading[g].a;
+        const double c = dot(unit(cur, w), d);
+        if (c > best_cos) best_cos = c, best = g, next = w;
+      }
+      // A crease fades: the straightest continuation bends the same way, by no more than the
+      // edge before it (noise on a smooth part neither keeps its sign nor falls steadily).
+      if (best < 0 || fading[best].sign != sign || fading[best].angle > last + 1.0) break;
+      // ... and the bend is the crease's, not the surface's: no other edge at either end (but
+      // those continuing the line) bends as much (the facets of a coarse sphere bend alike).
+      bool concentrated = true;
+      for (int v : {cur, next})
+        for (int g : fading_at[v]) {
+          if (g == best || fading[g].angle < fading[best].angle) continue;
+          const int w = fading[g].a == v ? fading[g].b : fading[g].a;
+          if (w == prev || std::abs(dot(unit(v, w), d)) > kAlong) continue;  // along the line
+          concentrated = false;
+        }
+      // Where it is not, the crease has sunk into the facets' own bends: that edge is its last.
+      const bool last_edge = !concentrated;
+      last = fading[best].angle;
+      joined = !feature_at[next].empty();  // the crease runs on into another feature curve: a junction
+      taken[best] = 1;
+      walk.push_back(best);
+      prev = cur, cur = next;
+      if (last_edge) break;
+    }
+    if (walk.empty()) continue;
+    for (int g : walk) {
+      added.push_back({std::min(fading[g].a, fading[g].b), std::max(fading[g].a, fading[g].b)});
+      feature_at[fading[g].a].push_back(fading[g].b), feature_at[fading[g].b].push_back(fading[g].a);
+    }
+    if (!joined) darts.push_back(cur);
+  }
+  edges.insert(edges.end(), added.begin(), added.end());
+  std::sort(edges.begin(), edges.end());
+  std::sort(darts.begin(), darts.end());
+  return static_cast<int>(added.size());
+}
+
 }  // namespace
 
 FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options) {
@@ -229,11 +306,13 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
     int face;
   };
   std::vector<EdgeFace> ef;
-  std::vector<Vec> normals(mesh.num_faces());
+  std::vector<Vec> normals(mesh.num_faces()), centre(mesh.num_faces(), Vec{0, 0, 0});
   int begin = 0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     int size = mesh.face_sizes[f];
     normals[f] = face_normal(mesh, begin, size);
+    for (int k = 0; k < size; ++k)
+      for (int c = 0; c < 3; ++c) centre[f][c] += mesh.positions[mesh.face_indices[begin + k]][c] / size;
     for (int k = 0; k < size; ++k) {
       int a = mesh.face_indices[begin + k], b = mesh.face_indices[begin + (k + 1) % size];
       ef.push_back({std::int64_t(std::min(a, b)) * n + std::max(a, b), f});
@@ -243,6 +322,16 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   std::sort(ef.begin(), ef.end(), [](const EdgeFace& x, const EdgeFace& y) {
     return x.key != y.key ? x.key < y.key : x.face < y.face;
   });
+  // Which way an interior edge bends: +1 convex (each face's centre below the other's plane), -1
+  // concave, 0 flat or on the boundary.
+  auto bend_sign = [&](int a, int b) {
+    const std::int64_t key = std::int64_t(std::min(a, b)) * n + std::max(a, b);
+    const auto it = std::lower_bound(ef.begin(), ef.end(), key, [](const EdgeFace& x, std::int64_t k) { return x.key < k; });
+    if (it == ef.end() || it + 1 == ef.end() || it->key != key || (it + 1)->key != key) return 0;
+    const Vec c = sub(centre[(it + 1)->face], mesh.positions[a]);
+    const double h = dot(normals[it->face], c);
+    return h < 0 ? 1 : h > 0 ? -1 : 0;
+  };
   std::vector<std::int64_t> tagged;
   for (const auto& c : mesh.creases)
     if (c.sharpness >= kInfiniteSharpness && c.v0 != c.v1 && c.v0 >= 0 && c.v1 >= 0 && c.v0 < n && c.v1 < n)
@@ -255,6 +344,8 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   std::vector<BentEdge> bent;  // interior edges that are not sharp, bending by half the soft angle or more
   std::vector<std::array<int, 2>> edges;
   std::vector<char> protect;  // boundary or tagged: never dropped
+  const bool fade = options.fade_angle_degrees > 0 && options.fade_angle_degrees < options.angle_degrees;
+  std::vector<BentEdge> fading;  // interior edges that are not sharp, bending by more than the fade angle
   for (size_t i = 0; i < ef.size();) {
     size_t j = i;
     while (j < ef.size() && ef[j].key == ef[i].key) ++j;
@@ -272,12 +363,14 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
     if (sharp) {
       edges.push_back({int(ef[i].key / n), int(ef[i].key % n)});
       protect.push_back(j - i == 1 || is_tagged);
-    } else if (soft) {
+    } else if (soft || fade) {
       const Vec& a = normals[ef[i].face];
       const Vec& b = normals[ef[i + 1].face];
       const double l = norm(a) * norm(b);
       const double angle = l > 0 ? std::acos(std::clamp(dot(a, b) / l, -1.0, 1.0)) * 180.0 / kPi : 0.0;
-      if (angle >= 0.5 * options.soft_angle_degrees) bent.push_back({int(ef[i].key / n), int(ef[i].key % n), angle});
+      BentEdge e{int(ef[i].key / n), int(ef[i].key % n), angle};
+      if (soft && angle >= 0.5 * options.soft_angle_degrees) bent.push_back(e);
+      if (fade && angle > options.fade_angle_degrees) e.sign = bend_sign(e.a, e.b), fading.push_back(e);
     }
     i = j;
   }
@@ -307,6 +400,10 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   std::sort(dropped.begin(), dropped.end());
   for (const auto& e : edges)
     if (!std::binary_search(dropped.begin(), dropped.end(), std::int64_t(e[0]) * n + e[1])) result.edges.push_back(e);
+  auto is_tagged = [&](int a, int b) {
+    return std::binary_search(tagged.begin(), tagged.end(), std::int64_t(std::min(a, b)) * n + std::max(a, b));
+  };
+  if (fade) result.faded_edges = continue_fading_chains(mesh, fading, bend_sign, is_tagged, result.edges, result.darts);
   corner = find_corners(mesh, result.edges, options.corner_angle_degrees, adjacent);
   for (int v = 0; v < n; ++v)
     if (corner[v]) result.corners.push_back(v);

@@ -23,6 +23,14 @@ struct FeatureOptions {
   /// soft_angle_degrees. Off when either is 0 (quad_remesh sets soft_reach to its edge length).
   double soft_angle_degrees = 0.0;
   double soft_reach = 0.0;
+  /// Fading creases: an open feature chain whose end touches no other feature is continued
+  /// along its line (the straightest edge within 30 degrees) through edges below angle_degrees,
+  /// as long as each bends the same way (convex or concave) by more than fade_angle_degrees and
+  /// by no more than the edge before it (+1 degree): a crease whose angle falls off, as where a
+  /// fillet's surfaces become tangent. Reaching another feature curve, the chain joins it there;
+  /// else its end is a dart (FeatureSet::darts), where the crease vanishes. Off when 0, or not
+  /// below angle_degrees.
+  double fade_angle_degrees = 1.0;
 };
 
 struct FeatureSet {
@@ -30,6 +38,8 @@ struct FeatureSet {
   std::vector<int> corners;               ///< vertices where the feature graph has degree != 2, or turns sharply; sorted
   int chains = 0;                         ///< feature curves (maximal chains between corners, or closed loops)
   int dropped_short_chains = 0;
+  std::vector<int> darts;                 ///< the corners where a fading chain ends (fade_angle_degrees): its crease vanishes there; sorted
+  int faded_edges = 0;                    ///< edges (in `edges`) added by continuing fading chains
 };
 
 /// Features of a triangle (or polygon) mesh. Polygons are fan-triangulated for the normals;

@@ -112,6 +112,7 @@ struct Dense {
   std::vector<Tri> t;
   std::unordered_set<std::uint64_t> feature;  // feature edge keys
   std::vector<char> corner;
+  std::vector<char> dart;  // corners that end a fading crease (FeatureSet::darts): held like corners, not tagged in the cage
 };
 
 // Directed edge (half_key(a, b)) -> the triangle that has it.
@@ -1486,6 +1487,8 @@ Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area
   for (const auto& x : mesh.positions) d.p.push_back(V3(x[0], x[1], x[2]));
   d.corner.assign(mesh.num_vertices(), 0);
   for (int c : features.corners) d.corner[c] = 1;
+  d.dart.assign(mesh.num_vertices(), 0);
+  for (int c : features.darts) d.dart[c] = 1;
   for (const auto& e : features.edges) d.feature.insert(edge_key(e[0], e[1]));
   int begin = 0;
   area = 0;
@@ -2140,7 +2143,8 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
   std::sort(feature_keys.begin(), feature_keys.end());
   for (auto k : feature_keys) cage.creases.push_back({int(k >> 32), int(k & 0xffffffffu), kInfiniteSharpness});
   for (int v = 0; v < nc; ++v)
-    if (fl.kind[dense_of[v]] == 2) cage.corners.push_back({v, kInfiniteSharpness});
+    if (fl.kind[dense_of[v]] == 2 && !d.dart[dense_of[v]])  // a fading crease's end is a dart
+      cage.corners.push_back({v, kInfiniteSharpness});
   return cage;
 }
 

@@ -52,6 +52,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -875,6 +876,127 @@ TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
   // Not checked elsewhere (printed): at the far end the sphere comes down to 0.9 .. 4 above the
   // bottom (walls lower than a cage quad), and the far bottom edge and the low walls' rims are
   // off by up to ~15 degrees with or without the crease normals (docs/meshes.md "Limits").
+}
+
+/// A block [-1, 1] x [-1, 2] x [0, 1] roofed by a tent along x = 0 whose height fades smoothly
+/// (smoothstep) to nothing at y = 1.5: z = 1 + k(y) (1.2 - |x|), k = 0.5 for y <= 0. The ridge is
+/// a crease between the normals (-/+k, -1.2 k', 1): 53 degrees at y <= 0, 30 at y = 0.63, fading
+/// to 0 at 1.5,
+/// the shape of a crease where a CAD part's surfaces become tangent (fandisk has two). Tessellated
+/// here (grids of 0.05), written as STL.
+Triangles fading_ridge_block() {
+  auto k = [](double y) {
+    const double t = std::clamp(y / 1.5, 0.0, 1.0);
+    return 0.5 * (1 - t * t * (3 - 2 * t));
+  };
+  auto top = [&](double x, double y) { return 1 + k(y) * (1.2 - std::abs(x)); };
+  Triangles t;
+  std::map<std::array<double, 3>, int> index;
+  auto id = [&](const gp_Pnt& p) {
+    const auto [it, added] = index.try_emplace({p.X(), p.Y(), p.Z()}, static_cast<int>(t.points.size()));
+    if (added) t.points.push_back(p);
+    return it->second;
+  };
+  const gp_Pnt centre(0, 0.5, 0.5);
+  // A grid of f(u, v), u, v in [0, 1], each quad two triangles, turned to face away from the centre.
+  auto grid = [&](const std::function<gp_Pnt(double, double)>& f, int nu, int nv) {
+    for (int i = 0; i < nu; ++i)
+      for (int j = 0; j < nv; ++j) {
+        const gp_Pnt a = f(double(i) / nu, double(j) / nv), b = f(double(i + 1) / nu, double(j) / nv);
+        const gp_Pnt c = f(double(i + 1) / nu, double(j + 1) / nv), d = f(double(i) / nu, double(j + 1) / nv);
+        for (const auto& tri : {std::array<gp_Pnt, 3>{a, b, c}, std::array<gp_Pnt, 3>{a, c, d}}) {
+          const gp_Vec n = gp_Vec(tri[0], tri[1]).Crossed(gp_Vec(tri[0], tri[2]));
+          const gp_Vec out(centre, tri[0]);
+          std::array<int, 3> v{id(tri[0]), id(tri[1]), id(tri[2])};
+          if (n.Dot(out) < 0) std::swap(v[1], v[2]);
+          t.triangles.push_back(v);
+        }
+      }
+  };
+  grid([&](double u, double v) { const double x = 2 * u - 1, y = 3 * v - 1; return gp_Pnt(x, y, top(x, y)); }, 40, 60);
+  grid([&](double u, double v) { const double x = 2 * u - 1, y = 3 * v - 1; return gp_Pnt(x, y, 0); }, 40, 60);
+  for (const double x : {-1.0, 1.0})
+    grid([&](double u, double v) { const double y = 3 * u - 1; return gp_Pnt(x, y, v * top(x, y)); }, 60, 20);
+  for (const double y : {-1.0, 2.0})
+    grid([&](double u, double v) { const double x = 2 * u - 1; return gp_Pnt(x, y, v * top(x, y)); }, 40, 20);
+  return t;
+}
+
+/// The fading ridge above through the mesh path: the ridge's chain is continued below the feature
+/// angle as long as it fades and ends in a dart (the report's fading end), and the B-rep's normal
+/// angle across its crease follows the exact dihedral within 3 degrees all along,
+/// down to where the crease fades below 5 degrees. Before fading creases were followed the chain
+/// ended at 30 degrees in a corner: the surface held a full crease to there and none beyond.
+TEST(MeshPath, FadingCreaseFollowsItsDihedral) {
+  TempDir dir;
+  const Triangles mesh = fading_ridge_block();
+  ASSERT_EQ(euler_characteristic(mesh), 2);
+  const std::string stl = dir.file("ridge.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir);
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  EXPECT_TRUE(BRepCheck_Analyzer(c.shape).IsValid());
+  EXPECT_EQ(json_number(c.report, {"mesh", "features", "fading_ends"}), 1);
+  EXPECT_GT(json_number(c.report, {"mesh", "features", "faded_edges"}), 5);
+  auto k = [](double y) {
+    const double t = std::clamp(y / 1.5, 0.0, 1.0);
+    return 0.5 * (1 - t * t * (3 - 2 * t));
+  };
+  const double deg = M_PI / 180;
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces;
+  TopExp::MapShapesAndAncestors(c.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  int samples = 0;
+  double worst = 0, worst_y = 0, last_y = -1;  // last_y: the farthest sample on the ridge
+  for (int i = 1; i <= edge_faces.Extent(); ++i) {
+    const TopoDS_Edge e = TopoDS::Edge(edge_faces.FindKey(i));
+    const TopTools_ListOfShape& faces = edge_faces.FindFromIndex(i);
+    if (faces.Extent() != 2 || BRep_Tool::Degenerated(e)) continue;
+    const BRepAdaptor_Curve curve(e);
+    for (int s = 1; s < 16; ++s) {
+      const double u = curve.FirstParameter() + s / 16.0 * (curve.LastParameter() - curve.FirstParameter());
+      gp_Pnt p;
+      gp_Vec tangent;
+      curve.D1(u, p, tangent);
+      // on the ridge and along it (not an edge between faces that crosses it), away from the
+      // wall at y = -1 (a corner there)
+      if (std::abs(p.X()) > 0.02 || p.Z() < 1.05 || p.Y() < -0.8) continue;
+      if (!(std::abs(tangent.Y()) > 0.9 * std::hypot(tangent.X(), tangent.Y()))) continue;  // seen from above
+      gp_Vec normal[2];
+      int side = 0;
+      for (const TopoDS_Shape& fs : faces) {
+        const TopoDS_Face f = TopoDS::Face(fs);
+        double a, b;
+        const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(e, f, a, b);
+        const gp_Pnt2d uv = pc->Value(u);
+        gp_Pnt q;
+        gp_Vec du, dv;
+        BRepAdaptor_Surface(f).D1(uv.X(), uv.Y(), q, du, dv);
+        normal[side] = du.Crossed(dv);
+        if (f.Orientation() == TopAbs_REVERSED) normal[side].Reverse();
+        ++side;
+      }
+      if (normal[0].Magnitude() < 1e-12 || normal[1].Magnitude() < 1e-12) continue;
+      // the exact normals either side of the ridge, (-/+k, -1.2 k', 1): the tent also slopes along y
+      const double y = p.Y(), t = std::clamp(y / 1.5, 0.0, 1.0);
+      const double slope_y = y > 0 && y < 1.5 ? -1.2 * 0.5 * 6 * t * (1 - t) / 1.5 : 0.0;
+      const double exact = gp_Vec(-k(y), slope_y, 1).Angle(gp_Vec(k(y), slope_y, 1)) / deg;
+      if (exact < 5) continue;
+      const double ours = normal[0].Angle(normal[1]) / deg;
+      ++samples;
+      last_y = std::max(last_y, p.Y());
+      if (std::abs(ours - exact) > worst) worst = std::abs(ours - exact), worst_y = p.Y();
+    }
+  }
+  std::printf("  fading ridge: %d samples on the ridge up to y = %.3g (5 deg at y = 1.22), normal angle within %.3g deg "
+              "of the exact dihedral (worst at y = %.3g); report: %g feature edges, %g faded, %g fading end(s), "
+              "feature angles %.3g deg max against the mesh, %g B-rep faces\n",
+              samples, last_y, worst, worst_y, json_number(c.report, {"mesh", "features", "edges"}),
+              json_number(c.report, {"mesh", "features", "faded_edges"}),
+              json_number(c.report, {"mesh", "features", "fading_ends"}),
+              json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"}), json_number(c.report, {"brep", "faces"}));
+  EXPECT_GT(samples, 30);
+  EXPECT_GT(last_y, 1.0);  // the crease runs on below 30 degrees (y = 0.63), to below 11 (y = 1.0)
+  EXPECT_LT(worst, 3.0) << "at y = " << worst_y;
 }
 
 /// Fandisk (12 946 triangles) with the defaults, against the input mesh itself: the report's

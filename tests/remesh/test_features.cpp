@@ -92,6 +92,7 @@ TEST(Features, ShortIsolatedChainIsDroppedUnlessLongEnoughOrTagged) {
   };
   FeatureOptions all;
   all.min_chain_edges = 1;
+  all.fade_angle_degrees = 0;  // the ridge fades below 30 degrees towards the boundary: the next test
   FeatureSet kept = detect_features(mesh, all);
   int ridge = ridge_edges(kept);
   EXPECT_EQ(ridge, 8);  // |y| <= 0.8: the edges whose bend exceeds 30 degrees
@@ -102,6 +103,7 @@ TEST(Features, ShortIsolatedChainIsDroppedUnlessLongEnoughOrTagged) {
 
   FeatureOptions longer;
   longer.min_chain_edges = ridge + 1;
+  longer.fade_angle_degrees = 0;
   FeatureSet dropped = detect_features(mesh, longer);
   EXPECT_EQ(ridge_edges(dropped), 0);
   EXPECT_EQ(dropped.dropped_short_chains, 1);
@@ -116,6 +118,71 @@ TEST(Features, ShortIsolatedChainIsDroppedUnlessLongEnoughOrTagged) {
   FeatureSet user = detect_features(tagged, longer);
   EXPECT_EQ(ridge_edges(user), ridge);
   EXPECT_EQ(user.dropped_short_chains, 0);
+}
+
+// Fading creases: the ridge above bends by less than 30 degrees (27) on its last edges before
+// the boundary, less on each edge than on the one before it, more than every edge beside it: by
+// default its chain is continued there and joins the boundary (two junctions: corners).
+TEST(Features, FadingRidgeIsContinuedIntoTheBoundary) {
+  MeshInput mesh = ridge_grid();
+  FeatureSet fs = detect_features(mesh);
+  const int on_line = static_cast<int>(std::count_if(fs.edges.begin(), fs.edges.end(), [&](const std::array<int, 2>& e) {
+    return mesh.positions[e[0]][0] == 0 && mesh.positions[e[1]][0] == 0;
+  }));
+  EXPECT_EQ(on_line, 10);  // the whole line x = 0, y in [-1, 1]
+  EXPECT_EQ(fs.faded_edges, 2);
+  EXPECT_TRUE(fs.darts.empty());
+  EXPECT_EQ(fs.corners.size(), 6u);  // the boundary's 4 and the two junctions
+  EXPECT_EQ(fs.chains, 7);           // the ridge, and the boundary's two sides split in two
+}
+
+// A tent along x = 0 whose height fades smoothly to nothing at y = 1.5 (smoothstep): its ridge
+// bends by 2 atan(k(y)), 53 degrees for y <= 0, 30 at k = tan 15 deg, 0 from y = 1.5 on. Its chain
+// is continued through the edges below 30 degrees as long as they fade, and ends in a dart, on
+// the line, between where the bend is 30 degrees and where it is 0; nothing else is a feature.
+TEST(Features, FadingCreaseEndsInADart) {
+  auto k = [](double y) {
+    const double t = std::clamp(y / 1.5, 0.0, 1.0);
+    return 0.5 * (1 - t * t * (3 - 2 * t));
+  };
+  test::MeshBuilder b;
+  b.patch([&](double u, double v) {
+    const double x = 2 * u - 1, y = 3 * v - 1;
+    return P3{x, y, k(y) * (1.2 - std::abs(x))};
+  }, 20, 30);
+  MeshInput mesh = b.mesh();
+  auto bend_at = [&](double y) { return 2 * std::atan(k(y)) * 180 / 3.14159265358979323846; };  // each side's slope is k
+  double y_30 = 0;
+  while (bend_at(y_30) > 30) y_30 += 1e-4;
+  FeatureSet fs = detect_features(mesh);
+  double y_min = INFINITY, y_max = -INFINITY;
+  int interior = 0;
+  for (const auto& e : fs.edges) {
+    const P3 &a = mesh.positions[e[0]], &c = mesh.positions[e[1]];
+    const bool boundary_edge = (std::abs(a[0]) == 1 && a[0] == c[0]) || (std::abs(a[1] - 0.5) == 1.5 && a[1] == c[1]);
+    if (boundary_edge) continue;
+    ++interior;
+    EXPECT_EQ(a[0], 0.0);  // only the ridge
+    EXPECT_EQ(c[0], 0.0);
+    y_min = std::min({y_min, a[1], c[1]}), y_max = std::max({y_max, a[1], c[1]});
+  }
+  EXPECT_EQ(y_min, -1.0);  // from the boundary (a junction there)
+  ASSERT_EQ(fs.darts.size(), 1u);
+  const P3& dart = mesh.positions[fs.darts[0]];
+  EXPECT_EQ(dart[0], 0.0);
+  EXPECT_EQ(dart[1], y_max);
+  EXPECT_GT(y_max, y_30 + 0.1);  // continued beyond the feature angle...
+  EXPECT_LE(y_max, 1.5);         // ... not beyond the tent
+  EXPECT_GE(fs.faded_edges, 2);
+  EXPECT_TRUE(std::binary_search(fs.corners.begin(), fs.corners.end(), fs.darts[0]));  // held like a corner by the remesher
+
+  FeatureOptions off;
+  off.fade_angle_degrees = 0;
+  FeatureSet plain = detect_features(mesh, off);
+  EXPECT_TRUE(plain.darts.empty());
+  EXPECT_EQ(plain.faded_edges, 0);
+  EXPECT_EQ(plain.edges.size() + static_cast<std::size_t>(fs.faded_edges), fs.edges.size());
+  EXPECT_GT(interior, 0);
 }
 
 TEST(Features, TaggedCreaseOnSmoothSurfaceIsKept) {
