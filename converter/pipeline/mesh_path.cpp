@@ -305,6 +305,7 @@ MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const
   rep.corners_in = static_cast<int>(rr.features.corners.size() - rr.features.darts.size());
   rep.faded_edges_in = rr.features.faded_edges;
   rep.fading_ends_in = static_cast<int>(rr.features.darts.size());
+  rep.plane_edges_in = rr.features.plane_edges;
   rep.feature_chains_in = rr.features.chains;
   features = std::move(rr.features);
 
@@ -599,7 +600,8 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   w.members("reason", r.route.reason, "input_vertices", r.input_vertices, "input_triangles", r.input_triangles);
   w.key("features").begin_object();
   w.members("angle_deg", r.feature_angle, "edges", r.feature_edges_in, "corners", r.corners_in, "chains",
-            r.feature_chains_in, "faded_edges", r.faded_edges_in, "fading_ends", r.fading_ends_in);
+            r.feature_chains_in, "faded_edges", r.faded_edges_in, "fading_ends", r.fading_ends_in, "plane_edges",
+            r.plane_edges_in);
   w.end_object();
   w.key("cage");
   write_stats(w, r.remesh);
@@ -648,6 +650,7 @@ std::string mesh_path_summary(const MeshPathReport& r) {
   o << "  mesh       " << r.input_triangles << " triangles, " << r.feature_edges_in << " feature edges in "
     << r.feature_chains_in << " curves, " << r.corners_in << " corners (feature angle " << short_number(r.feature_angle)
     << " deg)";
+  if (r.plane_edges_in > 0) o << "; " << r.plane_edges_in << " where planes end on fillets narrower than the cage";
   if (r.faded_edges_in > 0)
     o << "; " << r.faded_edges_in << " of the edges continue creases that fade below it, " << r.fading_ends_in
       << (r.fading_ends_in == 1 ? " fading end" : " fading ends");

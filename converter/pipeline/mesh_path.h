@@ -128,6 +128,7 @@ struct MeshPathReport {
   int feature_edges_in = 0, corners_in = 0, feature_chains_in = 0;
   int faded_edges_in = 0;  ///< of feature_edges_in, edges below the feature angle that continue a fading crease
   int fading_ends_in = 0;  ///< where fading creases vanish (darts in the cage; not in corners_in)
+  int plane_edges_in = 0;  ///< of feature_edges_in, edges below the feature angle where a planar region ends on a narrow fillet
   int target_faces = 0;         ///< asked for (after the automatic choice), 0 if edge_length
   double edge_length = 0;       ///< asked for, model units (0 if target_faces)
   double feature_angle = 30;

@@ -102,6 +102,17 @@ std::vector<std::vector<int>> walk_chains(const std::vector<std::vector<int>>& a
   return chains;
 }
 
+Vec cross(const Vec& a, const Vec& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+// Distance from x to the line through a and b (to a if they coincide).
+double segment_line_distance(const Vec& x, const Vec& a, const Vec& b) {
+  const Vec ab = sub(b, a);
+  const double l = norm(ab);
+  return l > 0 ? norm(cross(sub(x, a), ab)) / l : norm(sub(x, a));
+}
+
 double segment_distance(const Vec& x, const Vec& a, const Vec& b) {
   const Vec ab = sub(b, a);
   const double l = dot(ab, ab);
@@ -290,11 +301,16 @@ int continue_fading_chains(const MeshInput& mesh, const std::vector<BentEdge>& f
     }
     if (!joined) darts.push_back(cur);
   }
+  // A dart that a later chain ran into is a junction (or a point of that chain), not an end.
+  darts.erase(std::remove_if(darts.begin(), darts.end(), [&](int v) { return feature_at[v].size() != 1; }), darts.end());
   edges.insert(edges.end(), added.begin(), added.end());
   std::sort(edges.begin(), edges.end());
   std::sort(darts.begin(), darts.end());
   return static_cast<int>(added.size());
 }
+
+// Plane edges: a plane is at least this many times as wide as the polygon beyond its edge.
+constexpr double kPlaneOverFacet = 3;
 
 }  // namespace
 
@@ -346,6 +362,33 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   std::vector<char> protect;  // boundary or tagged: never dropped
   const bool fade = options.fade_angle_degrees > 0 && options.fade_angle_degrees < options.angle_degrees;
   std::vector<BentEdge> fading;  // interior edges that are not sharp, bending by more than the fade angle
+  // Plane edges (options.plane_of_polygon): an edge between polygon f (in a planar region) and g.
+  const bool planes = !options.plane_of_polygon.empty() && options.plane_radius > 0;
+  if (planes && static_cast<int>(options.plane_of_polygon.size()) != mesh.num_faces())
+    throw Error(ErrorKind::Settings, "features: plane_of_polygon has " + std::to_string(options.plane_of_polygon.size()) +
+                                         " entries for " + std::to_string(mesh.num_faces()) + " polygons");
+  const std::vector<int>& region = options.plane_of_polygon;
+  const std::vector<double>& region_width = options.plane_widths;
+  std::vector<int> face_begin(mesh.num_faces() + 1, 0);
+  for (int f = 0; f < mesh.num_faces(); ++f) face_begin[f + 1] = face_begin[f] + mesh.face_sizes[f];
+  std::vector<std::int64_t> plane_keys;  // added after the soft features (a plane edge may be one, grown along its line)
+  auto plane_edge = [&](int a, int b, int f, int g) {
+    if (region[f] == region[g]) return false;
+    const Vec &nf = normals[f], &ng = normals[g];
+    const double bend = std::atan2(norm(cross(nf, ng)), dot(nf, ng));  // radians
+    if (!(bend >= kPi / 180)) return false;
+    // The plane `in` ends at the edge if the polygon beyond, `out`, is much narrower across the
+    // edge than the plane is wide (a fillet's facet, not the next facet of a faceted cylinder,
+    // which is as wide as this one) and the surface turns on it with a radius below plane_radius.
+    auto ends = [&](int in, int out) {
+      if (region[in] < 0 || region[in] >= static_cast<int>(region_width.size())) return false;
+      double width = 0;  // out's width across the edge: its farthest vertex from the edge's line
+      for (int k = face_begin[out]; k < face_begin[out + 1]; ++k)
+        width = std::max(width, segment_line_distance(mesh.positions[mesh.face_indices[k]], mesh.positions[a], mesh.positions[b]));
+      return width * kPlaneOverFacet <= region_width[region[in]] && width < 2 * bend * options.plane_radius;
+    };
+    return ends(f, g) || ends(g, f);
+  };
   for (size_t i = 0; i < ef.size();) {
     size_t j = i;
     while (j < ef.size() && ef[j].key == ef[i].key) ++j;
@@ -359,6 +402,8 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
       const Vec& b = normals[ef[i + 1].face];
       double l = norm(a) * norm(b);
       sharp = l > 0 && dot(a, b) < cos_limit * l;
+      if (!sharp && planes && plane_edge(int(ef[i].key / n), int(ef[i].key % n), ef[i].face, ef[i + 1].face))
+        plane_keys.push_back(ef[i].key);
     }
     if (sharp) {
       edges.push_back({int(ef[i].key / n), int(ef[i].key % n)});
@@ -375,6 +420,15 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
     i = j;
   }
   if (soft) add_soft_features(mesh, options, bent, edges, protect);
+  int plane_edges = 0;
+  for (std::int64_t key : plane_keys) {
+    const std::array<int, 2> e{int(key / n), int(key % n)};
+    const auto it = std::lower_bound(edges.begin(), edges.end(), e);
+    if (it != edges.end() && *it == e) continue;  // a soft feature already
+    protect.insert(protect.begin() + (it - edges.begin()), 0);
+    edges.insert(it, e);
+    ++plane_edges;
+  }
 
   std::vector<std::vector<int>> adjacent;
   std::vector<char> corner = find_corners(mesh, edges, options.corner_angle_degrees, adjacent);
@@ -403,6 +457,7 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   auto is_tagged = [&](int a, int b) {
     return std::binary_search(tagged.begin(), tagged.end(), std::int64_t(std::min(a, b)) * n + std::max(a, b));
   };
+  result.plane_edges = plane_edges;
   if (fade) result.faded_edges = continue_fading_chains(mesh, fading, bend_sign, is_tagged, result.edges, result.darts);
   corner = find_corners(mesh, result.edges, options.corner_angle_degrees, adjacent);
   for (int v = 0; v < n; ++v)

@@ -31,6 +31,17 @@ struct FeatureOptions {
   /// else its end is a dart (FeatureSet::darts), where the crease vanishes. Off when 0, or not
   /// below angle_degrees.
   double fade_angle_degrees = 1.0;
+  /// Plane edges: where a planar region of the mesh ends at an edge bending by 1 degree or more,
+  /// and the polygon beyond is at most a third as wide across the edge as the region and turns
+  /// tighter than radius plane_radius (the bend at the edge over that width, doubled: a
+  /// tessellated fillet's first facet meets the plane at half its facets' angle), that edge is a
+  /// feature: the plane ends there, on a fillet too narrow for the cage to follow. The regions:
+  /// per polygon its region (-1: none) and per region its width (2 area / perimeter), as
+  /// set_plane_regions (core/remesh/quad_remesh.h) fills them. Off when empty or plane_radius is
+  /// 0 (quad_remesh sets regions 0.3 h wide and 0.5 h: QuadRemeshOptions::plane_edges).
+  std::vector<int> plane_of_polygon;
+  std::vector<double> plane_widths;
+  double plane_radius = 0.0;
 };
 
 struct FeatureSet {
@@ -40,6 +51,7 @@ struct FeatureSet {
   int dropped_short_chains = 0;
   std::vector<int> darts;                 ///< the corners where a fading chain ends (fade_angle_degrees): its crease vanishes there; sorted
   int faded_edges = 0;                    ///< edges (in `edges`) added by continuing fading chains
+  int plane_edges = 0;                    ///< edges (in `edges`) below the feature angle where a planar region ends (plane_radius)
 };
 
 /// Features of a triangle (or polygon) mesh. Polygons are fan-triangulated for the normals;

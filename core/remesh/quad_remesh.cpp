@@ -15,6 +15,7 @@
 #include <unordered_set>
 #include <utility>
 
+#include "core/fit/planar_regions.h"
 #include "core/mesh/poly_mesh.h"
 #include "core/remesh/quad_cleanup.h"
 #include "core/util/error.h"
@@ -2148,6 +2149,13 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
   return cage;
 }
 
+// Plane edges (QuadRemeshOptions::plane_edges), in edge lengths: planar regions at least this
+// wide (plate_holes' side wall, 0.43 h at the automatic size, is a face of the part) end where
+// the surface beyond bends tighter than this radius (a fillet the quads cannot follow; 0.6 and
+// above took in a fillet of featuretype's and doubled its distance: docs/remesh.md).
+constexpr double kPlaneWidth = 0.3;
+constexpr double kPlaneRadius = 0.5;
+
 // Checks the cage (manifold, oriented, each component's Euler characteristic and boundary loops
 // as the input's) and fills the statistics.
 void check_cage(const MeshInput& mesh, QuadRemeshResult& result) {
@@ -2254,6 +2262,36 @@ class SizeAim {
 
 }  // namespace
 
+void set_plane_regions(const MeshInput& mesh, double min_width, FeatureOptions& options) {
+  std::vector<Point3> points(mesh.positions.begin(), mesh.positions.end());
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<int> polygon_of;
+  int begin = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int size = mesh.face_sizes[f];
+    for (int k = 1; k + 1 < size; ++k) {
+      triangles.push_back({mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]});
+      polygon_of.push_back(f);
+    }
+    begin += size;
+  }
+  PlanarRegionOptions po;
+  po.min_width = min_width;
+  const std::vector<PlanarRegion> regions = detect_planar_regions(points, triangles, po);
+  options.plane_widths.clear();
+  for (const PlanarRegion& r : regions) options.plane_widths.push_back(r.width);
+  std::vector<int> of_triangle(triangles.size(), -1);
+  for (std::size_t r = 0; r < regions.size(); ++r)
+    for (int t : regions[r].triangles) of_triangle[static_cast<std::size_t>(t)] = static_cast<int>(r);
+  std::vector<int>& region = options.plane_of_polygon;
+  region.assign(mesh.num_faces(), -2);  // -2: no triangle seen yet
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    int& r = region[static_cast<std::size_t>(polygon_of[t])];
+    r = r == -2 || r == of_triangle[t] ? of_triangle[t] : -1;
+  }
+  for (int& r : region) r = std::max(r, -1);
+}
+
 QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& options,
                              const std::function<bool(double)>& progress) {
   if ((options.target_faces > 0) == (options.edge_length > 0) || !std::isfinite(options.edge_length) ||
@@ -2280,6 +2318,10 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     if (feature_options.soft_angle_degrees == 0 && feature_options.soft_reach == 0 && options.soft_features > 0) {
       feature_options.soft_angle_degrees = options.soft_features * feature_options.angle_degrees;
       feature_options.soft_reach = h;
+    }
+    if (options.plane_edges && feature_options.plane_of_polygon.empty() && feature_options.plane_radius == 0) {
+      set_plane_regions(mesh, kPlaneWidth * h, feature_options);
+      feature_options.plane_radius = kPlaneRadius * h;
     }
     result.features = detect_features(mesh, feature_options);
     QuadRemeshStats& st = result.stats;

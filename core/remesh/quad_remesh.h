@@ -37,6 +37,11 @@ struct QuadRemeshOptions {
   /// of the feature angle, with the bend concentrated within the cage's edge length, are
   /// features too (used when features.soft_angle_degrees and soft_reach are 0; 0 = off).
   double soft_features = 0.5;
+  /// Plane edges (FeatureOptions::plane_of_polygon, plane_radius): a planar region at least
+  /// 0.3 h wide ends in a feature where the surface beyond bends tighter than radius 0.5 h (h
+  /// the edge length), a fillet the cage's quads cannot follow (used when features has no
+  /// regions and no radius; docs/remesh.md "Plane edges").
+  bool plane_edges = true;
 };
 
 struct QuadRemeshStats {
@@ -76,6 +81,11 @@ struct QuadRemeshResult {
   QuadRemeshStats stats;
   bool cancelled = false;  ///< the progress callback returned false: the cage is empty (as ShapeFitStop::Cancelled)
 };
+
+/// FeatureOptions' planar regions of `mesh` for plane edges: detect_planar_regions
+/// (core/fit/planar_regions.h) over its polygons' fan triangles, regions at least `min_width`
+/// wide; a polygon is in a region when all its triangles are.
+void set_plane_regions(const MeshInput& mesh, double min_width, FeatureOptions& options);
 
 /// progress(fraction in [0,1]) -> false cancels: the result then has cancelled = true and an
 /// empty cage (the project's convention, as fit_to_shape's ShapeFitStop::Cancelled).

@@ -356,6 +356,53 @@ TEST(MeshPath, BoxWithDrilledHole) {
   EXPECT_LT(json_number(c.report, {"mesh", "planar", "flatness_after"}), 1e-12);
 }
 
+/// A box 100 x 60 x 20 whose four bottom edges are rounded with radius 2 (plate_holes' bottom
+/// outline in small: a fillet tangent to the bottom and to the walls, narrower than the cage's
+/// quads, ~7.8 at 300 quads). Without plane edges the bottom's quads along the fillet took it in
+/// smoothly: the bottom's outer ring was neither flat nor one face. The planes now end at the
+/// fillet's tangent lines (features: docs/remesh.md "Plane edges"), so the bottom is one planar
+/// face covering the exact solid's flat bottom, and the walls' planar faces reach down to the
+/// fillet.
+TEST(MeshPath, NarrowFilletEndsItsPlanes) {
+  TempDir dir;
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 100, 60, 20).Shape();
+  BRepFilletAPI_MakeFillet fillet(box);
+  for (TopExp_Explorer ex(box, TopAbs_EDGE); ex.More(); ex.Next()) {
+    const TopoDS_Edge e = TopoDS::Edge(ex.Current());
+    const gp_Pnt a = BRep_Tool::Pnt(TopExp::FirstVertex(e)), b = BRep_Tool::Pnt(TopExp::LastVertex(e));
+    if (a.Z() == 0 && b.Z() == 0) fillet.Add(2.0, e);
+  }
+  const TopoDS_Shape exact = fillet.Shape();
+  ASSERT_TRUE(BRepCheck_Analyzer(exact).IsValid());
+  const Triangles mesh = tessellate(exact, 0.01);
+  const std::string stl = dir.file("rounded.stl");
+  write_stl(mesh, stl);
+  const Converted c = convert(stl, dir, "--target-faces 300");
+  check_against(exact, mesh, c, 2e-3);
+  EXPECT_GT(json_number(c.report, {"mesh", "features", "plane_edges"}), 0);
+  // The bottom: one planar face in z = 0 covering the exact solid's flat bottom, 96 x 56: its
+  // area within that of a band of the distance tolerance along the bottom's outline (its edges
+  // are the fitted crease curves along the fillet's tangent lines).
+  double bottom = 0;
+  int bottom_faces = 0;
+  for (TopExp_Explorer ex(c.shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    const BRepAdaptor_Surface sf(TopoDS::Face(ex.Current()));
+    if (sf.GetType() != GeomAbs_Plane || std::abs(sf.Plane().Location().Z()) > 1e-9 ||
+        std::abs(std::abs(sf.Plane().Axis().Direction().Z()) - 1) > 1e-12)
+      continue;
+    GProp_GProps g;
+    BRepGProp::SurfaceProperties(ex.Current(), g);
+    bottom += g.Mass();
+    ++bottom_faces;
+  }
+  std::printf("  rounded box: %d bottom planar face(s) of area %.6g (exact flat bottom 5376), %g plane edges, %g B-rep faces\n",
+              bottom_faces, bottom, json_number(c.report, {"mesh", "features", "plane_edges"}),
+              json_number(c.report, {"brep", "faces"}));
+  EXPECT_EQ(bottom_faces, 1);
+  EXPECT_NEAR(bottom, 96.0 * 56.0, 2 * (96.0 + 56.0) * 2e-3 * diagonal(mesh));
+  check_planar_faces(exact, c.shape, diagonal(mesh), 0.8);
+}
+
 /// A stepped block (an L-shaped profile extruded, a hole drilled through the lower step): its
 /// nine planar faces stay planar.
 TEST(MeshPath, SteppedBlockStaysPlanar) {

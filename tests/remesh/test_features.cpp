@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/features/features.h"
+#include "core/remesh/quad_remesh.h"
 #include "core/util/error.h"
 #include "remesh/test_meshes.h"
 
@@ -183,6 +184,61 @@ TEST(Features, FadingCreaseEndsInADart) {
   EXPECT_EQ(plain.faded_edges, 0);
   EXPECT_EQ(plain.edges.size() + static_cast<std::size_t>(fs.faded_edges), fs.edges.size());
   EXPECT_GT(interior, 0);
+}
+
+// Plane edges: a floor (x in [-10, 0], z = 0) and a wall (x = 1, z in [1, 10]) joined by a
+// fillet of radius 1 in 6 facets of 15 degrees, extruded along y. Its first and last facet
+// edges, the fillet's tangent lines, bend by 7.5 degrees (half a facet), far below 30. With
+// plane edges at a width of 2 and a radius of 3 (a cage of edge length ~6), exactly those two
+// lines are features: the floor and the wall end there. Nothing else: the fillet's own facets
+// are planar regions too narrow to count. A faceted cylinder (32 facets of radius 1, each
+// 0.2 wide) has none at any width: its facets are as wide as the facets beyond them.
+TEST(Features, PlaneEdgesWhereAPlaneMeetsANarrowFillet) {
+  std::vector<std::array<double, 2>> profile;  // (x, z)
+  for (int i = -10; i <= 0; ++i) profile.push_back({double(i), 0.0});
+  for (int k = 1; k <= 6; ++k) {
+    const double a = -0.5 * 3.14159265358979323846 + k * 3.14159265358979323846 / 12;  // from -90 to 0 degrees
+    profile.push_back({std::cos(a), 1 + std::sin(a)});
+  }
+  for (int i = 2; i <= 10; ++i) profile.push_back({1.0, double(i)});
+  const int np = static_cast<int>(profile.size());
+  test::MeshBuilder b;
+  b.patch([&](double u, double v) {
+    const auto& q = profile[static_cast<std::size_t>(std::lround(u * (np - 1)))];
+    return P3{q[0], 10 * v, q[1]};
+  }, np - 1, 10);
+  MeshInput mesh = b.mesh();
+  FeatureOptions options;
+  set_plane_regions(mesh, 2, options);
+  options.plane_radius = 3;
+  const FeatureSet fs = detect_features(mesh, options);
+  int floor_line = 0, wall_line = 0, other = 0;
+  for (const auto& e : fs.edges) {
+    const P3 &p = mesh.positions[e[0]], &q = mesh.positions[e[1]];
+    const bool along_y = p[0] == q[0] && p[2] == q[2];
+    if (along_y && p[0] == 0 && p[2] == 0)
+      ++floor_line;
+    else if (along_y && std::abs(p[0] - 1) < 1e-12 && std::abs(p[2] - 1) < 1e-12)
+      ++wall_line;
+    else if (!(p[1] == q[1] && (p[1] == 0 || p[1] == 10)) && !(p[0] == q[0] && p[2] == q[2] && (p[0] == -10 || p[2] == 10)))
+      ++other;  // not on the boundary
+  }
+  EXPECT_EQ(floor_line, 10);
+  EXPECT_EQ(wall_line, 10);
+  EXPECT_EQ(other, 0);
+  EXPECT_EQ(fs.plane_edges, 20);
+  // off by default (the remesher turns it on at its edge length)
+  EXPECT_EQ(detect_features(mesh).plane_edges, 0);
+  // a narrower plane_radius than the fillet's: none
+  options.plane_radius = 0.9;
+  EXPECT_EQ(detect_features(mesh, options).plane_edges, 0);
+
+  const MeshInput cylinder = test::open_cylinder(1, 2, 32, 6);
+  FeatureOptions fine;
+  set_plane_regions(cylinder, 0.1, fine);
+  fine.plane_radius = 10;
+  EXPECT_EQ(fine.plane_widths.size(), 32u);  // every facet a region
+  EXPECT_EQ(detect_features(cylinder, fine).plane_edges, 0);
 }
 
 TEST(Features, TaggedCreaseOnSmoothSurfaceIsKept) {
