@@ -26,7 +26,7 @@ struct FeatureOptions {
   /// Fading creases: an open feature chain whose end touches no other feature is continued
   /// along its line (the straightest edge within 30 degrees) through edges below angle_degrees,
   /// as long as each bends the same way (convex or concave) by more than fade_angle_degrees and
-  /// by no more than the edge before it (+1 degree): a crease whose angle falls off, as where a
+  /// by less than the edge before it: a crease whose angle falls off, as where a
   /// fillet's surfaces become tangent. Reaching another feature curve, the chain joins it there;
   /// else its end is a dart (FeatureSet::darts), where the crease vanishes. Off when 0, or not
   /// below angle_degrees.
