@@ -826,6 +826,25 @@ TEST(MeshPath, FitToleranceOffGivenSizeAndCoarsening) {
 /// crease sides' normals (core/fit/shape_fit.h crease_normal_weight), the tip's quad, sheared
 /// into the wedge, was off by 8.6 degrees (now 2.75). Only the tip's third of the wedge is checked:
 /// its far end is another case (below).
+/// The outward normals of an edge's two faces at its curve parameter u (their surfaces' D1 at the
+/// pcurves' points); false where either vanishes.
+bool normals_across(const TopoDS_Edge& e, const TopTools_ListOfShape& faces, double u, gp_Vec normal[2]) {
+  int side = 0;
+  for (const TopoDS_Shape& fs : faces) {
+    const TopoDS_Face f = TopoDS::Face(fs);
+    double a, b;
+    const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(e, f, a, b);
+    const gp_Pnt2d uv = pc->Value(u);
+    gp_Pnt q;
+    gp_Vec du, dv;
+    BRepAdaptor_Surface(f).D1(uv.X(), uv.Y(), q, du, dv);
+    normal[side] = du.Crossed(dv);
+    if (f.Orientation() == TopAbs_REVERSED) normal[side].Reverse();
+    if (++side == 2) break;
+  }
+  return side == 2 && normal[0].Magnitude() >= 1e-12 && normal[1].Magnitude() >= 1e-12;
+}
+
 TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
   TempDir dir;
   const double deg = M_PI / 180, half = 10 * deg, L = 40, R = 22;
@@ -880,20 +899,7 @@ TEST(MeshPath, AcuteFeatureCornerKeepsItsDihedral) {
       const double t = curve.FirstParameter() + k / 8.0 * (curve.LastParameter() - curve.FirstParameter());
       const gp_Pnt p = curve.Value(t);
       gp_Vec normal[2];
-      int side = 0;
-      for (const TopoDS_Shape& fs : faces) {
-        const TopoDS_Face f = TopoDS::Face(fs);
-        double a, b;
-        const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(e, f, a, b);
-        const gp_Pnt2d uv = pc->Value(t);
-        gp_Pnt q;
-        gp_Vec du, dv;
-        BRepAdaptor_Surface(f).D1(uv.X(), uv.Y(), q, du, dv);
-        normal[side] = du.Crossed(dv);
-        if (f.Orientation() == TopAbs_REVERSED) normal[side].Reverse();
-        ++side;
-      }
-      if (normal[0].Magnitude() < 1e-12 || normal[1].Magnitude() < 1e-12) continue;
+      if (!normals_across(e, faces, t, normal)) continue;
       const double ours = normal[0].Angle(normal[1]) / deg;
       if (ours < 20) continue;  // a smooth seam between our faces (exact dihedral 0 inside a face)
       // The two exact surfaces through p; skipped near the solid's corners (a third one near).
@@ -1009,20 +1015,7 @@ TEST(MeshPath, FadingCreaseFollowsItsDihedral) {
       if (std::abs(p.X()) > 0.02 || p.Z() < 1.05 || p.Y() < -0.8) continue;
       if (!(std::abs(tangent.Y()) > 0.9 * std::hypot(tangent.X(), tangent.Y()))) continue;  // seen from above
       gp_Vec normal[2];
-      int side = 0;
-      for (const TopoDS_Shape& fs : faces) {
-        const TopoDS_Face f = TopoDS::Face(fs);
-        double a, b;
-        const Handle(Geom2d_Curve) pc = BRep_Tool::CurveOnSurface(e, f, a, b);
-        const gp_Pnt2d uv = pc->Value(u);
-        gp_Pnt q;
-        gp_Vec du, dv;
-        BRepAdaptor_Surface(f).D1(uv.X(), uv.Y(), q, du, dv);
-        normal[side] = du.Crossed(dv);
-        if (f.Orientation() == TopAbs_REVERSED) normal[side].Reverse();
-        ++side;
-      }
-      if (normal[0].Magnitude() < 1e-12 || normal[1].Magnitude() < 1e-12) continue;
+      if (!normals_across(e, faces, u, normal)) continue;
       // the exact normals either side of the ridge, (-/+k, -1.2 k', 1): the tent also slopes along y
       const double y = p.Y(), t = std::clamp(y / 1.5, 0.0, 1.0);
       const double slope_y = y > 0 && y < 1.5 ? -1.2 * 0.5 * 6 * t * (1 - t) / 1.5 : 0.0;
