@@ -8,15 +8,17 @@
 
 #include "core/util/constants.h"
 #include "core/util/error.h"
+#include "core/util/vec3.h"
 
 namespace subd2nurbs {
 namespace {
 
 using Vec = std::array<double, 3>;
 
-Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
+using vec3::cross;
+using vec3::dot;
+using vec3::norm;
+using vec3::sub;
 
 // Newell normal of a polygon (not normalised; zero for a degenerate face).
 Vec face_normal(const MeshInput& mesh, int begin, int size) {
@@ -102,12 +104,8 @@ std::vector<std::vector<int>> walk_chains(const std::vector<std::vector<int>>& a
   return chains;
 }
 
-Vec cross(const Vec& a, const Vec& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
 // Distance from x to the line through a and b (to a if they coincide).
-double segment_line_distance(const Vec& x, const Vec& a, const Vec& b) {
+double line_distance(const Vec& x, const Vec& a, const Vec& b) {
   const Vec ab = sub(b, a);
   const double l = norm(ab);
   return l > 0 ? norm(cross(sub(x, a), ab)) / l : norm(sub(x, a));
@@ -340,15 +338,18 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
   std::sort(ef.begin(), ef.end(), [](const EdgeFace& x, const EdgeFace& y) {
     return x.key != y.key ? x.key < y.key : x.face < y.face;
   });
-  // Which way an interior edge bends: +1 convex (each face's centre below the other's plane), -1
-  // concave, 0 flat or on the boundary.
+  // Which way the edge from vertex a between faces f and g bends: +1 convex (g's centre below f's
+  // plane), -1 concave, 0 flat.
+  auto faces_bend_sign = [&](int a, int f, int g) {
+    const double h = dot(normals[f], sub(centre[g], mesh.positions[a]));
+    return h < 0 ? 1 : h > 0 ? -1 : 0;
+  };
+  // ... of the edge (a, b), looked up: 0 on the boundary.
   auto bend_sign = [&](int a, int b) {
     const std::int64_t key = std::int64_t(std::min(a, b)) * n + std::max(a, b);
     const auto it = std::lower_bound(ef.begin(), ef.end(), key, [](const EdgeFace& x, std::int64_t k) { return x.key < k; });
     if (it == ef.end() || it + 1 == ef.end() || it->key != key || (it + 1)->key != key) return 0;
-    const Vec c = sub(centre[(it + 1)->face], mesh.positions[a]);
-    const double h = dot(normals[it->face], c);
-    return h < 0 ? 1 : h > 0 ? -1 : 0;
+    return faces_bend_sign(a, it->face, (it + 1)->face);
   };
   std::vector<std::int64_t> tagged;
   for (const auto& c : mesh.creases)
@@ -386,7 +387,7 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
       if (region[in] < 0 || region[in] >= static_cast<int>(region_width.size())) return false;
       double width = 0;  // out's width across the edge: its farthest vertex from the edge's line
       for (int k = face_begin[out]; k < face_begin[out + 1]; ++k)
-        width = std::max(width, segment_line_distance(mesh.positions[mesh.face_indices[k]], mesh.positions[a], mesh.positions[b]));
+        width = std::max(width, line_distance(mesh.positions[mesh.face_indices[k]], mesh.positions[a], mesh.positions[b]));
       return width * kPlaneOverFacet <= region_width[region[in]] && width < 2 * bend * options.plane_radius;
     };
     return ends(f, g) || ends(g, f);
@@ -417,7 +418,7 @@ FeatureSet detect_features(const MeshInput& mesh, const FeatureOptions& options)
       const double angle = l > 0 ? std::acos(std::clamp(dot(a, b) / l, -1.0, 1.0)) * 180.0 / kPi : 0.0;
       BentEdge e{int(ef[i].key / n), int(ef[i].key % n), angle};
       if (soft && angle >= 0.5 * options.soft_angle_degrees) bent.push_back(e);
-      if (fade && angle > options.fade_angle_degrees) e.sign = bend_sign(e.a, e.b), fading.push_back(e);
+      if (fade && angle > options.fade_angle_degrees) e.sign = faces_bend_sign(e.a, ef[i].face, ef[i + 1].face), fading.push_back(e);
     }
     i = j;
   }

@@ -1483,6 +1483,22 @@ struct Projector {
 
 
 // The input's polygons fan-triangulated, with its features; `area` its area.
+// The mesh's polygons as fans of triangles from their first corners (`polygon_of`, if given: each
+// triangle's polygon).
+std::vector<Tri> fan_triangles(const MeshInput& mesh, std::vector<int>* polygon_of = nullptr) {
+  std::vector<Tri> t;
+  int begin = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int size = mesh.face_sizes[f];
+    for (int k = 1; k + 1 < size; ++k) {
+      t.push_back({mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]});
+      if (polygon_of) polygon_of->push_back(f);
+    }
+    begin += size;
+  }
+  return t;
+}
+
 Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area) {
   Dense d;
   for (const auto& x : mesh.positions) d.p.push_back(V3(x[0], x[1], x[2]));
@@ -1491,16 +1507,9 @@ Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area
   d.dart.assign(mesh.num_vertices(), 0);
   for (int c : features.darts) d.dart[c] = 1;
   for (const auto& e : features.edges) d.feature.insert(edge_key(e[0], e[1]));
-  int begin = 0;
+  d.t = fan_triangles(mesh);
   area = 0;
-  for (int size : mesh.face_sizes) {
-    for (int k = 1; k + 1 < size; ++k) {
-      Tri t{mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]};
-      d.t.push_back(t);
-      area += 0.5 * (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]).norm();
-    }
-    begin += size;
-  }
+  for (const Tri& t : d.t) area += 0.5 * (d.p[t[1]] - d.p[t[0]]).cross(d.p[t[2]] - d.p[t[0]]).norm();
   return d;
 }
 
@@ -2264,17 +2273,8 @@ class SizeAim {
 
 void set_plane_regions(const MeshInput& mesh, double min_width, FeatureOptions& options) {
   std::vector<Point3> points(mesh.positions.begin(), mesh.positions.end());
-  std::vector<std::array<int, 3>> triangles;
   std::vector<int> polygon_of;
-  int begin = 0;
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const int size = mesh.face_sizes[f];
-    for (int k = 1; k + 1 < size; ++k) {
-      triangles.push_back({mesh.face_indices[begin], mesh.face_indices[begin + k], mesh.face_indices[begin + k + 1]});
-      polygon_of.push_back(f);
-    }
-    begin += size;
-  }
+  const std::vector<Tri> triangles = fan_triangles(mesh, &polygon_of);
   PlanarRegionOptions po;
   po.min_width = min_width;
   const std::vector<PlanarRegion> regions = detect_planar_regions(points, triangles, po);
