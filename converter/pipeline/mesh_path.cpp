@@ -214,15 +214,20 @@ std::pair<double, double> quad_edge_uv(int corner, double t) {
 /// both sides at 1/4, 1/2, 3/4 of the edge), against the mesh's dihedral at the closest feature
 /// edge of the mesh.
 FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vector<Point3>& positions,
-                                         const std::vector<MeshFeatureEdge>& mesh_edges) {
+                                         const std::vector<MeshFeatureEdge>& mesh_edges,
+                                         const std::vector<std::array<int, 2>>& sector_edges) {
   FeatureAngleStats s;
   if (mesh_edges.empty()) return s;
   const PolyMesh& m = cage.mesh;
+  std::vector<char> sector(static_cast<std::size_t>(m.num_edges()), 0);  // no mesh feature: not measured
+  for (const auto& [a, b] : sector_edges)
+    if (const int e = m.find_edge(a, b); e >= 0) sector[static_cast<std::size_t>(e)] = 1;
   const LimitEvaluator limit(cage, positions);
   const FeatureEdgeGrid grid(mesh_edges);
   double sum = 0;
   for (int e = 0; e < m.num_edges(); ++e) {
-    if (m.is_boundary_edge(e) || cage.edge_sharpness[e] < kInfiniteSharpness) continue;
+    if (m.is_boundary_edge(e) || cage.edge_sharpness[e] < kInfiniteSharpness || sector[static_cast<std::size_t>(e)])
+      continue;
     const int h = m.edge_corner(e), g = m.twin(h);
     const int fh = m.corner_face(h), fg = m.corner_face(g);
     if (m.face_size(fh) != 4 || m.face_size(fg) != 4) continue;
@@ -301,6 +306,7 @@ MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const
   if (rr.cancelled) throw Error(ErrorKind::Usage, "cancelled");
   rep.remesh_ms = ms_since(t);
   rep.remesh = rr.stats;
+  out.sector_edges = std::move(rr.sector_edges);
   rep.feature_edges_in = static_cast<int>(rr.features.edges.size());
   rep.corners_in = static_cast<int>(rr.features.corners.size() - rr.features.darts.size());
   rep.faded_edges_in = rr.features.faded_edges;
@@ -390,7 +396,8 @@ void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
   w.members("faces", r.faces, "vertices", r.vertices, "extraordinary_vertices", r.extraordinary_vertices,
             "feature_edges", r.feature_edges, "feature_chains_kept", r.feature_chains_kept, "corners", r.corners);
   w.members("coarse_quads", r.coarse_quads, "coarse_triangles", r.coarse_triangles, "flips", r.flips, "attempts", r.attempts);
-  w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges, "relocations", r.relocations);
+  w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges, "relocations", r.relocations,
+            "concave_sectors", r.concave_sectors);
   w.members("field_singularities", r.field_singularities, "position_dislocations", r.position_dislocations,
             "position_dislocations_left", r.position_dislocations_left);
   w.members("euler_characteristic", r.euler_cage, "boundaries", r.boundaries_cage, "components", r.components_cage);
@@ -591,7 +598,8 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   // The kept features' normal angles against the mesh's dihedrals.
   Diagnostics ignore;
   const PolyMesh poly = PolyMesh::build(tri.num_vertices(), tri.face_sizes, tri.face_indices, &ignore);
-  rep.feature_angles = measure_feature_angles(out.cage.level, out.positions, mesh_feature_edges(tri, poly, features));
+  rep.feature_angles = measure_feature_angles(out.cage.level, out.positions, mesh_feature_edges(tri, poly, features),
+                                             out.sector_edges);
   return out;
 }
 

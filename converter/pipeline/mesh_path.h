@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <functional>
 #include <optional>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -152,6 +153,9 @@ struct MeshPathReport {
 struct MeshCage {
   LoadedInput cage;                ///< the cage (tags: feature creases and corners), validated
   std::vector<Point3> positions;   ///< the fitted positions
+  /// Cage edges tagged to split concave corner sectors (core/remesh/quad_remesh.h): creases of
+  /// the cage, not features of the mesh.
+  std::vector<std::array<int, 2>> sector_edges;
   MeshPathReport report;
 };
 

@@ -5,6 +5,7 @@
 // Catmull-Clark-style split into an all-quad cage. docs/remesh.md describes the method.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -42,6 +43,10 @@ struct QuadRemeshOptions {
   /// the edge length), a fillet the cage's quads cannot follow (used when features has no
   /// regions and no radius; docs/remesh.md "Plane edges").
   bool plane_edges = true;
+  /// Concave corners: a flat corner sector spanning more than 170 degrees (an L-shaped plane's
+  /// inner corner), which the corner rule folds over itself, is split in two by tagging its
+  /// middle edge infinitely sharp (docs/remesh.md step 9).
+  bool split_concave_sectors = true;
 };
 
 struct QuadRemeshStats {
@@ -71,6 +76,7 @@ struct QuadRemeshStats {
   int position_dislocations_left = 0;  ///< ... and after the cancelling (those near features are left alone)
   double cleanup_seconds = 0;  ///< wall time of the clean-up (part of extract_seconds)
   int attempts = 0;            ///< position field + extraction runs (the size check, docs/remesh.md step 7)
+  int concave_sectors = 0;     ///< corner sectors split by a crease edge (split_concave_sectors)
 };
 
 struct QuadRemeshResult {
@@ -79,6 +85,9 @@ struct QuadRemeshResult {
                         ///< positions on (near) the input surface
   FeatureSet features;  ///< the input's features
   QuadRemeshStats stats;
+  /// The edges tagged to split concave sectors (split_concave_sectors; in cage.creases too, not
+  /// features of the mesh: the feature counts and measures leave them out).
+  std::vector<std::array<int, 2>> sector_edges;
   bool cancelled = false;  ///< the progress callback returned false: the cage is empty (as ShapeFitStop::Cancelled)
 };
 

@@ -421,6 +421,87 @@ TEST(MeshPath, SteppedBlockStaysPlanar) {
   EXPECT_GE(json_number(c.report, {"mesh", "planar", "regions_used"}), 8);
 }
 
+/// Concave corners (docs/remesh.md step 9): an L-shaped profile extruded, whose front and back
+/// faces each have an inner corner of 270 degrees where the concave edge ends. The corner rule
+/// folds such a sector over itself at the corner (the faces' normals there face into the block),
+/// so the remesher splits it with a crease. Checked against the exact solid, with the B-spline
+/// faces kept: every point of our faces, sampled on grids graded towards the faces' corners, that
+/// lies on one of the block's planes faces the way that plane's outward normal does; the two
+/// concave sectors, and only they, are split; no faces cross or touch. (Without the split: no
+/// sector split, and 6 of 13 125 samples, at the two inner corners, face into the block.)
+TEST(MeshPath, ConcaveCornersDoNotFold) {
+  TempDir dir;
+  const TopoDS_Shape block = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 40, 24, 16).Shape();
+  const TopoDS_Shape step = BRepPrimAPI_MakeBox(gp_Pnt(20, -1, 8), 21, 26, 9).Shape();
+  const TopoDS_Shape exact = BRepAlgoAPI_Cut(block, step).Shape();
+  const Triangles mesh = tessellate(exact, 0.01);
+  const std::string stl = dir.file("l_block.stl");
+  write_stl(mesh, stl);
+  // B-spline faces kept (coplanar faces merged into one planar face would hide a fold).
+  const Converted c = convert(stl, dir, "--target-faces 300 --planar-faces keep");
+  check_against(exact, mesh, c, 2e-2);
+  const double diag = diagonal(mesh);
+  EXPECT_EQ(json_number(c.report, {"mesh", "cage", "concave_sectors"}), 2);
+  EXPECT_EQ(json_number(c.report, {"self_intersection", "touching_face_pairs"}), 0);
+  EXPECT_EQ(json_number(c.report, {"self_intersection", "crossing_face_pairs"}), 0);
+
+  struct ExactPlane {
+    gp_Pln plane;
+    gp_Vec outward;
+    Bnd_Box box;
+  };
+  std::vector<ExactPlane> planes;
+  for (TopExp_Explorer ex(exact, TopAbs_FACE); ex.More(); ex.Next()) {
+    const TopoDS_Face& f = TopoDS::Face(ex.Current());
+    const gp_Pln pl = BRepAdaptor_Surface(f).Plane();
+    gp_Vec n(pl.Axis().Direction());
+    if (!pl.Direct()) n.Reverse();  // a left-handed frame: its normal is -Z
+    if (f.Orientation() == TopAbs_REVERSED) n.Reverse();
+    ExactPlane e{pl, n, {}};
+    BRepBndLib::Add(f, e.box);
+    e.box.Enlarge(1e-3 * diag);
+    planes.push_back(e);
+  }
+  ASSERT_EQ(planes.size(), 8u);
+  const std::vector<double> graded = {0, 1e-3, 4e-3, 0.01, 0.02, 0.04, 0.07, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5};
+  std::vector<double> ts = graded;
+  for (const double t : graded)
+    if (t < 0.5) ts.push_back(1 - t);
+  int samples = 0, folded = 0;
+  for (TopExp_Explorer ex(c.shape, TopAbs_FACE); ex.More(); ex.Next()) {
+    const TopoDS_Face& face = TopoDS::Face(ex.Current());
+    const BRepAdaptor_Surface s(face);
+    const BRepTopAdaptor_FClass2d inside(face, 1e-9);
+    for (const double tu : ts)
+      for (const double tv : ts) {
+        const double u = s.FirstUParameter() + (s.LastUParameter() - s.FirstUParameter()) * tu;
+        const double v = s.FirstVParameter() + (s.LastVParameter() - s.FirstVParameter()) * tv;
+        if (s.GetType() == GeomAbs_Plane && inside.Perform(gp_Pnt2d(u, v)) != TopAbs_IN) continue;
+        gp_Pnt q;
+        gp_Vec du, dv;
+        s.D1(u, v, q, du, dv);
+        gp_Vec n = du.Crossed(dv);
+        if (n.Magnitude() < 1e-12) continue;
+        if (face.Orientation() == TopAbs_REVERSED) n.Reverse();
+        bool on_plane = false, agrees = false;
+        for (const ExactPlane& e : planes) {
+          if (e.box.IsOut(q) || e.plane.Distance(q) > 1e-3 * diag) continue;
+          on_plane = true;
+          agrees = agrees || n.Normalized().Dot(e.outward) > 0.5;
+        }
+        samples += on_plane;
+        if (on_plane && !agrees) {
+          if (folded++ < 5)
+            std::printf("  folded: (%.4g, %.4g, %.4g) normal (%.3f, %.3f, %.3f)\n", q.X(), q.Y(), q.Z(),
+                        n.Normalized().X(), n.Normalized().Y(), n.Normalized().Z());
+        }
+      }
+  }
+  EXPECT_GT(samples, 10000);
+  EXPECT_EQ(folded, 0) << "of " << samples << " samples on the block's planes";
+  std::printf("  %d samples on the block's planes, %d facing against them\n", samples, folded);
+}
+
 /// Walls narrower than a cage edge (issue #28; docs/fitting.md "Planar regions"): a 60 x 40 x 3
 /// slab with a hole of radius 5 drilled through, converted with ~6-unit quads, so its four side
 /// walls (3 high) are one quad between the sharp top and bottom rims. Such a wall's faces depend
