@@ -279,7 +279,7 @@ void run_convert(const ConvertOptions& options, std::ostream& err) {
     mesh_progress.stage = [&](const std::string& what) { progress.stage(what); };
     made = pipeline::mesh_to_cage(source.mesh, all.mesh, mesh_progress);
     made->report.route = source.route;
-    if (!made->report.warning.empty()) warn(made->report.warning);
+    for (const std::string& w : made->report.warnings) warn(w);
     source.cage = std::move(made->cage);
   }
   const LoadedInput& loaded = *source.cage;

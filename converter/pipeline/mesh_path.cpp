@@ -259,7 +259,7 @@ FeatureAngleStats measure_feature_angles(const SubdivLevel& cage, const std::vec
       const double diff = std::abs(surface - mesh_angle);
       sum += diff;
       ++s.samples;
-      if (diff > s.max_difference) s.max_difference = diff, s.where_edge = e;
+      if (diff > s.max_difference) s.max_difference = diff, s.where_edge = e, s.where = a.p;
     }
   }
   if (s.samples > 0) s.mean_difference = sum / s.samples;
@@ -584,15 +584,16 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   rep.predicted_target_faces = rep.tolerance_met ? 0 : predicted;
   if (!rep.tolerance_met) {
     const std::size_t n = rep.rounds.size();
-    rep.warning = "subd2nurbs: warning: the fit tolerance " + short_number(tolerance) + " was not met: " +
+    std::string warning = "subd2nurbs: warning: the fit tolerance " + short_number(tolerance) + " was not met: " +
                   (n == 1 ? std::string("the cage") : "the closest of " + std::to_string(n) + " cages") + " (" +
                   std::to_string(best.quads) + " quads) is within " + short_number(best.distance()) +
                   " of the diagonal (to the mesh " + short_number(best.to_mesh) + ", from it " +
                   short_number(best.from_mesh) + ")";
     if (predicted > 0)
-      rep.warning += "; the size rule predicts about " + std::to_string(predicted) + " quads for it, more than " +
+      warning += "; the size rule predicts about " + std::to_string(predicted) + " quads for it, more than " +
                      short_number(kMaxSizeFactor) + " x the automatic size, so they were not tried";
-    rep.warning += " (a target face count given sets the size)";
+    warning += " (a target face count given sets the size)";
+    rep.warnings.push_back(warning);
   }
 
   // The kept features' normal angles against the mesh's dihedrals.
@@ -600,6 +601,13 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
   const PolyMesh poly = PolyMesh::build(tri.num_vertices(), tri.face_sizes, tri.face_indices, &ignore);
   rep.feature_angles = measure_feature_angles(out.cage.level, out.positions, mesh_feature_edges(tri, poly, features),
                                              out.sector_edges);
+  const FeatureAngleStats& fa = rep.feature_angles;
+  if (fa.max_difference > kFoldedCreaseDegrees)
+    rep.warnings.push_back("subd2nurbs: warning: a feature curve folds: the surface's normal angle across it differs "
+                           "from the mesh's dihedral by " + short_number(fa.max_difference) + " degrees at (" +
+                           short_number(fa.where[0]) + ", " + short_number(fa.where[1]) + ", " +
+                           short_number(fa.where[2]) + "); another size of the cage (a target face count) may "
+                           "avoid it");
   return out;
 }
 
@@ -637,6 +645,7 @@ void write_mesh_path(JsonWriter& w, const MeshPathReport& r) {
   w.key("feature_angles").begin_object();
   w.members("samples", r.feature_angles.samples, "max_difference_deg", r.feature_angles.max_difference,
             "mean_difference_deg", r.feature_angles.mean_difference, "where_edge", r.feature_angles.where_edge);
+  if (r.feature_angles.samples > 0) w.key("where").point(r.feature_angles.where);
   w.end_object();
   w.key("planar").begin_object();
   w.members("regions", r.planar.regions, "regions_used", r.planar.regions_used, "faces", r.planar.faces,

@@ -108,7 +108,14 @@ struct FeatureAngleStats {
   double max_difference = 0;  ///< max |surface angle - mesh angle|, degrees
   double mean_difference = 0;
   int where_edge = -1;        ///< the worst cage feature edge (an edge number of the fitted cage's PolyMesh)
+  Point3 where{};             ///< the worst sample's point on the surface
 };
+
+/// A feature curve whose normal angle differs from the mesh's dihedral by more than this
+/// (degrees) is folded, not merely off (docs/meshes.md "Folded creases"): the mesh path warns.
+/// Unfolded curves stay within ~10 degrees (fandisk at 500 .. 1600 target faces: up to 9.7;
+/// folded: 22 .. 140).
+constexpr double kFoldedCreaseDegrees = 20;
 
 /// One remesh and fit of the size rule.
 struct MeshPathRound {
@@ -145,7 +152,9 @@ struct MeshPathReport {
   int kept_round = 0;
   bool tolerance_met = true;    ///< the kept round meets fit_tolerance (true when there is none)
   int predicted_target_faces = 0;  ///< the rounds ended at a prediction beyond kMaxSizeFactor: that size, else 0
-  std::string warning;          ///< "subd2nurbs: warning: ..." when the tolerance was not met, else empty
+  /// "subd2nurbs: warning: ..." lines: the fit tolerance not met; a folded feature curve
+  /// (kFoldedCreaseDegrees).
+  std::vector<std::string> warnings;
   double remesh_ms = 0, fit_ms = 0, measure_ms = 0;  ///< over all rounds
 };
 

@@ -652,7 +652,7 @@ std::shared_ptr<Conversion> convert(const DoubleArray& positions, const IntArray
         conversion->base = std::make_shared<const SubdivLevel>(SubdivLevel::from_input(in, &diagnostics));
       }
       std::vector<std::string> warnings = load_warnings ? *load_warnings : diagnostics_text(diagnostics);
-      if (made && !made->warning.empty()) warnings.push_back(made->warning);  // the fit tolerance not met
+      if (made) warnings.insert(warnings.end(), made->warnings.begin(), made->warnings.end());  // tolerance not met, a fold
       c = pipeline::convert(*conversion->base, points, pipeline::conversion_settings(settings.settings), callbacks,
                             warnings);
     });
