@@ -1,6 +1,8 @@
 #include "core/util/number_text.h"
 #include "core/mesh/validate.h"
 
+#include "core/mesh/corner_sectors.h"
+
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -80,6 +82,18 @@ PolyMesh validate_and_build(const MeshInput& input, Diagnostics* diagnostics) {
                              "hole tag names face " + std::to_string(input.holes[i]) +
                                  ", but the mesh has " + std::to_string(mesh.num_faces()) +
                                  " faces");
+  // Corners whose sectors the corner rule folds (core/mesh/corner_sectors.h): wider than 180
+  // degrees, with a margin for the cage's angles standing for the limit's.
+  if (diagnostics)
+    for (const CornerSector& s : wide_corner_sectors(input, kFoldingSectorDegrees))
+      diagnostics->push_back({"concave-corner", ElementKind::Vertex, s.corner,
+                              "vertex " + std::to_string(s.corner) + " is a corner whose " + std::to_string(s.faces) +
+                                  (s.faces == 1 ? " face" : " faces") + " between two sharp edges span " +
+                                  number_text(std::round(s.degrees)) +
+                                  " degrees: the corner rule folds the surface over itself there (near the corner "
+                                  "its faces lie on each other, facing the wrong way); infinitely sharp creases on "
+                                  "edges inside that sector, from the corner, until none spans more than 180 "
+                                  "degrees, keep it flat"});
   return mesh;
 }
 

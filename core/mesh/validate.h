@@ -19,12 +19,18 @@ constexpr int kMaxFaceSize = 1024;
 /// builder's work per extraordinary vertex grows with the cube of the valence.
 constexpr int kMaxValence = 1024;
 
+/// A corner's sector (core/mesh/corner_sectors.h) wider than this, measured on the cage, gets a
+/// "concave-corner" diagnostic: above 180 degrees the corner rule folds it; the margin keeps a
+/// T-junction's 180 (a crease ending on another) quiet.
+constexpr double kFoldingSectorDegrees = 190;
+
 /// Validates a MeshInput completely and returns its connectivity.
 /// Order of checks (the first failure is thrown): empty mesh, non-finite coordinates,
 /// coordinates beyond +-kMaxCoordinate, faces larger than kMaxFaceSize, face sizes /
 /// indices / repeats, vertices of valence above kMaxValence, non-manifold edges, orientation, non-manifold vertices,
 /// then tags (crease edges that do not exist, corner vertices / hole faces out of range,
-/// negative or non-finite sharpness).
+/// negative or non-finite sharpness). Diagnostics (when asked for): unused vertices, corners
+/// with a sector wider than kFoldingSectorDegrees.
 /// \throw InvalidMeshError
 PolyMesh validate_and_build(const MeshInput& input, Diagnostics* diagnostics = nullptr);
 

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "core/fit/planar_regions.h"
+#include "core/mesh/corner_sectors.h"
 #include "core/mesh/poly_mesh.h"
 #include "core/remesh/quad_cleanup.h"
 #include "core/util/constants.h"
@@ -2159,93 +2160,26 @@ MeshInput split_into_quads(const MeshInput& mesh, const Dense& d, const Fields& 
   return cage;
 }
 
-// Concave corners (docs/remesh.md step 9). At a vertex tagged as a corner the Catmull-Clark
-// corner rule makes each limit tangent along an edge between two crease edges a positive
-// combination of the two creases' tangents, so a sector (the faces between two consecutive crease
-// or boundary edges around the corner) can only cover the convex wedge between them. A concave
-// sector on a plane (an L-shaped face's inner corner: 270 degrees) is folded back over itself
-// near the corner: sheets lying on each other in the plane, with opposite normals (Biermann,
-// Levin and Zorin 2000 give other rules for such corners; the cage's surface follows the
-// standard ones). Each flat sector (its faces' normals within kSectorFlat of their mean) spanning
-// more than kConcaveSector (the sum of its faces' angles at the corner, on the cage) with an edge
-// inside is split by tagging that edge, the one nearest the sector's middle, infinitely sharp:
-// two convex sectors, each on the plane. The crease ends at the edge's other vertex, a dart.
-// Curved sectors are left (a fan's tip, 300 degrees around two creases meeting at 60: a crease
-// across a curved surface is a kink, and fandisk's fit went 4.5 -> 29 degrees off at the
-// creases beside it). Returns the sectors split; the tagged edges go to `added`.
+// Concave corners (docs/remesh.md step 9; core/mesh/corner_sectors.h): each flat sector wider
+// than kConcaveSector at a corner of the cage, which the corner rule folds over itself at the
+// corner (an L-shaped plane's inner corner), with an edge inside is split by tagging that edge,
+// the one nearest the sector's middle, infinitely sharp: two convex sectors, each on the plane.
+// The crease ends at the edge's other vertex, a dart. Curved sectors are left (a fan's tip, 300
+// degrees around two creases meeting at 60: a crease across a curved surface is a kink, and
+// fandisk's fit went 4.5 -> 29 degrees off at the creases beside it). Returns the sectors split;
+// the tagged edges go to `added`.
 constexpr double kConcaveSector = 170;  // degrees; a T-junction's 180 (a crease ending on another) lies flat too
-constexpr double kSectorFlat = 5;       // degrees
 
 int split_concave_sectors(MeshInput& cage, std::vector<std::array<int, 2>>& added) {
-  std::unordered_set<std::uint64_t> sharp;
-  for (const CreaseTag& c : cage.creases)
-    if (c.sharpness >= kInfiniteSharpness) sharp.insert(edge_key(c.v0, c.v1));
-  std::vector<char> is_corner(cage.positions.size(), 0);
-  for (const CornerTag& c : cage.corners)
-    if (c.sharpness >= kInfiniteSharpness) is_corner[c.vertex] = 1;
-  auto at = [&](int v) { return V3(cage.positions[v][0], cage.positions[v][1], cage.positions[v][2]); };
-  // Around each corner v, per face: the edge v -> a it leaves by, the edge v -> b it comes back
-  // by (a face ... b v a ...; the next face around v leaves by v -> b) and its normal.
-  struct FanFace {
-    int a, b;
-    V3 normal;
-  };
-  std::unordered_map<int, std::vector<FanFace>> fans;
-  std::size_t off = 0;
-  for (const int n : cage.face_sizes) {
-    V3 normal = V3::Zero();
-    for (int k = 0; k < n; ++k)
-      normal += at(cage.face_indices[off + k]).cross(at(cage.face_indices[off + (k + 1) % n]));
-    normal.normalize();
-    for (int k = 0; k < n; ++k) {
-      const int v = cage.face_indices[off + k];
-      if (is_corner[v])
-        fans[v].push_back({cage.face_indices[off + (k + 1) % n], cage.face_indices[off + (k + n - 1) % n], normal});
-    }
-    off += static_cast<std::size_t>(n);
-  }
-  std::vector<int> corners;
-  for (const auto& [v, fan] : fans) corners.push_back(v);
-  std::sort(corners.begin(), corners.end());  // deterministic
-  const double flat = std::cos(kSectorFlat * kPi / 180);
+  // Once: a half of 170 .. 180 degrees (a 270-degree sector of three square quads: 90 + 180) is
+  // flat but degenerate at the corner point, not folded; splitting it again cost featuretype 2
+  // more pairs of faces touching and 1 crossing.
   int split = 0;
-  for (const int v : corners) {
-    const std::vector<FanFace>& fan = fans[v];
-    std::unordered_map<int, int> leaving;  // a -> the face (index in fan) leaving by v -> a
-    std::unordered_set<int> returning;
-    for (std::size_t i = 0; i < fan.size(); ++i) leaving[fan[i].a] = static_cast<int>(i), returning.insert(fan[i].b);
-    // Sectors start at a crease edge, or at the boundary edge no face comes back by.
-    std::vector<int> starts;
-    for (const auto& [a, i] : leaving)
-      if (sharp.count(edge_key(v, a)) || !returning.count(a)) starts.push_back(a);
-    if (starts.size() < 2) continue;
-    std::sort(starts.begin(), starts.end());
-    for (const int start : starts) {
-      double angle = 0;
-      std::vector<std::pair<int, double>> inside;  // edges v -> b inside the sector, the angle up to each
-      std::vector<V3> normals;
-      for (int a = start;;) {
-        const FanFace& f = fan[static_cast<std::size_t>(leaving.at(a))];
-        const V3 ea = at(a) - at(v), eb = at(f.b) - at(v);
-        angle += std::atan2(ea.cross(eb).norm(), ea.dot(eb));
-        normals.push_back(f.normal);
-        if (sharp.count(edge_key(v, f.b)) || !leaving.count(f.b) || f.b == start) break;
-        inside.emplace_back(f.b, angle);
-        a = f.b;
-      }
-      if (inside.empty() || angle * 180 / kPi <= kConcaveSector) continue;
-      V3 mean = V3::Zero();
-      for (const V3& n : normals) mean += n;
-      if (!(mean.norm() > 0)) continue;
-      mean.normalize();
-      if (std::any_of(normals.begin(), normals.end(), [&](const V3& n) { return !(n.dot(mean) >= flat); })) continue;
-      const auto middle = std::min_element(inside.begin(), inside.end(), [&](const auto& x, const auto& y) {
-        return std::abs(x.second - angle / 2) < std::abs(y.second - angle / 2);
-      });
-      cage.creases.push_back({v, middle->first, kInfiniteSharpness});
-      added.push_back({v, middle->first});
-      ++split;
-    }
+  for (const CornerSector& s : wide_corner_sectors(cage, kConcaveSector)) {
+    if (!s.flat || s.middle < 0) continue;
+    cage.creases.push_back({s.corner, s.middle, kInfiniteSharpness});
+    added.push_back({s.corner, s.middle});
+    ++split;
   }
   return split;
 }

@@ -134,6 +134,27 @@ TEST(ObjReader, UnusedVertexIsAWarningNotAnError) {
             valid("unused_vertex.obj") + ":6: warning: vertex 5 is not used by any face");
 }
 
+TEST(ObjReader, ConcaveCornerIsAWarningNamingItsVertex) {
+  // Two corners whose sectors the corner rule folds (core/mesh/corner_sectors.h): warnings that
+  // name the OBJ's vertex numbers and lines (the exact limit's fold: tests/limit, ConcaveCorner).
+  const LoadedCage cage = read_obj(valid("l_prism_concave.obj"));
+  Diagnostics diagnostics;
+  SubdivLevel::from_input(cage.input, &diagnostics);
+  ASSERT_EQ(diagnostics.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(diagnostics[i].code, "concave-corner");
+    EXPECT_EQ(diagnostics[i].index, 4 + 8 * i);
+    const std::string vertex = std::to_string(5 + 8 * i);
+    EXPECT_EQ(format_diagnostic(cage, diagnostics[i]).rfind(valid("l_prism_concave.obj") + ":" +
+                                                                std::to_string(7 + 8 * i) + ": warning: vertex " +
+                                                                vertex + " is a corner whose 3 faces between two "
+                                                                "sharp edges span 270 degrees",
+                                                            0),
+              0u)
+        << format_diagnostic(cage, diagnostics[i]);
+  }
+}
+
 TEST(ObjReader, CoordinatesAreExactlyRounded) {
   // tinyobjloader's own parser returns -0.012886000000000002 for "-0.012886".
   const char* texts[] = {"-0.012886", "0.10000000000000001", "123456.78901234567",
