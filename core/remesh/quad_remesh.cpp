@@ -1844,6 +1844,60 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
   return flips;
 }
 
+// Slivers along a chain (docs/remesh.md step 5, "Slivers"): a coarse triangle whose angle at a
+// feature vertex is below max_degrees between a coarse feature edge and an edge that is none lies
+// along the chain. Where the chain bends away from its chord, the feature edge's split point (the
+// chain's middle) lands beside the other edge's, and the split quad between them turns over
+// (fandisk at 1050 quads: the crease folded, 140 degrees off the mesh's dihedral). The other edge
+// is flipped with the triangle across it when the new edge is new, both new triangles face
+// within 60 degrees of the old pair and their smallest angle is larger than the old pair's.
+// Returns the flips.
+template <class IsFeature>
+int flip_chain_slivers(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
+                       IsFeature&& coarse_feature, double max_degrees) {
+  std::unordered_map<std::uint64_t, int> half = half_edges(tris);
+  auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
+  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
+  auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
+  auto min_angle = [&](int a, int b, int c) {
+    const V3 &x = pos(a), &y = pos(b), &z = pos(c);
+    return std::min({angle(y - x, z - x), angle(z - y, x - y), angle(x - z, y - z)});
+  };
+  const double sliver = max_degrees * kPi / 180;
+  int flips = 0;
+  for (int pass = 0; pass < 10; ++pass) {
+    int changed = 0;
+    for (size_t i = 0; i < tris.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
+        if (fl.kind[dense_of[a]] == 0 || angle(pos(b) - pos(a), pos(c) - pos(a)) >= sliver) continue;
+        const bool fb = coarse_feature(a, b), fc = coarse_feature(c, a);
+        if (fb == fc) continue;
+        // The edge to flip, p -> q in the triangle's order, and the third vertex r (the chain's).
+        const int p = fb ? c : a, q = fb ? a : b, r = fb ? b : c;
+        auto it = half.find(half_key(q, p));
+        if (it == half.end()) continue;
+        const int j = it->second;
+        const int dd = third_vertex(tris[j], p, q);
+        if (dd < 0 || dd == r || half.count(half_key(r, dd)) || half.count(half_key(dd, r))) continue;
+        const V3 side = normal(q, p, dd), n1 = normal(p, dd, r), n2 = normal(dd, q, r), old = normal(p, q, r);
+        const V3 ref = side + old;
+        const double lr = ref.norm();
+        if (!(lr > 0) || n1.dot(ref) <= 0.5 * n1.norm() * lr || n2.dot(ref) <= 0.5 * n2.norm() * lr) continue;
+        if (std::min(min_angle(p, dd, r), min_angle(dd, q, r)) <= std::min(min_angle(p, q, r), min_angle(q, p, dd)))
+          continue;
+        flip_pair(tris, half, int(i), j, p, q, r, dd);
+        ++changed;
+        break;
+      }
+    flips += changed;
+    if (changed == 0) break;
+  }
+  return flips;
+}
+
+constexpr double kChainSliver = 15;  // degrees (at 15 featuretype.STL: 16 -> 7 crossing face pairs, docs/remesh.md)
+
 // Pairs the coarse triangles into quads (diagonal edges first, never across a feature edge);
 // returns the quads, then the unpaired triangles; `quads` their count.
 template <class IsFeature>
@@ -2409,6 +2463,8 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       auto coarse_feature = [&](int a, int b) { return col.is_feature(dense_of[a], dense_of[b]); };
       if (options.regularize_valence) st.flips = flip_to_regular_valence(d, fl, tris, dense_of, coarse_feature);
       flip_ears(d, fl, tris, dense_of, coarse_feature);  // always: an ear folds the cage
+      if (options.flip_chain_slivers)  // before the pairing: a sliver along a bending chain folds the cage
+        st.sliver_flips = flip_chain_slivers(d, fl, tris, dense_of, coarse_feature, kChainSliver);
       std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
       int split_faces = 0;  // the cage's faces without the clean-up: the size check's count

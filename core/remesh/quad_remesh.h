@@ -47,6 +47,9 @@ struct QuadRemeshOptions {
   /// inner corner), which the corner rule folds over itself, is split in two by tagging its
   /// middle edge infinitely sharp (docs/remesh.md step 9).
   bool split_concave_sectors = true;
+  /// Coarse triangles lying along a feature chain (an angle below 15 degrees at a feature vertex
+  /// between a feature edge and another) flipped open before the pairing (docs/remesh.md step 5).
+  bool flip_chain_slivers = true;
 };
 
 struct QuadRemeshStats {
@@ -77,6 +80,7 @@ struct QuadRemeshStats {
   double cleanup_seconds = 0;  ///< wall time of the clean-up (part of extract_seconds)
   int attempts = 0;            ///< position field + extraction runs (the size check, docs/remesh.md step 7)
   int concave_sectors = 0;     ///< corner sectors split by a crease edge (split_concave_sectors)
+  int sliver_flips = 0;        ///< coarse slivers along a feature chain flipped open (flip_chain_slivers)
 };
 
 struct QuadRemeshResult {

@@ -1181,6 +1181,22 @@ TEST(MeshPath, FoldedCreaseWarns) {
   std::printf("  fandisk at 720: feature angle error %.3g deg\n", angle_max);
 }
 
+/// Slivers along a chain (docs/remesh.md step 5): fandisk at 1050 target faces had a coarse
+/// triangle with a small angle between a feature edge and another edge at a crease vertex; where
+/// the chain bends away from its chord the split quad between them turned over and the fit
+/// folded the crease, 140 degrees off the mesh's dihedral. Flipped open before the pairing, the
+/// crease follows the mesh (the oracle: the mesh's dihedral at its nearest feature edge).
+TEST(MeshPath, SliverAlongAChainIsFlippedOpen) {
+  TempDir dir;
+  const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir, "--target-faces 1050");
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  EXPECT_GE(json_number(c.report, {"mesh", "cage", "sliver_flips"}), 1);
+  const double angle_max = json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"});
+  EXPECT_LT(angle_max, 10.0);
+  EXPECT_EQ(c.run.err.find("feature curve folds"), std::string::npos) << c.run.err;
+  std::printf("  fandisk at 1050: feature angle error %.3g deg\n", angle_max);
+}
+
 /// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says
 /// so, and its conversion equals the OBJ cage's.
 TEST(MeshPath, TriangulatedQuadCageStaysACage) {
