@@ -1715,6 +1715,52 @@ void flip_pair(std::vector<Tri>& tris, std::unordered_map<std::uint64_t, int>& h
     for (int m = 0; m < 3; ++m) half[half_key(tris[t][m], tris[t][(m + 1) % 3])] = t;
 }
 
+// The two new triangles of a flip (their normals n1, n2) face within 60 degrees of `ref`.
+bool both_face(const V3& n1, const V3& n2, const V3& ref) {
+  const double l = ref.norm();
+  return l > 0 && n1.dot(ref) > 0.5 * n1.norm() * l && n2.dot(ref) > 0.5 * n2.norm() * l;
+}
+
+// The smallest angle of the triangle (x, y, z).
+double min_angle(const V3& x, const V3& y, const V3& z) {
+  auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
+  return std::min({angle(y - x, z - x), angle(z - y, x - y), angle(x - z, y - z)});
+}
+
+// For a flip of edge p -> q of a triangle (p, q, r): the triangle j across it and its third
+// vertex dd; false when there is none or r - dd is an edge already.
+bool flip_partner(const std::vector<Tri>& tris, const std::unordered_map<std::uint64_t, int>& half, int p, int q,
+                  int r, int& j, int& dd) {
+  auto it = half.find(half_key(q, p));
+  if (it == half.end()) return false;
+  j = it->second;
+  dd = third_vertex(tris[j], p, q);
+  return dd >= 0 && dd != r && !half.count(half_key(r, dd)) && !half.count(half_key(dd, r));
+}
+
+// Passes over the coarse triangles (at most 10, until one makes no flip): for each triangle i
+// and each of its corners k in turn, try(i, k, p, q, r, j, dd) says whether to flip its edge
+// p -> q (r its third vertex) with triangle j (third vertex dd); a flip ends the triangle's turn.
+// Returns the flips.
+template <class Try>
+int flip_passes(std::vector<Tri>& tris, std::unordered_map<std::uint64_t, int>& half, Try&& try_flip) {
+  int flips = 0;
+  for (int pass = 0; pass < 10; ++pass) {
+    int changed = 0;
+    for (size_t i = 0; i < tris.size(); ++i)
+      for (int k = 0; k < 3; ++k) {
+        int p, q, r, j, dd;
+        if (!try_flip(int(i), k, p, q, r, j, dd)) continue;
+        flip_pair(tris, half, int(i), j, p, q, r, dd);
+        ++changed;
+        break;
+      }
+    flips += changed;
+    if (changed == 0) break;
+  }
+  return flips;
+}
+
 // Edge flips on the coarse triangles towards regular valences (6 inside, 4 on the boundary;
 // corners free) and lattice edges: an interior edge that is no feature edge is flipped when the
 // new edge is a lattice edge (displacement (±1, 0), (0, ±1) or (±1, ±1)) where the old one was
@@ -1754,11 +1800,7 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
     const double x = std::abs(std::round(disp.dot(fl.q[da]) / fl.s)), y = std::abs(std::round(disp.dot(t) / fl.s));
     return x <= 1 && y <= 1 && x + y > 0 ? 0 : 1;
   };
-  auto min_angle = [&](int a, int b, int c) {
-    const V3 &x = pos(a), &y = pos(b), &z = pos(c);
-    auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
-    return std::min({angle(y - x, z - x), angle(z - y, x - y), angle(x - z, y - z)});
-  };
+  auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
   int flips = 0;
   for (int pass = 0; pass < 10; ++pass) {
     int changed = 0;
@@ -1777,10 +1819,8 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
         const bool better = (lattice_new < lattice_old && after <= before) || (lattice_new <= lattice_old && after < before);
         if (!better) continue;
         const V3 old_n = normal(a, b, c).normalized() + normal(b, a, dd).normalized();
-        const V3 n1 = normal(a, dd, c), n2 = normal(dd, b, c);
-        const double lo = old_n.norm();
-        if (!(lo > 0) || n1.dot(old_n) <= 0.5 * n1.norm() * lo || n2.dot(old_n) <= 0.5 * n2.norm() * lo) continue;
-        if (std::min(min_angle(a, dd, c), min_angle(dd, b, c)) < std::min(min_angle(a, b, c), min_angle(b, a, dd)))
+        if (!both_face(normal(a, dd, c), normal(dd, b, c), old_n)) continue;
+        if (std::min(smallest(a, dd, c), smallest(dd, b, c)) < std::min(smallest(a, b, c), smallest(b, a, dd)))
           continue;  // the pair's smallest angle must not shrink (the cage's quads stay even)
         flip_pair(tris, half, int(i), j, a, b, c, dd);  // (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c)
         count.erase(edge_key(a, b));
@@ -1816,32 +1856,16 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
   std::unordered_map<std::uint64_t, int> half = half_edges(tris);
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
-  int flips = 0;
-  for (int pass = 0; pass < 10; ++pass) {
-    int changed = 0;
-    for (size_t i = 0; i < tris.size(); ++i)
-      for (int k = 0; k < 3; ++k) {
-        const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
-        if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b) || !coarse_feature(b, c) || !coarse_feature(c, a))
-          continue;
-        auto it = half.find(half_key(b, a));
-        if (it == half.end()) continue;
-        const int j = it->second;
-        const int dd = third_vertex(tris[j], a, b);
-        if (dd < 0 || dd == c || half.count(half_key(c, dd)) || half.count(half_key(dd, c))) continue;
-        if (fl.kind[dense_of[dd]] != 0) continue;  // the side's vertex (not across a wall one quad high)
-        const V3 side = normal(b, a, dd), n1 = normal(a, dd, c), n2 = normal(dd, b, c), ear = normal(a, b, c);
-        const double ls = side.norm();
-        if (!(ls > 0) || n1.dot(side) <= 0.5 * n1.norm() * ls || n2.dot(side) <= 0.5 * n2.norm() * ls) continue;
-        if (ear.dot(side) > 0.5 * ear.norm() * ls) continue;  // the ear lies on the side: left as it is
-        flip_pair(tris, half, int(i), j, a, b, c, dd);
-        ++changed;
-        break;
-      }
-    flips += changed;
-    if (changed == 0) break;
-  }
-  return flips;
+  return flip_passes(tris, half, [&](int i, int k, int& a, int& b, int& c, int& j, int& dd) {
+    a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
+    if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b) || !coarse_feature(b, c) || !coarse_feature(c, a))
+      return false;
+    if (!flip_partner(tris, half, a, b, c, j, dd)) return false;
+    if (fl.kind[dense_of[dd]] != 0) return false;  // the side's vertex (not across a wall one quad high)
+    const V3 side = normal(b, a, dd), ear = normal(a, b, c);
+    if (!both_face(normal(a, dd, c), normal(dd, b, c), side)) return false;
+    return !(ear.dot(side) > 0.5 * ear.norm() * side.norm());  // an ear lying on the side is left as it is
+  });
 }
 
 // Slivers along a chain (docs/remesh.md step 5, "Slivers"): a coarse triangle whose angle at a
@@ -1859,41 +1883,19 @@ int flip_chain_slivers(const Dense& d, const Fields& fl, std::vector<Tri>& tris,
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
   auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
-  auto min_angle = [&](int a, int b, int c) {
-    const V3 &x = pos(a), &y = pos(b), &z = pos(c);
-    return std::min({angle(y - x, z - x), angle(z - y, x - y), angle(x - z, y - z)});
-  };
+  auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
   const double sliver = max_degrees * kPi / 180;
-  int flips = 0;
-  for (int pass = 0; pass < 10; ++pass) {
-    int changed = 0;
-    for (size_t i = 0; i < tris.size(); ++i)
-      for (int k = 0; k < 3; ++k) {
-        const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
-        if (fl.kind[dense_of[a]] == 0 || angle(pos(b) - pos(a), pos(c) - pos(a)) >= sliver) continue;
-        const bool fb = coarse_feature(a, b), fc = coarse_feature(c, a);
-        if (fb == fc) continue;
-        // The edge to flip, p -> q in the triangle's order, and the third vertex r (the chain's).
-        const int p = fb ? c : a, q = fb ? a : b, r = fb ? b : c;
-        auto it = half.find(half_key(q, p));
-        if (it == half.end()) continue;
-        const int j = it->second;
-        const int dd = third_vertex(tris[j], p, q);
-        if (dd < 0 || dd == r || half.count(half_key(r, dd)) || half.count(half_key(dd, r))) continue;
-        const V3 side = normal(q, p, dd), n1 = normal(p, dd, r), n2 = normal(dd, q, r), old = normal(p, q, r);
-        const V3 ref = side + old;
-        const double lr = ref.norm();
-        if (!(lr > 0) || n1.dot(ref) <= 0.5 * n1.norm() * lr || n2.dot(ref) <= 0.5 * n2.norm() * lr) continue;
-        if (std::min(min_angle(p, dd, r), min_angle(dd, q, r)) <= std::min(min_angle(p, q, r), min_angle(q, p, dd)))
-          continue;
-        flip_pair(tris, half, int(i), j, p, q, r, dd);
-        ++changed;
-        break;
-      }
-    flips += changed;
-    if (changed == 0) break;
-  }
-  return flips;
+  return flip_passes(tris, half, [&](int i, int k, int& p, int& q, int& r, int& j, int& dd) {
+    const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
+    if (fl.kind[dense_of[a]] == 0 || angle(pos(b) - pos(a), pos(c) - pos(a)) >= sliver) return false;
+    const bool fb = coarse_feature(a, b), fc = coarse_feature(c, a);
+    if (fb == fc) return false;
+    // The edge to flip, p -> q in the triangle's order, and the third vertex r (the chain's).
+    p = fb ? c : a, q = fb ? a : b, r = fb ? b : c;
+    if (!flip_partner(tris, half, p, q, r, j, dd)) return false;
+    if (!both_face(normal(p, dd, r), normal(dd, q, r), normal(q, p, dd) + normal(p, q, r))) return false;
+    return std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd));
+  });
 }
 
 constexpr double kChainSliver = 15;  // degrees (at 15 featuretype.STL: 16 -> 7 crossing face pairs, docs/remesh.md)
