@@ -26,41 +26,67 @@ constexpr double kFlatDegrees = 5;
 std::vector<CornerSector> wide_corner_sectors(const MeshInput& cage, double min_degrees) {
   const int nv = cage.num_vertices();
   auto at = [&](int v) { return V3(cage.positions[v][0], cage.positions[v][1], cage.positions[v][2]); };
+  // Corners need an infinitely sharp crease or a corner tag (boundary edges alone give a vertex of
+  // a manifold cage two sharp edges at most), so only those vertices and their neighbours are
+  // looked at: a cage without such tags costs one pass over its tags.
+  std::set<std::pair<int, int>> sharp;  // infinitely sharp creases, then the boundary edges near corners
+  for (const CreaseTag& c : cage.creases)
+    if (c.sharpness >= kInfiniteSharpness) sharp.insert(edge_of(c.v0, c.v1));
+  std::vector<char> corner(static_cast<std::size_t>(nv), 0), candidate(static_cast<std::size_t>(nv), 0);
+  for (const CornerTag& c : cage.corners)
+    if (c.sharpness >= kInfiniteSharpness && c.vertex >= 0 && c.vertex < nv)
+      corner[static_cast<std::size_t>(c.vertex)] = candidate[static_cast<std::size_t>(c.vertex)] = 1;
+  for (const auto& [a, b] : sharp) candidate[static_cast<std::size_t>(a)] = candidate[static_cast<std::size_t>(b)] = 1;
+  if (std::find(candidate.begin(), candidate.end(), 1) == candidate.end()) return {};
   std::vector<char> hole(cage.face_sizes.size(), 0);
   for (const int h : cage.holes)
     if (h >= 0 && h < static_cast<int>(hole.size())) hole[static_cast<std::size_t>(h)] = 1;
-  // Around each vertex, per face: the edge v -> a it leaves by, the edge v -> b it comes back by
-  // (a face ... b v a ...; the next face around v leaves by v -> b) and its normal.
+  // The faces around candidates: their vertices are near (a sector's inside edges end there).
+  std::vector<char> near(static_cast<std::size_t>(nv), 0);
+  auto faces = [&](auto&& visit) {  // visit(offset, size) for each face with surface (no hole)
+    std::size_t off = 0;
+    for (std::size_t f = 0; f < cage.face_sizes.size(); ++f) {
+      const int n = cage.face_sizes[f];
+      if (!hole[f]) visit(off, n);
+      off += static_cast<std::size_t>(n);
+    }
+  };
+  auto touches = [&](std::size_t off, int n, const std::vector<char>& mark) {
+    for (int k = 0; k < n; ++k)
+      if (mark[static_cast<std::size_t>(cage.face_indices[off + k])]) return true;
+    return false;
+  };
+  faces([&](std::size_t off, int n) {
+    if (touches(off, n, candidate))
+      for (int k = 0; k < n; ++k) near[static_cast<std::size_t>(cage.face_indices[off + k])] = 1;
+  });
+  // Around each candidate v, per face: the edge v -> a it leaves by, the edge v -> b it comes back
+  // by (a face ... b v a ...; the next face around v leaves by v -> b) and its normal; the faces
+  // of each edge at a near vertex (one: a boundary edge).
   struct FanFace {
     int a, b;
     V3 normal;
   };
   std::vector<std::vector<FanFace>> fans(static_cast<std::size_t>(nv));
   std::map<std::pair<int, int>, int> edge_faces;
-  std::size_t off = 0;
-  for (std::size_t f = 0; f < cage.face_sizes.size(); ++f) {
-    const int n = cage.face_sizes[f];
-    if (!hole[f]) {
-      V3 normal = V3::Zero();
+  faces([&](std::size_t off, int n) {
+    if (!touches(off, n, near)) return;
+    const bool fan = touches(off, n, candidate);
+    V3 normal = V3::Zero();
+    if (fan) {
       for (int k = 0; k < n; ++k)
         normal += at(cage.face_indices[off + k]).cross(at(cage.face_indices[off + (k + 1) % n]));
       if (normal.norm() > 0) normal.normalize();
-      for (int k = 0; k < n; ++k) {
-        const int v = cage.face_indices[off + k], a = cage.face_indices[off + (k + 1) % n];
-        fans[static_cast<std::size_t>(v)].push_back({a, cage.face_indices[off + (k + n - 1) % n], normal});
-        ++edge_faces[edge_of(v, a)];
-      }
     }
-    off += static_cast<std::size_t>(n);
-  }
-  std::set<std::pair<int, int>> sharp;  // infinitely sharp creases and boundary edges
-  for (const CreaseTag& c : cage.creases)
-    if (c.sharpness >= kInfiniteSharpness) sharp.insert(edge_of(c.v0, c.v1));
+    for (int k = 0; k < n; ++k) {
+      const int v = cage.face_indices[off + k], a = cage.face_indices[off + (k + 1) % n];
+      if (fan && candidate[static_cast<std::size_t>(v)])
+        fans[static_cast<std::size_t>(v)].push_back({a, cage.face_indices[off + (k + n - 1) % n], normal});
+      if (near[static_cast<std::size_t>(v)] || near[static_cast<std::size_t>(a)]) ++edge_faces[edge_of(v, a)];
+    }
+  });
   for (const auto& [e, count] : edge_faces)
     if (count == 1) sharp.insert(e);
-  std::vector<char> corner(static_cast<std::size_t>(nv), 0);
-  for (const CornerTag& c : cage.corners)
-    if (c.sharpness >= kInfiniteSharpness && c.vertex >= 0 && c.vertex < nv) corner[static_cast<std::size_t>(c.vertex)] = 1;
   std::vector<int> sharp_count(static_cast<std::size_t>(nv), 0);
   for (const auto& [a, b] : sharp) ++sharp_count[static_cast<std::size_t>(a)], ++sharp_count[static_cast<std::size_t>(b)];
 
@@ -95,8 +121,9 @@ std::vector<CornerSector> wide_corner_sectors(const MeshInput& cage, double min_
       s.faces = static_cast<int>(normals.size());
       V3 mean = V3::Zero();
       for (const V3& n : normals) mean += n;
-      s.flat = mean.norm() > 0 &&
-               std::all_of(normals.begin(), normals.end(), [&](const V3& n) { return n.dot(mean.normalized()) >= flat; });
+      s.flat = mean.norm() > 0 && std::all_of(normals.begin(), normals.end(), [&, unit = mean.normalized()](const V3& n) {
+                 return n.dot(unit) >= flat;
+               });
       // The middle edge: its far vertex on no sharp edge and no corner (a crease tagged there
       // would make a corner of it: a kink in a curve, or curves joined).
       double best = INFINITY;
