@@ -547,11 +547,10 @@ int source_line(const LoadedCage& cage, const Diagnostic& diagnostic) {
 std::string format_diagnostic(const LoadedCage& cage, const Diagnostic& diagnostic) {
   const int line = source_line(cage, diagnostic);
   std::string message = diagnostic.message;
-  // Validation messages count vertices from 0; say which vertex the user sees.
-  if (diagnostic.code == "unused-vertex" && diagnostic.element == ElementKind::Vertex)
-    message = vertex_name(cage, diagnostic.index) + " is not used by any face";
+  // Validation messages ("vertex 4 is ...": unused-vertex, concave-corner) count vertices from 0;
+  // say which vertex the user sees.
   const std::string zero_based = "vertex " + std::to_string(diagnostic.index) + " ";
-  if (diagnostic.code == "concave-corner" && message.rfind(zero_based, 0) == 0)
+  if (diagnostic.element == ElementKind::Vertex && message.rfind(zero_based, 0) == 0)
     message = vertex_name(cage, diagnostic.index) + " " + message.substr(zero_based.size());
   return cage.path + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": warning: " +
          message;

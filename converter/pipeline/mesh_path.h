@@ -18,9 +18,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <optional>
-#include <array>
 #include <string>
 #include <vector>
 

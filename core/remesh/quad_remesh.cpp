@@ -1484,7 +1484,6 @@ struct Projector {
 };
 
 
-// The input's polygons fan-triangulated, with its features; `area` its area.
 // The mesh's polygons as fans of triangles from their first corners (`polygon_of`, if given: each
 // triangle's polygon).
 std::vector<Tri> fan_triangles(const MeshInput& mesh, std::vector<int>* polygon_of = nullptr) {
@@ -1501,6 +1500,7 @@ std::vector<Tri> fan_triangles(const MeshInput& mesh, std::vector<int>* polygon_
   return t;
 }
 
+// The input's polygons fan-triangulated, with its features; `area` its area.
 Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area) {
   Dense d;
   for (const auto& x : mesh.positions) d.p.push_back(V3(x[0], x[1], x[2]));
@@ -1721,10 +1721,12 @@ bool both_face(const V3& n1, const V3& n2, const V3& ref) {
   return l > 0 && n1.dot(ref) > 0.5 * n1.norm() * l && n2.dot(ref) > 0.5 * n2.norm() * l;
 }
 
+// The angle between u and v (radians).
+double angle_between(const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); }
+
 // The smallest angle of the triangle (x, y, z).
 double min_angle(const V3& x, const V3& y, const V3& z) {
-  auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
-  return std::min({angle(y - x, z - x), angle(z - y, x - y), angle(x - z, y - z)});
+  return std::min({angle_between(y - x, z - x), angle_between(z - y, x - y), angle_between(x - z, y - z)});
 }
 
 // For a flip of edge p -> q of a triangle (p, q, r): the triangle j across it and its third
@@ -1882,12 +1884,11 @@ int flip_chain_slivers(const Dense& d, const Fields& fl, std::vector<Tri>& tris,
   std::unordered_map<std::uint64_t, int> half = half_edges(tris);
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
-  auto angle = [](const V3& u, const V3& v) { return std::atan2(u.cross(v).norm(), u.dot(v)); };
   auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
   const double sliver = max_degrees * kPi / 180;
   return flip_passes(tris, half, [&](int i, int k, int& p, int& q, int& r, int& j, int& dd) {
     const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
-    if (fl.kind[dense_of[a]] == 0 || angle(pos(b) - pos(a), pos(c) - pos(a)) >= sliver) return false;
+    if (fl.kind[dense_of[a]] == 0 || angle_between(pos(b) - pos(a), pos(c) - pos(a)) >= sliver) return false;
     const bool fb = coarse_feature(a, b), fc = coarse_feature(c, a);
     if (fb == fc) return false;
     // The edge to flip, p -> q in the triangle's order, and the third vertex r (the chain's).
