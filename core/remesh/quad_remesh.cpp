@@ -1136,6 +1136,8 @@ void restretch_positions(Fields& fl, const Translations& tr) {
 }
 
 // --- extraction by edge collapses -------------------------------------------------------------
+constexpr double kTurnedOver = -0.3;  // cos 107 deg: a face turned over (Collapser::turned_over, docs/remesh.md step 4)
+
 struct Collapser {
   const std::vector<V3>& p;
   const Fields& fl;
@@ -1238,6 +1240,18 @@ struct Collapser {
       if (faces_with(u, w, tmp) == 1) return true;
     return false;
   }
+  // Whether a face of (unnormalized) normal n and vertices a, b, c, none on a feature, faces
+  // away from the surface: more than ~107 deg from the sum of its vertices' normals. The turn
+  // test of can_collapse bounds each collapse's turn of a face, not a run of them: on bob's limit
+  // scan (668 quads) two coarse triangles had turned over (-0.72, -0.84), a knot of folded cage
+  // faces whose limit surface crossed itself. A face with a vertex on a feature is left to the
+  // turn test: its vertices' normals mix the sides of a sharp edge.
+  bool turned_over(const V3& n, int a, int b, int c) const {
+    if (fl.kind[a] != 0 || fl.kind[b] != 0 || fl.kind[c] != 0) return false;
+    const V3 surface = fl.normal[a] + fl.normal[b] + fl.normal[c];
+    return n.dot(surface) < kTurnedOver * n.norm() * surface.norm();
+  }
+
   V3 face_normal(const Tri& t, int from, int to) const {
     auto at = [&](int k) -> const V3& { return p[t[k] == from ? to : t[k]]; };
     return (at(1) - at(0)).cross(at(2) - at(0));
@@ -1281,6 +1295,7 @@ struct Collapser {
       int a = -1, b = -1;
       for (int w : f[fi])
         if (w != u) (a < 0 ? a : b) = w;
+      if (turned_over(after, v, a, b)) return false;
       if (face_of(v, a, b)) return false;
     }
     if (fl.kind[u] == 1 && !chord_follows_chain(u, v)) {

@@ -1197,6 +1197,53 @@ TEST(MeshPath, SliverAlongAChainIsFlippedOpen) {
   std::printf("  fandisk at 1050: feature angle error %.3g deg\n", angle_max);
 }
 
+/// A scan of a smooth surface is remeshed without folds: bob's exact limit surface (Keenan
+/// Crane's cage, tests/data/mesh, 334 quads, genus 1), sampled 10 x 10 per quad by `subd2nurbs
+/// limit` and triangulated, is remeshed at 668 quads (twice the cage) and fitted. The oracle: the
+/// exact limit of a cage whose limit is smooth and embedded crosses itself nowhere, and the scan
+/// lies on it. Before the remesher's collapses kept faces from turning over (docs/remesh.md step
+/// 4) coarse triangles faced away from the surface there, and the fitted surface crossed itself
+/// (6 pairs of faces) at a knot 2.6e-3 of the diagonal from the scan.
+TEST(MeshPath, LimitScanDoesNotFold) {
+  TempDir dir;
+  const std::string cage = std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/bob_controlmesh.obj";
+  const int faces = read_obj(cage).input.num_faces(), n = 10;
+  {
+    std::ofstream q(dir.file("queries.txt"));
+    q.precision(17);
+    for (int f = 0; f < faces; ++f)
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j) q << f << " " << double(i) / n << " " << double(j) / n << "\n";
+  }
+  const CommandResult limit = run_command(kExe + " limit " + quote(cage) + " " + quote(dir.file("queries.txt")));
+  ASSERT_EQ(limit.exit_code, 0) << limit.err;
+  Triangles scan;
+  std::istringstream lines(limit.out);
+  for (std::string line; std::getline(lines, line);) {
+    double x, y, z;
+    if (std::istringstream(line) >> x >> y >> z) scan.points.emplace_back(x, y, z);
+  }
+  ASSERT_EQ(scan.points.size(), size_t(faces) * (n + 1) * (n + 1));
+  for (int f = 0; f < faces; ++f)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const int a = f * (n + 1) * (n + 1) + i * (n + 1) + j, b = a + n + 1;
+        scan.triangles.push_back({a, b, b + 1});
+        scan.triangles.push_back({a, b + 1, a + 1});
+      }
+  write_stl(scan, dir.file("scan.stl"));
+  const Converted c = convert(dir.file("scan.stl"), dir, "--input mesh --target-faces 668 -q");
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  EXPECT_EQ(json_number(c.report, {"self_intersection", "crossing_face_pairs"}), 0) << c.run.err;
+  EXPECT_EQ(json_number(c.report, {"self_intersection", "touching_face_pairs"}), 0) << c.run.err;
+  const double to_scan = json_number(c.report, {"mesh", "fit", "after", "limit_to_target", "max"});
+  const double from_scan = json_number(c.report, {"mesh", "fit", "after", "target_to_limit", "max"});
+  EXPECT_LE(to_scan, 1e-3);
+  EXPECT_LE(from_scan, 1e-3);
+  std::printf("  bob's limit scan: %d quads, to the scan %.3g, from the scan %.3g of the diagonal\n",
+              c.cage.input.num_faces(), to_scan, from_scan);
+}
+
 /// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says
 /// so, and its conversion equals the OBJ cage's.
 TEST(MeshPath, TriangulatedQuadCageStaysACage) {
