@@ -1864,9 +1864,11 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
 // between the fitted normals across a 90 degree edge). An ear that faces more than 60 degrees
 // away from the triangle across its chord (which lies on the side) has the chord flipped,
 // (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c), joining the chain vertex c to the side's
-// vertex dd, when dd is on no feature (not across a wall one quad high), the new edge is new and
-// both new triangles face within 60 degrees of the triangle across. An ear lying on its side
-// (on the top, inside the arc) is left as it is. Returns the flips made.
+// vertex dd, when dd is on no feature or, across a wall one quad high, on another feature curve
+// (no corner, no feature edge to a, b or c: the new edge crosses the wall from rim to rim;
+// featuretype.STL has 10 such ears, and 7 pairs of crossing faces without their flips), the new edge is new and both new
+// triangles face within 60 degrees of the triangle across. An ear lying on its side (on the top,
+// inside the arc) is left as it is. Returns the flips made.
 template <class IsFeature>
 int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
               IsFeature&& coarse_feature) {
@@ -1878,7 +1880,11 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
     if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b) || !coarse_feature(b, c) || !coarse_feature(c, a))
       return false;
     if (!flip_partner(tris, half, a, b, c, j, dd)) return false;
-    if (fl.kind[dense_of[dd]] != 0) return false;  // the side's vertex (not across a wall one quad high)
+    // The side's vertex: on no feature, or (a wall one quad high) on another feature curve than
+    // the ear's, which the new edge c - dd then crosses the wall to.
+    const int side_kind = fl.kind[dense_of[dd]];
+    if (side_kind == 2 || (side_kind == 1 && (coarse_feature(dd, a) || coarse_feature(dd, b) || coarse_feature(dd, c))))
+      return false;
     const V3 side = normal(b, a, dd), ear = normal(a, b, c);
     if (!both_face(normal(a, dd, c), normal(dd, b, c), side)) return false;
     return !(ear.dot(side) > 0.5 * ear.norm() * side.norm());  // an ear lying on the side is left as it is
