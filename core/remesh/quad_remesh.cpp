@@ -1861,14 +1861,17 @@ int flip_to_regular_valence(const Dense& d, const Fields& fl, std::vector<Tri>& 
 // part) the chord leaves the triangle's side of the part: on the wall side of a rounded rim the
 // ear's plane is the top's, facing away from the wall, and the split's three quads lie along the
 // sharp edge, folded over onto the top (fandisk's bottom rim at --target-faces 300: 180 degrees
-// between the fitted normals across a 90 degree edge). An ear that faces more than 60 degrees
-// away from the triangle across its chord (which lies on the side) has the chord flipped,
+// between the fitted normals across a 90 degree edge). Where the chain bends over three coarse
+// edges the region between it and the chord is a fan of an ear and a chord triangle (one edge on
+// the chain, a and b both on features: featuretype's rounded step corners, fandisk at 500 quads),
+// which folds the same way and is flipped by the same rule. An ear that faces more than 60
+// degrees away from the triangle across its chord (which lies on the side) has the chord flipped,
 // (a, b, c), (b, a, dd) -> (a, dd, c), (dd, b, c), joining the chain vertex c to the side's
 // vertex dd, when dd is on no feature or, across a wall one quad high, on another feature curve
 // (no corner, no feature edge to a, b or c: the new edge crosses the wall from rim to rim;
-// featuretype.STL has 10 such ears, and 7 pairs of crossing faces without their flips), the new edge is new and both new
-// triangles face within 60 degrees of the triangle across. An ear lying on its side (on the top,
-// inside the arc) is left as it is. Returns the flips made.
+// featuretype.STL has 10 such ears, and 7 pairs of crossing faces without their flips), the new
+// edge is new and both new triangles face within 60 degrees of the triangle across. An ear
+// lying on its side (on the top, inside the arc) is left as it is. Returns the flips made.
 template <class IsFeature>
 int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const std::vector<int>& dense_of,
               IsFeature&& coarse_feature) {
@@ -1877,8 +1880,11 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
   return flip_passes(tris, half, [&](int i, int k, int& a, int& b, int& c, int& j, int& dd) {
     a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
-    if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b) || !coarse_feature(b, c) || !coarse_feature(c, a))
-      return false;
+    if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b)) return false;
+    const bool two_on_chain = coarse_feature(b, c) && coarse_feature(c, a);
+    const bool chord = (coarse_feature(b, c) || coarse_feature(c, a)) && fl.kind[dense_of[a]] != 0 &&
+                       fl.kind[dense_of[b]] != 0;  // the rest of a fan between a bending chain and a chord
+    if (!two_on_chain && !chord) return false;
     if (!flip_partner(tris, half, a, b, c, j, dd)) return false;
     // The side's vertex: on no feature, or (a wall one quad high) on another feature curve than
     // the ear's, which the new edge c - dd then crosses the wall to.

@@ -1262,6 +1262,24 @@ TEST(MeshPath, MachinedPartDoesNotCrossItself) {
               json_number(c.report, {"brep", "faces"}), json_number(c.report, {"self_intersection", "touching_face_pairs"}));
 }
 
+/// A fan of an ear and a chord triangle along a rim (docs/remesh.md step 5, "Ears"): fandisk at
+/// 500 target faces had coarse triangles with all their vertices on one rim where it bends over
+/// three coarse edges, lying on the wrong side of it; their split quads turned over and the fit
+/// folded the crease, 90 degrees off the mesh's dihedral, with faces crossing. Flipped like
+/// ears, the crease follows the mesh (the oracle: the mesh's dihedral at its nearest feature
+/// edge) and the surface crosses and touches itself nowhere (fandisk is a solid).
+TEST(MeshPath, ChordFanAlongARimIsFlippedOpen) {
+  TempDir dir;
+  const Converted c = convert(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/fandisk.off", dir, "--target-faces 500");
+  ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
+  const double angle_max = json_number(c.report, {"mesh", "feature_angles", "max_difference_deg"});
+  EXPECT_LT(angle_max, 15.0);
+  EXPECT_EQ(c.run.err.find("feature curve folds"), std::string::npos) << c.run.err;
+  EXPECT_EQ(json_number(c.report, {"self_intersection", "crossing_face_pairs"}), 0) << c.run.err;
+  EXPECT_EQ(json_number(c.report, {"self_intersection", "touching_face_pairs"}), 0) << c.run.err;
+  std::printf("  fandisk at 500: feature angle error %.3g deg\n", angle_max);
+}
+
 /// A triangulated quad cage (each quad split along a diagonal) takes the cage road: `info` says
 /// so, and its conversion equals the OBJ cage's.
 TEST(MeshPath, TriangulatedQuadCageStaysACage) {
