@@ -1880,11 +1880,11 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
   return flip_passes(tris, half, [&](int i, int k, int& a, int& b, int& c, int& j, int& dd) {
     a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
-    if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b)) return false;
-    const bool two_on_chain = coarse_feature(b, c) && coarse_feature(c, a);
-    const bool chord = (coarse_feature(b, c) || coarse_feature(c, a)) && fl.kind[dense_of[a]] != 0 &&
-                       fl.kind[dense_of[b]] != 0;  // the rest of a fan between a bending chain and a chord
-    if (!two_on_chain && !chord) return false;
+    // c on the chain by one edge (a chord triangle) or both (an ear; a feature edge's ends are on
+    // features, so a and b are then too), a and b on features.
+    if (fl.kind[dense_of[c]] != 1 || coarse_feature(a, b) || !(coarse_feature(b, c) || coarse_feature(c, a)) ||
+        fl.kind[dense_of[a]] == 0 || fl.kind[dense_of[b]] == 0)
+      return false;
     if (!flip_partner(tris, half, a, b, c, j, dd)) return false;
     // The side's vertex: on no feature, or (a wall one quad high) on another feature curve than
     // the ear's, which the new edge c - dd then crosses the wall to.
