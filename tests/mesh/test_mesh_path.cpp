@@ -235,6 +235,29 @@ Converted convert(const std::string& input, TempDir& dir, const std::string& ext
   return c;
 }
 
+/// `subd2nurbs limit` on the quads of the cage file `cage` (`faces` of them) at (u, v) = (ts[i],
+/// ts[j]) on each, i outer: the exact limit points, in that order (asserted: one per query).
+std::vector<gp_Pnt> limit_points(const std::string& cage, int faces, const std::vector<double>& ts, TempDir& dir) {
+  const std::string queries = dir.file("queries.txt");
+  {
+    std::ofstream q(queries);
+    q.precision(17);
+    for (int f = 0; f < faces; ++f)
+      for (double u : ts)
+        for (double v : ts) q << f << " " << u << " " << v << "\n";
+  }
+  const CommandResult limit = run_command(kExe + " limit " + quote(cage) + " " + quote(queries));
+  EXPECT_EQ(limit.exit_code, 0) << limit.err;
+  std::vector<gp_Pnt> points;
+  std::istringstream lines(limit.out);
+  for (std::string line; std::getline(lines, line);) {
+    double x, y, z;
+    if (std::istringstream(line) >> x >> y >> z) points.emplace_back(x, y, z);
+  }
+  EXPECT_EQ(points.size(), static_cast<std::size_t>(faces) * ts.size() * ts.size());
+  return points;
+}
+
 /// The checks every mesh conversion must pass, against the exact solid it was tessellated from.
 /// Distances: the largest both ways below `max_rel` x the diagonal, our surface's mean distance to
 /// the exact solid below `mean_rel` x the diagonal. (The goal, a largest distance of
@@ -872,25 +895,11 @@ TEST(MeshPath, FitToleranceOffGivenSizeAndCoarsening) {
   EXPECT_NE(coarse.find("\"tolerance_met\": true"), std::string::npos) << coarse;
   // The kept cage's exact limit surface (`subd2nurbs limit`, 5 x 5 points per quad) within the
   // tolerance + the mesh's chord error of the capsule.
-  const std::string queries = dir.file("queries.txt");
-  {
-    std::ofstream q(queries);
-    for (int f = 0; f < kept_cage.input.num_faces(); ++f)
-      for (int i = 0; i < 5; ++i)
-        for (int j = 0; j < 5; ++j) q << f << " " << (i + 0.5) / 5 << " " << (j + 0.5) / 5 << "\n";
-  }
-  const CommandResult limit = run_command(kExe + " limit " + quote(dir.file("coarse.obj")) + " " + quote(queries));
-  ASSERT_EQ(limit.exit_code, 0) << limit.err;
-  std::istringstream lines(limit.out);
-  double worst = 0, x, y, z;
-  int points = 0;
-  for (std::string line; std::getline(lines, line);) {
-    std::istringstream in(line);
-    if (!(in >> x >> y >> z)) continue;
-    worst = std::max(worst, k.shape.distance(gp_Pnt(x, y, z)));
-    ++points;
-  }
-  EXPECT_EQ(points, 25 * kept_cage.input.num_faces());
+  const std::vector<gp_Pnt> points =
+      limit_points(dir.file("coarse.obj"), kept_cage.input.num_faces(), {0.1, 0.3, 0.5, 0.7, 0.9}, dir);
+  ASSERT_EQ(points.size(), 25u * static_cast<std::size_t>(kept_cage.input.num_faces()));
+  double worst = 0;
+  for (const gp_Pnt& p : points) worst = std::max(worst, k.shape.distance(p));
   EXPECT_LT(worst, 3 * d0 * k.diag + k.chord) << "relative " << worst / k.diag;
   std::printf("  capsule: automatic %d quads at %.3g; fit tolerance %.3g: rounds %g, %g quads, kept %g; its limit within "
               "%.3g of the diagonal of the capsule\n",
@@ -1208,21 +1217,10 @@ TEST(MeshPath, LimitScanDoesNotFold) {
   TempDir dir;
   const std::string cage = std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/bob_controlmesh.obj";
   const int faces = read_obj(cage).input.num_faces(), n = 10;
-  {
-    std::ofstream q(dir.file("queries.txt"));
-    q.precision(17);
-    for (int f = 0; f < faces; ++f)
-      for (int i = 0; i <= n; ++i)
-        for (int j = 0; j <= n; ++j) q << f << " " << double(i) / n << " " << double(j) / n << "\n";
-  }
-  const CommandResult limit = run_command(kExe + " limit " + quote(cage) + " " + quote(dir.file("queries.txt")));
-  ASSERT_EQ(limit.exit_code, 0) << limit.err;
+  std::vector<double> ts;
+  for (int i = 0; i <= n; ++i) ts.push_back(double(i) / n);
   Triangles scan;
-  std::istringstream lines(limit.out);
-  for (std::string line; std::getline(lines, line);) {
-    double x, y, z;
-    if (std::istringstream(line) >> x >> y >> z) scan.points.emplace_back(x, y, z);
-  }
+  scan.points = limit_points(cage, faces, ts, dir);
   ASSERT_EQ(scan.points.size(), size_t(faces) * (n + 1) * (n + 1));
   for (int f = 0; f < faces; ++f)
     for (int i = 0; i < n; ++i)
