@@ -1928,6 +1928,32 @@ int flip_chain_slivers(const Dense& d, const Fields& fl, std::vector<Tri>& tris,
 
 constexpr double kChainSliver = 15;  // degrees (at 15 featuretype.STL: 16 -> 7 crossing face pairs, docs/remesh.md)
 
+// Caps (docs/remesh.md step 5, "Caps"): a coarse triangle with an angle above max_degrees at a
+// vertex r has r almost on its opposite edge p - q. Paired or not it makes a degenerate corner
+// (a quad with a ~180 degree angle, or an unpaired triangle's split quad), an extraordinary
+// vertex at best, and the fit can slide r across p - q and turn the triangle over (plate_holes'
+// top plane: 27 pairs of faces touching). The edge p - q (no feature edge) is flipped with the
+// triangle across it when the new edge is new, both new triangles face within 60 degrees of the
+// old pair and their smallest angle is larger than the old pair's. Returns the flips.
+template <class IsFeature>
+int flip_caps(const Dense& d, std::vector<Tri>& tris, const std::vector<int>& dense_of, IsFeature&& coarse_feature,
+              double max_degrees) {
+  std::unordered_map<std::uint64_t, int> half = half_edges(tris);
+  auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
+  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
+  auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
+  const double cap = max_degrees * kPi / 180;
+  return flip_passes(tris, half, [&](int i, int k, int& p, int& q, int& r, int& j, int& dd) {
+    p = tris[i][k], q = tris[i][(k + 1) % 3], r = tris[i][(k + 2) % 3];
+    if (coarse_feature(p, q) || angle_between(pos(p) - pos(r), pos(q) - pos(r)) <= cap) return false;
+    if (!flip_partner(tris, half, p, q, r, j, dd)) return false;
+    if (!both_face(normal(p, dd, r), normal(dd, q, r), normal(q, p, dd) + normal(p, q, r))) return false;
+    return std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd));
+  });
+}
+
+constexpr double kCapAngle = 160;  // degrees (150 and 170 measured alike, docs/remesh.md step 5)
+
 // Pairs the coarse triangles into quads (diagonal edges first, never across a feature edge);
 // returns the quads, then the unpaired triangles; `quads` their count.
 template <class IsFeature>
@@ -2495,10 +2521,23 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       flip_ears(d, fl, tris, dense_of, coarse_feature);  // always: an ear folds the cage
       if (options.flip_chain_slivers)  // before the pairing: a sliver along a bending chain folds the cage
         st.sliver_flips = flip_chain_slivers(d, fl, tris, dense_of, coarse_feature, kChainSliver);
+      // The size check's count (step 7): the faces the cage would have without the caps' flips
+      // and the clean-up, so that neither decides whether the extraction runs again: they change
+      // the cage where they act, not the spacing of a second run's whole lattice.
+      auto split_count = [](const std::vector<std::vector<int>>& polygons) {
+        int faces = 0;
+        for (const auto& polygon : polygons) faces += static_cast<int>(polygon.size());
+        return faces;
+      };
+      int split_faces = -1;
+      if (options.flip_caps) {  // before the pairing: a cap's corner is degenerate and can turn over
+        int quads_before = 0;
+        split_faces = split_count(pair_triangles(d, fl, s, tris, dense_of, coarse_feature, quads_before));
+        st.cap_flips = flip_caps(d, tris, dense_of, coarse_feature, kCapAngle);
+      }
       std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
-      int split_faces = 0;  // the cage's faces without the clean-up: the size check's count
-      for (const auto& polygon : polygons) split_faces += static_cast<int>(polygon.size());
+      if (split_faces < 0) split_faces = split_count(polygons);
       if (options.cleanup) {  // quad-dominant clean-up (core/remesh/quad_cleanup.h, docs/remesh.md step 6b)
         std::vector<V3> positions, normals;
         std::vector<char> corner;

@@ -50,6 +50,9 @@ struct QuadRemeshOptions {
   /// Coarse triangles lying along a feature chain (an angle below 15 degrees at a feature vertex
   /// between a feature edge and another) flipped open before the pairing (docs/remesh.md step 5).
   bool flip_chain_slivers = true;
+  /// Caps: coarse triangles with an angle above 160 degrees (a vertex almost on the opposite
+  /// edge) flipped before the pairing, feature edges kept (docs/remesh.md step 5).
+  bool flip_caps = true;
 };
 
 struct QuadRemeshStats {
@@ -81,6 +84,7 @@ struct QuadRemeshStats {
   int attempts = 0;            ///< position field + extraction runs (the size check, docs/remesh.md step 7)
   int concave_sectors = 0;     ///< corner sectors split by a crease edge (split_concave_sectors)
   int sliver_flips = 0;        ///< coarse slivers along a feature chain flipped open (flip_chain_slivers)
+  int cap_flips = 0;           ///< coarse caps (an angle above 160 degrees) flipped (flip_caps)
 };
 
 struct QuadRemeshResult {

@@ -601,6 +601,37 @@ TEST(QuadRemesh, NoSliverBesideATightRim) {
   EXPECT_EQ(on.cage.creases.size(), off.cage.creases.size());
 }
 
+// docs/remesh.md step 5, "Caps": plate_holes.STL's planes have coarse triangles with an angle
+// above 160 degrees (a vertex almost on the opposite edge). Flipped, they pair into better quads:
+// fewer extraordinary vertices. The flips change no lattice point (the size check counts the
+// faces as they would be without them, so it never chooses another spacing for a second run):
+// the coarse vertices, (V + chi) / 2 - coarse faces after the one split (V = V_c + E_c + F_c and
+// V_c - E_c + F_c = chi), are the same number with the flips and without.
+TEST(QuadRemesh, CapsFlipWithoutMovingTheLattice) {
+  MeshReadOptions triangles;
+  triangles.recover_quads = false;  // the mesh path takes the triangles as they are
+  const MeshInput m = read_cage(std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/plate_holes.STL", triangles).input;
+  QuadRemeshOptions o;
+  o.target_faces = 600;
+  o.flip_caps = false;
+  const QuadRemeshResult off = quad_remesh(m, o);
+  o.flip_caps = true;
+  const QuadRemeshResult on = quad_remesh(m, o);
+  check_cage(m, off, 0);
+  check_cage(m, on, 0);
+  auto coarse_vertices = [](const QuadRemeshResult& r) {
+    return (r.cage.num_vertices() + r.stats.euler_cage) / 2 - (r.stats.coarse_quads + r.stats.coarse_triangles);
+  };
+  std::printf("  %d caps flipped; extraordinary vertices %d -> %d, quads %d -> %d\n", on.stats.cap_flips,
+              off.stats.extraordinary_vertices, on.stats.extraordinary_vertices, off.cage.num_faces(), on.cage.num_faces());
+  EXPECT_EQ(off.stats.cap_flips, 0);
+  EXPECT_GT(on.stats.cap_flips, 0);
+  EXPECT_EQ(on.stats.attempts, off.stats.attempts);
+  EXPECT_EQ(coarse_vertices(on), coarse_vertices(off));
+  EXPECT_LT(on.stats.extraordinary_vertices, off.stats.extraordinary_vertices);
+  EXPECT_EQ(on.cage.creases.size(), off.cage.creases.size());
+}
+
 // docs/remesh.md step 3: the position field pins a lattice column at each tight arc of a feature
 // chain, so the side under a rim that rounds a corner of the part (radius 0.06, a fifth of the
 // lattice spacing 0.3 at 1000 quads) has a row under each kept rim vertex and no vertex stays
