@@ -1897,6 +1897,19 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
   });
 }
 
+// The conditions of the sliver and cap flips (docs/remesh.md step 5) for the edge p -> q of a
+// triangle whose third vertex is r: a triangle j across it whose far vertex dd makes a new edge,
+// both new triangles facing within 60 degrees of the old pair, and a larger smallest angle.
+bool flip_improves(const Dense& d, const std::vector<Tri>& tris, const std::unordered_map<std::uint64_t, int>& half,
+                   const std::vector<int>& dense_of, int p, int q, int r, int& j, int& dd) {
+  auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
+  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
+  auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
+  if (!flip_partner(tris, half, p, q, r, j, dd)) return false;
+  if (!both_face(normal(p, dd, r), normal(dd, q, r), normal(q, p, dd) + normal(p, q, r))) return false;
+  return std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd));
+}
+
 // Slivers along a chain (docs/remesh.md step 5, "Slivers"): a coarse triangle whose angle at a
 // feature vertex is below max_degrees between a coarse feature edge and an edge that is none lies
 // along the chain. Where the chain bends away from its chord, the feature edge's split point (the
@@ -1910,8 +1923,6 @@ int flip_chain_slivers(const Dense& d, const Fields& fl, std::vector<Tri>& tris,
                        IsFeature&& coarse_feature, double max_degrees) {
   std::unordered_map<std::uint64_t, int> half = half_edges(tris);
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
-  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
-  auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
   const double sliver = max_degrees * kPi / 180;
   return flip_passes(tris, half, [&](int i, int k, int& p, int& q, int& r, int& j, int& dd) {
     const int a = tris[i][k], b = tris[i][(k + 1) % 3], c = tris[i][(k + 2) % 3];
@@ -1920,9 +1931,7 @@ int flip_chain_slivers(const Dense& d, const Fields& fl, std::vector<Tri>& tris,
     if (fb == fc) return false;
     // The edge to flip, p -> q in the triangle's order, and the third vertex r (the chain's).
     p = fb ? c : a, q = fb ? a : b, r = fb ? b : c;
-    if (!flip_partner(tris, half, p, q, r, j, dd)) return false;
-    if (!both_face(normal(p, dd, r), normal(dd, q, r), normal(q, p, dd) + normal(p, q, r))) return false;
-    return std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd));
+    return flip_improves(d, tris, half, dense_of, p, q, r, j, dd);
   });
 }
 
@@ -1940,19 +1949,15 @@ int flip_caps(const Dense& d, std::vector<Tri>& tris, const std::vector<int>& de
               double max_degrees) {
   std::unordered_map<std::uint64_t, int> half = half_edges(tris);
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
-  auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
-  auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
   const double cap = max_degrees * kPi / 180;
   return flip_passes(tris, half, [&](int i, int k, int& p, int& q, int& r, int& j, int& dd) {
     p = tris[i][k], q = tris[i][(k + 1) % 3], r = tris[i][(k + 2) % 3];
     if (coarse_feature(p, q) || angle_between(pos(p) - pos(r), pos(q) - pos(r)) <= cap) return false;
-    if (!flip_partner(tris, half, p, q, r, j, dd)) return false;
-    if (!both_face(normal(p, dd, r), normal(dd, q, r), normal(q, p, dd) + normal(p, q, r))) return false;
-    return std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd));
+    return flip_improves(d, tris, half, dense_of, p, q, r, j, dd);
   });
 }
 
-constexpr double kCapAngle = 160;  // degrees (150 and 170 measured alike, docs/remesh.md step 5)
+constexpr double kCapAngle = 160;  // degrees (lower angles measured: docs/remesh.md step 5, "Caps")
 
 // Pairs the coarse triangles into quads (diagonal edges first, never across a feature edge);
 // returns the quads, then the unpaired triangles; `quads` their count.
