@@ -2526,23 +2526,20 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       flip_ears(d, fl, tris, dense_of, coarse_feature);  // always: an ear folds the cage
       if (options.flip_chain_slivers)  // before the pairing: a sliver along a bending chain folds the cage
         st.sliver_flips = flip_chain_slivers(d, fl, tris, dense_of, coarse_feature, kChainSliver);
-      // The size check's count (step 7): the faces the cage would have without the caps' flips
-      // and the clean-up, so that neither decides whether the extraction runs again: they change
-      // the cage where they act, not the spacing of a second run's whole lattice.
-      auto split_count = [](const std::vector<std::vector<int>>& polygons) {
-        int faces = 0;
-        for (const auto& polygon : polygons) faces += static_cast<int>(polygon.size());
-        return faces;
-      };
-      int split_faces = -1;
+      std::vector<Tri> before_caps;  // the triangles as the size check counts them (below)
       if (options.flip_caps) {  // before the pairing: a cap's corner is degenerate and can turn over
-        int quads_before = 0;
-        split_faces = split_count(pair_triangles(d, fl, s, tris, dense_of, coarse_feature, quads_before));
+        before_caps = tris;
         st.cap_flips = flip_caps(d, tris, dense_of, coarse_feature, kCapAngle);
       }
       std::vector<std::vector<int>> polygons =
           pair_triangles(d, fl, s, tris, dense_of, coarse_feature, st.coarse_quads);
-      if (split_faces < 0) split_faces = split_count(polygons);
+      // The size check's count (step 7): the faces the cage would have without the caps' flips
+      // and the clean-up, so that neither decides whether the extraction runs again: they change
+      // the cage where they act, not the spacing of a second run's whole lattice. Each pair of
+      // triangles is a quad: 4 x quads + 3 x (triangles - 2 x quads) faces after the split.
+      int quads_counted = st.coarse_quads;
+      if (st.cap_flips > 0) pair_triangles(d, fl, s, before_caps, dense_of, coarse_feature, quads_counted);
+      const int split_faces = 3 * static_cast<int>(tris.size()) - 2 * quads_counted;
       if (options.cleanup) {  // quad-dominant clean-up (core/remesh/quad_cleanup.h, docs/remesh.md step 6b)
         std::vector<V3> positions, normals;
         std::vector<char> corner;
