@@ -309,7 +309,7 @@ def main():
                            qf_vertices=None)
                 fitted, fit_report = os.path.join(tmp, "qf_fit.obj"), os.path.join(tmp, "qf_fit.json")
                 _, _, _, err, code = run([exe, "fit", qf_obj, "--to", src, "-o", fitted, "--report", fit_report,
-                                          "--max-iterations", "15", "-q"], tmp, check=False)
+                                          "--max-iterations", "40", "-q"], tmp, check=False)
                 if code == 0:
                     row["qf_distance"] = two_sided(json.load(open(fit_report))["after"])
                     if original and rep == 0:
