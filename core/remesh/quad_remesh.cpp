@@ -1897,17 +1897,26 @@ int flip_ears(const Dense& d, const Fields& fl, std::vector<Tri>& tris, const st
   });
 }
 
+// The largest angle of the triangle (x, y, z).
+double max_angle(const V3& x, const V3& y, const V3& z) {
+  return std::max({angle_between(y - x, z - x), angle_between(z - y, x - y), angle_between(x - z, y - z)});
+}
+
 // The conditions of the sliver and cap flips (docs/remesh.md step 5) for the edge p -> q of a
 // triangle whose third vertex is r: a triangle j across it whose far vertex dd makes a new edge,
-// both new triangles facing within 60 degrees of the old pair, and a larger smallest angle.
+// both new triangles facing within 60 degrees of the old pair, and a larger smallest angle (or,
+// with `or_largest_falls`, a smaller largest angle).
 bool flip_improves(const Dense& d, const std::vector<Tri>& tris, const std::unordered_map<std::uint64_t, int>& half,
-                   const std::vector<int>& dense_of, int p, int q, int r, int& j, int& dd) {
+                   const std::vector<int>& dense_of, int p, int q, int r, int& j, int& dd, bool or_largest_falls = false) {
   auto pos = [&](int v) -> const V3& { return d.p[dense_of[v]]; };
   auto normal = [&](int a, int b, int c) { return V3((pos(b) - pos(a)).cross(pos(c) - pos(a))); };
   auto smallest = [&](int a, int b, int c) { return min_angle(pos(a), pos(b), pos(c)); };
+  auto largest = [&](int a, int b, int c) { return max_angle(pos(a), pos(b), pos(c)); };
   if (!flip_partner(tris, half, p, q, r, j, dd)) return false;
   if (!both_face(normal(p, dd, r), normal(dd, q, r), normal(q, p, dd) + normal(p, q, r))) return false;
-  return std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd));
+  if (std::min(smallest(p, dd, r), smallest(dd, q, r)) > std::min(smallest(p, q, r), smallest(q, p, dd))) return true;
+  return or_largest_falls &&
+         std::max(largest(p, dd, r), largest(dd, q, r)) < std::max(largest(p, q, r), largest(q, p, dd));
 }
 
 // Slivers along a chain (docs/remesh.md step 5, "Slivers"): a coarse triangle whose angle at a
@@ -1943,7 +1952,10 @@ constexpr double kChainSliver = 15;  // degrees (at 15 featuretype.STL: 16 -> 7 
 // vertex at best, and the fit can slide r across p - q and turn the triangle over (plate_holes'
 // top plane: 27 pairs of faces touching). The edge p - q (no feature edge) is flipped with the
 // triangle across it when the new edge is new, both new triangles face within 60 degrees of the
-// old pair and their smallest angle is larger than the old pair's. Returns the flips.
+// old pair and their smallest angle is larger than the old pair's, or their largest angle smaller
+// (the cap's: plate_holes' countersunk hole has a 170 degree cap whose partner reaches a vertex
+// 65 mm off across the top, so every triangle there is a sliver and the smallest angle cannot
+// grow; left, the cage folded there, 84 degrees off the mesh's dihedral). Returns the flips.
 template <class IsFeature>
 int flip_caps(const Dense& d, std::vector<Tri>& tris, const std::vector<int>& dense_of, IsFeature&& coarse_feature,
               double max_degrees) {
@@ -1953,7 +1965,7 @@ int flip_caps(const Dense& d, std::vector<Tri>& tris, const std::vector<int>& de
   return flip_passes(tris, half, [&](int i, int k, int& p, int& q, int& r, int& j, int& dd) {
     p = tris[i][k], q = tris[i][(k + 1) % 3], r = tris[i][(k + 2) % 3];
     if (coarse_feature(p, q) || angle_between(pos(p) - pos(r), pos(q) - pos(r)) <= cap) return false;
-    return flip_improves(d, tris, half, dense_of, p, q, r, j, dd);
+    return flip_improves(d, tris, half, dense_of, p, q, r, j, dd, true);
   });
 }
 
