@@ -346,8 +346,11 @@ MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const
   rep.fit_options.vertex_planes = vertex_planes(planar, in.regions);
   ShapeFitProgress fit_progress;
   if (in.progress.fraction)
+    // The fit stops when it stops gaining, after 7 .. 27 of its 40 iterations on the meshes
+    // measured: the fraction rises as 1 - exp(-iterations / 8) (0.6 at 7, 0.97 at 27), not
+    // linearly to a cap it seldom reaches.
     fit_progress = [&](int iteration, double) {
-      return in.progress.fraction(std::min(1.0, (iteration + 1.0) / rep.fit_options.max_iterations));
+      return in.progress.fraction(1.0 - std::exp(-(iteration + 1.0) / 8.0));
     };
   // The planar regions' faces made exactly planar (the held vertices onto their planes) before
   // the fitted cage is measured.
