@@ -332,7 +332,7 @@ MeshCage remesh_and_fit(const RoundInput& in, const QuadRemeshOptions& ro, const
   // samples per quad still outnumber the mesh's vertices; 4 x cheaper than level 3.
   rep.fit_options.levels = 2;
   // Until the two-sided distance gains less than 2 % in an iteration (the fit's min_gain, as
-  // `subd2nurbs fit`), 40 iterations at most: the CAD meshes stop after 7 .. 10, where their
+  // `subd2nurbs fit`), 40 iterations at most: the CAD meshes stop after 7 .. 15, where their
   // cages, not the fit, limit the distance; a smooth scan goes on (bob's limit scan: 27, half
   // the distance to the true limit of 10; docs/meshes.md "Measured against bob's true limit").
   rep.fit_options.max_iterations = 40;

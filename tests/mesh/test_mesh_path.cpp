@@ -59,9 +59,9 @@
 #include <algorithm>
 
 #include "common/json_text.h"
-#include "core/fit/shape_target.h"
 #include "common/run_command.h"
 #include "common/shapes.h"
+#include "core/fit/shape_target.h"
 #include "io/obj_reader.h"
 #include "io/temp_dir.h"
 
@@ -1207,6 +1207,24 @@ TEST(MeshPath, SliverAlongAChainIsFlippedOpen) {
   std::printf("  fandisk at 1050: feature angle error %.3g deg\n", angle_max);
 }
 
+/// `cage`'s exact limit (its `faces` quads) sampled n x n per quad by `subd2nurbs limit` (the
+/// points at (i / n, j / n), borders included) and triangulated, two triangles per grid cell.
+Triangles limit_grid_mesh(const std::string& cage, int faces, int n, TempDir& dir) {
+  std::vector<double> ts;
+  for (int i = 0; i <= n; ++i) ts.push_back(double(i) / n);
+  Triangles mesh;
+  mesh.points = limit_points(cage, faces, ts, dir);
+  EXPECT_EQ(mesh.points.size(), size_t(faces) * (n + 1) * (n + 1));
+  for (int f = 0; f < faces; ++f)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const int a = f * (n + 1) * (n + 1) + i * (n + 1) + j, b = a + n + 1;
+        mesh.triangles.push_back({a, b, b + 1});
+        mesh.triangles.push_back({a, b + 1, a + 1});
+      }
+  return mesh;
+}
+
 /// A scan of a smooth surface is remeshed without folds: bob's exact limit surface (Keenan
 /// Crane's cage, tests/data/mesh, 334 quads, genus 1), sampled 10 x 10 per quad by `subd2nurbs
 /// limit` and triangulated, is remeshed at 668 quads (twice the cage) and fitted. The oracle: the
@@ -1225,19 +1243,9 @@ TEST(MeshPath, SliverAlongAChainIsFlippedOpen) {
 TEST(MeshPath, LimitScanDoesNotFold) {
   TempDir dir;
   const std::string cage = std::string(SUBD2NURBS_TEST_DATA_DIR) + "/mesh/bob_controlmesh.obj";
-  const int faces = read_obj(cage).input.num_faces(), n = 10;
-  std::vector<double> ts;
-  for (int i = 0; i <= n; ++i) ts.push_back(double(i) / n);
-  Triangles scan;
-  scan.points = limit_points(cage, faces, ts, dir);
-  ASSERT_EQ(scan.points.size(), size_t(faces) * (n + 1) * (n + 1));
-  for (int f = 0; f < faces; ++f)
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) {
-        const int a = f * (n + 1) * (n + 1) + i * (n + 1) + j, b = a + n + 1;
-        scan.triangles.push_back({a, b, b + 1});
-        scan.triangles.push_back({a, b + 1, a + 1});
-      }
+  const int faces = read_obj(cage).input.num_faces();
+  const Triangles scan = limit_grid_mesh(cage, faces, 10, dir);
+  ASSERT_FALSE(HasFailure());
   write_stl(scan, dir.file("scan.stl"));
   const Converted c = convert(dir.file("scan.stl"), dir, "--input mesh --target-faces 668 -q");
   ASSERT_EQ(c.run.exit_code, 0) << c.run.err;
@@ -1248,21 +1256,11 @@ TEST(MeshPath, LimitScanDoesNotFold) {
   EXPECT_LE(to_scan, 1e-3);
   EXPECT_LE(from_scan, 1e-3);
   // The exact limit, triangulated 40 x 40 per quad, and the fitted cage's limit at 5 x 5 points per quad.
-  const int m = 40;
-  std::vector<double> fine_ts;
-  for (int i = 0; i <= m; ++i) fine_ts.push_back(double(i) / m);
-  std::vector<Point3> fine;
-  for (const gp_Pnt& p : limit_points(cage, faces, fine_ts, dir)) fine.push_back({p.X(), p.Y(), p.Z()});
-  ASSERT_EQ(fine.size(), size_t(faces) * (m + 1) * (m + 1));
-  std::vector<std::array<int, 3>> fine_triangles;
-  for (int f = 0; f < faces; ++f)
-    for (int i = 0; i < m; ++i)
-      for (int j = 0; j < m; ++j) {
-        const int a = f * (m + 1) * (m + 1) + i * (m + 1) + j, b = a + m + 1;
-        fine_triangles.push_back({a, b, b + 1});
-        fine_triangles.push_back({a, b + 1, a + 1});
-      }
-  const subd2nurbs::ClosestPointTree exact(fine, fine_triangles);
+  const Triangles fine = limit_grid_mesh(cage, faces, 40, dir);
+  ASSERT_FALSE(HasFailure());
+  std::vector<Point3> fine_points;
+  for (const gp_Pnt& p : fine.points) fine_points.push_back({p.X(), p.Y(), p.Z()});
+  const subd2nurbs::ClosestPointTree exact(fine_points, fine.triangles);
   Bnd_Box box;
   for (const gp_Pnt& p : scan.points) box.Add(p);
   const double diagonal = std::sqrt(box.SquareExtent());
