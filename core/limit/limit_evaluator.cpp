@@ -798,6 +798,19 @@ struct LimitEvaluator::DescentCache {
 
 namespace {
 
+/// A sample at an extraordinary vertex itself (eval_prepared's `singular`): the exact position
+/// and normal (from the edge-ray tangents), curvature undefined.
+LimitSample at_extraordinary_vertex(LimitSample out) {
+  const Point3 n = {out.du[1] * out.dv[2] - out.du[2] * out.dv[1], out.du[2] * out.dv[0] - out.du[0] * out.dv[2],
+                    out.du[0] * out.dv[1] - out.du[1] * out.dv[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (int c = 0; c < 3; ++c) out.normal[c] = len > 0 ? n[c] / len : 0.0;
+  out.duu = out.duv = out.dvv = Point3{};
+  out.k1 = out.k2 = out.mean = out.gauss = std::numeric_limits<double>::quiet_NaN();
+  out.exact_derivatives = false;
+  return out;
+}
+
 using DescentCache = LimitEvaluator::DescentCache;
 
 /// The general driver: face f of level L, local face coordinates (s, t) = A (u, v) + c.
@@ -821,18 +834,7 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
       const Derivs d = eval_prepared(pr, s, t, &singular);
       LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? A.then(corner_frame(pr.corner)) : A);
       if (method) *method = depth == 0 ? pr.method : LimitMethod::Refined;
-      if (singular) {
-        // Exact position and normal; curvature undefined.
-        const Point3 n = {out.du[1] * out.dv[2] - out.du[2] * out.dv[1],
-                          out.du[2] * out.dv[0] - out.du[0] * out.dv[2],
-                          out.du[0] * out.dv[1] - out.du[1] * out.dv[0]};
-        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        for (int c = 0; c < 3; ++c) out.normal[c] = len > 0 ? n[c] / len : 0.0;
-        out.duu = out.duv = out.dvv = Point3{};
-        out.k1 = out.k2 = out.mean = out.gauss = std::numeric_limits<double>::quiet_NaN();
-        out.exact_derivatives = false;
-        return out;
-      }
+      if (singular) return at_extraordinary_vertex(out);
       finish_sample(out);
       if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
       return out;
@@ -1129,13 +1131,15 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
     if (cp.method != LimitMethod::Refined) {
       bool singular = false;
       const Derivs d = eval_prepared(cp, s, t, &singular);
-      if (!singular) {
-        LimitSample out = to_ptex(d, cp.method == LimitMethod::Stam ? A.then(corner_frame(cp.corner)) : A);
-        finish_sample(out);
-        if (cp.method == LimitMethod::Stam) stam_normal_fallback(cp, out);
-        if (method) *method = LimitMethod::Refined;
-        return out;
-      }
+      LimitSample out = to_ptex(d, cp.method == LimitMethod::Stam ? A.then(corner_frame(cp.corner)) : A);
+      if (method) *method = LimitMethod::Refined;
+      // At the child's extraordinary vertex: what the descent below would return (its first
+      // level finds the same Stam corner), without refining the face's neighbourhood again per
+      // point (around a 1000-gon that was O(n) per corner sample, O(n^2) per face ring).
+      if (singular) return at_extraordinary_vertex(out);
+      finish_sample(out);
+      if (cp.method == LimitMethod::Stam) stam_normal_fallback(cp, out);
+      return out;
     }
     if (fc.level1) {
       // Key: a leading 1 bit, the cache slot, 10 bits for the child (an n-gon has n), then 2
@@ -1154,13 +1158,14 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
       const Prepared& pr = cache_[c].prepared;
       bool singular = false;
       const Derivs d = eval_prepared(pr, u, v, &singular);
-      if (!singular) {
-        LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? corner_frame(pr.corner) : Affine{});
-        finish_sample(out);
-        if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
-        if (method) *method = pr.method;
-        return out;
-      }
+      LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? corner_frame(pr.corner) : Affine{});
+      if (method) *method = pr.method;
+      // At the extraordinary vertex: what eval_general would return after preparing the face
+      // again (an O(n^2) product at a valence-n vertex, per point).
+      if (singular) return at_extraordinary_vertex(out);
+      finish_sample(out);
+      if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
+      return out;
     }
     return eval_general(base_, positions_, f, u, v, Affine{}, method);
   }

@@ -1,5 +1,7 @@
 #include "core/limit/stam_eigen.h"
 
+#include <Eigen/Sparse>
+
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -164,26 +166,46 @@ std::shared_ptr<const StamEigen> build(int n) {
       }
     }
   }
+  // S has at most 9 entries per row. Above kDenseValence its products are taken as a sparse
+  // matrix's and V is inverted block by block, so that the decomposition is O(K^2) (dense
+  // products and a dense inverse are O(K^3): 40 s at valence 1000). Up to it the dense
+  // computation is kept: the same to rounding, and bit for bit what every conversion made so
+  // far (the mesh path's fit amplifies a change in the last bit into another cage).
+  const bool dense = n <= kDenseValence;
+  const Eigen::SparseMatrix<double> S_sparse = E.S.sparseView();
   E.V = Eigen::MatrixXd::Zero(K, K);
+  E.Vinv = Eigen::MatrixXd::Zero(K, K);
   E.lambda = Eigen::VectorXd::Zero(K);
   int col = 0;
   for (const Eigen::MatrixXd& Q0 : bases) {
     // Orthonormal columns (the Fourier vectors of one block are orthogonal already).
     Eigen::MatrixXd Q = Q0;
     for (int c = 0; c < Q.cols(); ++c) Q.col(c).normalize();
-    const Eigen::MatrixXd B = Q.transpose() * E.S * Q;
-    const double inv_res = (E.S * Q - Q * B).cwiseAbs().maxCoeff();
+    const Eigen::MatrixXd SQ = dense ? Eigen::MatrixXd(E.S * Q) : Eigen::MatrixXd(S_sparse * Q);
+    const Eigen::MatrixXd B =
+        dense ? Eigen::MatrixXd(Q.transpose() * E.S * Q) : Eigen::MatrixXd(Q.transpose() * SQ);
+    const double inv_res = (SQ - Q * B).cwiseAbs().maxCoeff();
     if (inv_res > 1e-12) throw std::runtime_error("stam_eigen: Fourier subspace not invariant");
     Eigen::EigenSolver<Eigen::MatrixXd> es(B);
     if (es.info() != Eigen::Success) throw std::runtime_error("stam_eigen: block eigen-solver failed");
+    Eigen::MatrixXd Y(B.rows(), B.cols());  // the block's unit eigenvectors in Q's coordinates
     for (int c = 0; c < B.cols(); ++c) {
       if (std::abs(es.eigenvalues()(c).imag()) > 1e-12)
         throw std::runtime_error("stam_eigen: complex eigenvalue");
-      E.lambda(col) = es.eigenvalues()(c).real();
+      E.lambda(col + c) = es.eigenvalues()(c).real();
       Eigen::VectorXd x = Q * es.eigenvectors().col(c).real();
-      E.V.col(col) = x / x.norm();
-      ++col;
+      const double length = x.norm();
+      E.V.col(col + c) = x / length;
+      Y.col(c) = es.eigenvectors().col(c).real() / length;
     }
+    if (!dense) {
+      // The blocks' Q are orthonormal to each other and together span R^K, so V = [Q_b Y_b]
+      // has the inverse whose rows of block b are Y_b^-1 Q_b^T.
+      Eigen::FullPivLU<Eigen::MatrixXd> lu(Y);
+      if (!lu.isInvertible()) throw std::runtime_error("stam_eigen: eigenvectors are dependent");
+      E.Vinv.middleRows(col, Y.cols()) = lu.inverse() * Q.transpose();
+    }
+    col += static_cast<int>(Y.cols());
   }
   if (col != K) throw std::logic_error("stam_eigen: subspace dimensions do not add up");
   // Dominant eigenvalue 1 first (the constant vector) so that callers can rely on it.
@@ -193,14 +215,17 @@ std::shared_ptr<const StamEigen> build(int n) {
   if (one != 0) {
     std::swap(E.lambda(0), E.lambda(one));
     E.V.col(0).swap(E.V.col(one));
+    E.Vinv.row(0).swap(E.Vinv.row(one));
   }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(E.V);
-  if (!lu.isInvertible()) throw std::runtime_error("stam_eigen: eigenvectors are dependent");
-  E.Vinv = lu.inverse();
-  E.eigen_residual = (E.S * E.V - E.V * E.lambda.asDiagonal()).cwiseAbs().maxCoeff();
+  if (dense) {
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(E.V);
+    if (!lu.isInvertible()) throw std::runtime_error("stam_eigen: eigenvectors are dependent");
+    E.Vinv = lu.inverse();
+  }
+  E.eigen_residual = (S_sparse * E.V - E.V * E.lambda.asDiagonal()).cwiseAbs().maxCoeff();
   if (E.eigen_residual > 1e-12) throw std::runtime_error("stam_eigen: residual check failed");
   E.W = S11 * E.V;
-  E.limit_weights = ring_limit_weights(n, -1);
+  E.limit_weights = ring_limit_weights(n, -1);  // in closed form above kDenseValence
 
   // Tiles of the next level: 16 points each, rows over the level-0 configuration.
   const int tile_origin[3][2] = {{0, -1}, {0, 0}, {-1, 0}};  // k = 1, 2, 3: grid of P[0][0]

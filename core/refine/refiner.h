@@ -106,7 +106,14 @@ StencilTable limit_stencils(const SubdivLevel& level);
 
 /// Limit weights of an interior vertex of valence n surrounded by quads, ordered
 /// (v, e_0..e_{n-1}, d_0..d_{n-1}) in fan order, where edge `sharp_edge` (index into e, or -1)
-/// is infinitely sharp: the normalised left eigenvector of the 1-ring subdivision matrix.
+/// is infinitely sharp: the normalised left eigenvector of the 1-ring subdivision matrix
+/// (solved for; in closed form for a smooth vertex, sharp_edge -1, above kDenseValence).
 std::vector<double> ring_limit_weights(int n, int sharp_edge);
+
+/// Up to this valence the eigen-structure at an extraordinary vertex (ring_limit_weights, the
+/// Stam decomposition of core/limit/stam_eigen.h) is computed with dense O(n^3) solves and
+/// products; above it in O(n^2) (closed forms, sparse products, block-wise inverses), the same
+/// to rounding.
+constexpr int kDenseValence = 64;
 
 }  // namespace subd2nurbs

@@ -91,7 +91,7 @@ TEST(LimitConvergence, ExactAtRefinedVerticesAndTheRightRatesAtValence3To12) {
 // coarse-to-fine on one face and fine-to-coarse on the other, on two evaluators.
 TEST(LimitConvergence, ExactAtRefinedVerticesAtHighValenceInAnyOrder) {
   const int L = 4;
-  for (int n : {17, 40}) {
+  for (int n : {17, 40, kDenseValence + 3}) {  // the last above the dense eigen-structure's valences
     SCOPED_TRACE("valence " + std::to_string(n));
     const MeshInput in = ev_disc(n, 300u + n);
     const SubdivLevel base = SubdivLevel::from_input(in);
@@ -119,4 +119,50 @@ TEST(LimitConvergence, ExactAtRefinedVerticesAtHighValenceInAnyOrder) {
       EXPECT_LT(worst, 1e-12);
     }
   }
+}
+
+// The corners of quads beside an n-gon (a prism's sides; each corner a valence-3 vertex whose
+// n-gon makes it irregular at the base level, a Stam corner one level down): the limit at a
+// corner is that vertex's limit position (the exact identity above, level 1), and it is taken
+// from the Stam corner of the face's kept children, not by the fallback that refines the
+// n-gon's neighbourhood some 20 levels per point (a 1000-gon prism's report took 12 minutes).
+TEST(LimitConvergence, CornersBesideAnNgonAreTheLimitPositionsWithoutTheFallback) {
+  const int n = 12;
+  MeshInput in;
+  for (int z = 0; z < 2; ++z)
+    for (int k = 0; k < n; ++k) {
+      const double a = 2 * std::acos(-1.0) * k / n;
+      in.positions.push_back({std::cos(a) * (1 + 0.1 * (k % 3)), std::sin(a), z * (1.0 + 0.05 * k)});
+    }
+  in.face_sizes.push_back(n);  // bottom, facing down
+  for (int k = n - 1; k >= 0; --k) in.face_indices.push_back(k);
+  in.face_sizes.push_back(n);  // top
+  for (int k = 0; k < n; ++k) in.face_indices.push_back(n + k);
+  for (int k = 0; k < n; ++k) {
+    in.face_sizes.push_back(4);
+    for (int q : {k, (k + 1) % n, n + (k + 1) % n, n + k}) in.face_indices.push_back(q);
+  }
+  const SubdivLevel base = SubdivLevel::from_input(in);
+  const std::vector<Point3> pos = positions_of(in);
+  const double diag = diagonal(pos);
+  const LimitEvaluator ev(base, pos);
+  const Refinement r = refine_uniform(base, 1);
+  const std::vector<std::vector<Point3>> lp = r.positions(pos);
+  std::vector<Point3> limit_1;
+  limit_stencils(r.levels[1]).apply(lp[1], limit_1);
+  int corners = 0;
+  for (int f = 2; f < 2 + n; ++f)
+    for (int i : {0, 2})
+      for (int j : {0, 2}) {
+        LimitMethod method;
+        const LimitSample s = ev.evaluate(f, 0, i / 2.0, j / 2.0, &method);
+        EXPECT_LT(dist(s.p, limit_1[vertex_at(r, f, 1, i, j)]) / diag, 1e-13) << "face " << f;
+        EXPECT_EQ(method, LimitMethod::Refined) << "face " << f << " corner " << i << j;
+        // The normal there is the limit of the normals inside the face (G1 at the vertex).
+        const double du = i == 0 ? 1e-7 : 1 - 1e-7, dv = j == 0 ? 1e-7 : 1 - 1e-7;
+        const LimitSample inside = ev.evaluate(f, 0, du, dv);
+        EXPECT_LT(dist(s.normal, inside.normal), 1e-3) << "face " << f;
+        ++corners;
+      }
+  EXPECT_EQ(corners, 4 * n);
 }

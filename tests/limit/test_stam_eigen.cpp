@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/limit/stam_eigen.h"
+#include "core/refine/refiner.h"
 
 using namespace subd2nurbs;
 
@@ -33,8 +34,17 @@ std::vector<double> predicted_spectrum(int n) {
 
 }  // namespace
 
+/// Valences 3 .. last, and beyond kDenseValence (core/refine/refiner.h), where the
+/// decomposition takes its O(n^2) path (odd and even: an even n has the one-vector block n/2).
+std::vector<int> valences_up_to(int last) {
+  std::vector<int> out;
+  for (int n = 3; n <= last; ++n) out.push_back(n);
+  for (int n : {kDenseValence + 1, kDenseValence + 2, 200}) out.push_back(n);
+  return out;
+}
+
 TEST(StamEigen, SpectrumMatchesTheFourierBlocks) {
-  for (int n = 3; n <= 16; ++n) {
+  for (int n : valences_up_to(16)) {
     SCOPED_TRACE(n);
     const auto e = stam_eigen(n);
     ASSERT_EQ(e->K, 2 * n + 1);
@@ -56,7 +66,7 @@ TEST(StamEigen, SpectrumMatchesTheFourierBlocks) {
 }
 
 TEST(StamEigen, OuterBlockAndAffineRows) {
-  for (int n = 3; n <= 12; ++n) {
+  for (int n : valences_up_to(12)) {
     SCOPED_TRACE(n);
     const auto e = stam_eigen(n);
     // S12 has eigenvalues 1/8, 1/8, 1/16, 1/16, 1/32, 1/32, 1/64 (MATH.md 7.2).
