@@ -798,16 +798,25 @@ struct LimitEvaluator::DescentCache {
 
 namespace {
 
-/// A sample at an extraordinary vertex itself (eval_prepared's `singular`): the exact position
-/// and normal (from the edge-ray tangents), curvature undefined.
-LimitSample at_extraordinary_vertex(LimitSample out) {
-  const Point3 n = {out.du[1] * out.dv[2] - out.du[2] * out.dv[1], out.du[2] * out.dv[0] - out.du[0] * out.dv[2],
-                    out.du[0] * out.dv[1] - out.du[1] * out.dv[0]};
-  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-  for (int c = 0; c < 3; ++c) out.normal[c] = len > 0 ? n[c] / len : 0.0;
-  out.duu = out.duv = out.dvv = Point3{};
-  out.k1 = out.k2 = out.mean = out.gauss = std::numeric_limits<double>::quiet_NaN();
-  out.exact_derivatives = false;
+/// The sample of a prepared face (not Refined) at local (s, t), with derivatives with respect to
+/// the parameters A maps to (s, t). At an extraordinary vertex itself (eval_prepared's
+/// `singular`): the exact position and normal (from the edge-ray tangents), curvature undefined.
+LimitSample sample_prepared(const Prepared& pr, double s, double t, const Affine& A) {
+  bool singular = false;
+  const Derivs d = eval_prepared(pr, s, t, &singular);
+  LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? A.then(corner_frame(pr.corner)) : A);
+  if (singular) {
+    const Point3 n = {out.du[1] * out.dv[2] - out.du[2] * out.dv[1], out.du[2] * out.dv[0] - out.du[0] * out.dv[2],
+                      out.du[0] * out.dv[1] - out.du[1] * out.dv[0]};
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int c = 0; c < 3; ++c) out.normal[c] = len > 0 ? n[c] / len : 0.0;
+    out.duu = out.duv = out.dvv = Point3{};
+    out.k1 = out.k2 = out.mean = out.gauss = std::numeric_limits<double>::quiet_NaN();
+    out.exact_derivatives = false;
+    return out;
+  }
+  finish_sample(out);
+  if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
   return out;
 }
 
@@ -830,14 +839,8 @@ LimitSample eval_general(const SubdivLevel& L0, const std::vector<Point3>& P0, i
     if (!cached) fresh = prepare(*L, *P, f);
     const Prepared& pr = cached ? cached->children[f - cached->first_child] : fresh;
     if (pr.method != LimitMethod::Refined) {
-      bool singular = false;
-      const Derivs d = eval_prepared(pr, s, t, &singular);
-      LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? A.then(corner_frame(pr.corner)) : A);
       if (method) *method = depth == 0 ? pr.method : LimitMethod::Refined;
-      if (singular) return at_extraordinary_vertex(out);
-      finish_sample(out);
-      if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
-      return out;
+      return sample_prepared(pr, s, t, A);
     }
     const PolyMesh& m = L->mesh;
     // Quad: which corner's child holds (s, t)? (n-gons only occur at the base, handled by the caller.)
@@ -1129,17 +1132,11 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
     }
     const Prepared& cp = fc.children[k];
     if (cp.method != LimitMethod::Refined) {
-      bool singular = false;
-      const Derivs d = eval_prepared(cp, s, t, &singular);
-      LimitSample out = to_ptex(d, cp.method == LimitMethod::Stam ? A.then(corner_frame(cp.corner)) : A);
-      if (method) *method = LimitMethod::Refined;
-      // At the child's extraordinary vertex: what the descent below would return (its first
+      // Also at the child's extraordinary vertex: what the descent below would return (its first
       // level finds the same Stam corner), without refining the face's neighbourhood again per
       // point (around a 1000-gon that was O(n) per corner sample, O(n^2) per face ring).
-      if (singular) return at_extraordinary_vertex(out);
-      finish_sample(out);
-      if (cp.method == LimitMethod::Stam) stam_normal_fallback(cp, out);
-      return out;
+      if (method) *method = LimitMethod::Refined;
+      return sample_prepared(cp, s, t, A);
     }
     if (fc.level1) {
       // Key: a leading 1 bit, the cache slot, 10 bits for the child (an n-gon has n), then 2
@@ -1155,17 +1152,10 @@ LimitSample LimitEvaluator::evaluate(int f, int sub, double u, double v, LimitMe
   if (size == 4) {
     const int c = cache_index;
     if (c >= 0 && cache_[c].prepared.method != LimitMethod::Refined) {
-      const Prepared& pr = cache_[c].prepared;
-      bool singular = false;
-      const Derivs d = eval_prepared(pr, u, v, &singular);
-      LimitSample out = to_ptex(d, pr.method == LimitMethod::Stam ? corner_frame(pr.corner) : Affine{});
-      if (method) *method = pr.method;
-      // At the extraordinary vertex: what eval_general would return after preparing the face
-      // again (an O(n^2) product at a valence-n vertex, per point).
-      if (singular) return at_extraordinary_vertex(out);
-      finish_sample(out);
-      if (pr.method == LimitMethod::Stam) stam_normal_fallback(pr, out);
-      return out;
+      // Also at the extraordinary vertex: what eval_general would return after preparing the
+      // face again (an O(n^2) product at a valence-n vertex, per point).
+      if (method) *method = cache_[c].prepared.method;
+      return sample_prepared(cache_[c].prepared, u, v, Affine{});
     }
     return eval_general(base_, positions_, f, u, v, Affine{}, method);
   }

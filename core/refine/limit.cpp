@@ -13,20 +13,33 @@ bool has_closed_form_limits(const SubdivLevel& level) {
   return level.mesh.all_quads() && level.max_semi_sharpness() == 0.0;
 }
 
+/// The limit mask of a smooth interior vertex of valence n >= 3 between quads:
+/// p = (n^2 v + 4 sum e_r + sum d_r) / (n (n + 5)), e_r its edge neighbours, d_r the corners
+/// opposite it.
+struct SmoothLimitMask {
+  double vertex, edge, diagonal;
+  explicit SmoothLimitMask(int valence) {
+    const double n = valence;
+    diagonal = 1.0 / (n * (n + 5.0));
+    edge = 4.0 * diagonal;
+    vertex = 1.0 - n * (edge + diagonal);
+  }
+};
+
 }  // namespace
 
 std::vector<double> ring_limit_weights(int n, int sharp) {
   const int N = 2 * n + 1;
   if (sharp < 0 && n > kDenseValence) {
-    // A smooth vertex: the closed form (n^2 v + 4 sum e_r + sum d_r) / (n (n + 5)), the left
-    // eigenvector solved for below to rounding (the solve is O(n^3): 7 s at valence 1000; up to
-    // kDenseValence it is kept, bit for bit what every conversion made so far).
-    const double nn = n, wd = 1.0 / (nn * (nn + 5.0)), we = 4.0 * wd;
+    // A smooth vertex: the closed form (SmoothLimitMask), the left eigenvector solved for below
+    // to rounding (the solve is O(n^3): 7 s at valence 1000; up to kDenseValence it is kept,
+    // bit for bit what every conversion made so far).
+    const SmoothLimitMask w(n);
     std::vector<double> l(N);
-    l[0] = 1.0 - nn * (we + wd);
+    l[0] = w.vertex;
     for (int r = 0; r < n; ++r) {
-      l[1 + r] = we;
-      l[1 + n + r] = wd;
+      l[1 + r] = w.edge;
+      l[1 + n + r] = w.diagonal;
     }
     return l;
   }
@@ -99,14 +112,12 @@ StencilTable closed_form_limit_stencils(const SubdivLevel& level) {
     switch (rule) {
       case VertexRule::Dart:
       case VertexRule::Smooth: {
-        // p = (n^2 v + 4 sum e_r + sum d_r) / (n (n + 5)), d_r opposite v in each quad.
-        const double n = nf;
-        const double wf = 1.0 / (n * (n + 5.0)), we = 4.0 * wf;
-        add(v, 1.0 - n * (we + wf));
+        const SmoothLimitMask w(nf);  // d_r opposite v in each quad
+        add(v, w.vertex);
         const int* c = m.vertex_corners(v);
         for (int i = 0; i < nf; ++i) {
-          add(m.to_vertex(c[i]), we);
-          add(m.corner_vertex(m.next(m.next(c[i]))), wf);
+          add(m.to_vertex(c[i]), w.edge);
+          add(m.corner_vertex(m.next(m.next(c[i]))), w.diagonal);
         }
         break;
       }

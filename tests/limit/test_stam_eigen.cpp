@@ -32,8 +32,6 @@ std::vector<double> predicted_spectrum(int n) {
   return ev;
 }
 
-}  // namespace
-
 /// Valences 3 .. last, and beyond kDenseValence (core/refine/refiner.h), where the
 /// decomposition takes its O(n^2) path (odd and even: an even n has the one-vector block n/2).
 std::vector<int> valences_up_to(int last) {
@@ -42,6 +40,8 @@ std::vector<int> valences_up_to(int last) {
   for (int n : {kDenseValence + 1, kDenseValence + 2, 200}) out.push_back(n);
   return out;
 }
+
+}  // namespace
 
 TEST(StamEigen, SpectrumMatchesTheFourierBlocks) {
   for (int n : valences_up_to(16)) {
