@@ -15,6 +15,8 @@ namespace subd2nurbs {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 using Vec = Point3;
 
 Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
@@ -279,12 +281,44 @@ struct Node {
   }
 };
 
+/// A node's hub (-1: none, or several) and the angular range of its triangles around it.
+struct NodeArc {
+  int hub = -1;
+  float lo = 0, hi = 0;
+};
+
 struct Bvh {
   std::vector<Node> nodes;
   std::vector<int> order;
+  std::vector<NodeArc> arcs;  ///< per node, when there are hubs
 };
 
-Bvh build_bvh(const Tess& t) {
+/// Hub ordering (SelfIntersectionOptions::hub_valence): per triangle the hub whose faces it
+/// belongs to and its angular range [lo, hi] around it (-1: none; all three empty when there is
+/// no hub); per hub the angular width below which a group of its triangles is split in space,
+/// not by angle.
+struct HubArcs {
+  std::vector<int> hub;
+  std::vector<float> lo, hi;  ///< rounded outwards: they hold the exact ranges
+  std::vector<double> split_width;
+};
+
+/// Two angular ranges around one hub, [a0, a1] and [b0, b1] (a0, b0 in [0, 2 pi)), that are
+/// apart on the circle.
+bool arcs_apart(double a0, double a1, double b0, double b1) {
+  constexpr double kTwoPi = 6.283185307179586, kGap = 1e-9;
+  if ((a1 - a0) + (b1 - b0) >= kTwoPi - 2 * kGap) return false;
+  for (int k = -1; k <= 1; ++k)  // widths below 2 pi: no other shift can overlap
+    if (b0 + k * kTwoPi <= a1 + kGap && a0 <= b1 + k * kTwoPi + kGap) return false;
+  return true;
+}
+
+/// A bounding volume hierarchy over the triangles: median splits along the longest axis of the
+/// boxes' centres, leaves of at most 4 triangles. With hubs, a node holding triangles of several
+/// hubs (or of none) is first split between them, and a node of one hub's triangles is split by
+/// angle around it while wider than the hub's split_width: such nodes are compared only when
+/// their angular ranges meet. Without hubs the tree is the spatial one alone.
+Bvh build_bvh(const Tess& t, const HubArcs& arcs) {
   Bvh bvh;
   const int n = static_cast<int>(t.tris.size());
   bvh.order.resize(n);
@@ -301,24 +335,60 @@ Bvh build_bvh(const Tess& t) {
   std::vector<Item> stack;
   bvh.nodes.emplace_back();
   stack.push_back({0, 0, n});
+  if (!arcs.hub.empty()) bvh.arcs.reserve(bvh.nodes.capacity());
+  auto middle = [&](int i) { return 0.5 * (double(arcs.lo[i]) + double(arcs.hi[i])); };
+  auto hub_of = [&](int i) { return arcs.hub.empty() ? -1 : arcs.hub[i]; };
   while (!stack.empty()) {
     const Item it = stack.back();
     stack.pop_back();
     Box box, cbox;
+    const int hub0 = hub_of(bvh.order[it.begin]);
+    bool one_hub = true;
+    float lo = 1e30f, hi = -1e30f;
+    double mid_lo = 1e300, mid_hi = -1e300;
     for (int k = it.begin; k < it.end; ++k) {
-      box.add(t.tri_box[bvh.order[k]]);
-      cbox.add(centre[bvh.order[k]]);
+      const int i = bvh.order[k];
+      box.add(t.tri_box[i]);
+      cbox.add(centre[i]);
+      if (hub_of(i) != hub0) one_hub = false;
+      if (hub_of(i) >= 0) {
+        lo = std::min(lo, arcs.lo[i]);
+        hi = std::max(hi, arcs.hi[i]);
+        mid_lo = std::min(mid_lo, middle(i));
+        mid_hi = std::max(mid_hi, middle(i));
+      }
     }
-    bvh.nodes[it.node].box = box;
-    bvh.nodes[it.node].begin = it.begin;
-    bvh.nodes[it.node].end = it.end;
+    Node& node = bvh.nodes[it.node];
+    node.box = box;
+    node.begin = it.begin;
+    node.end = it.end;
+    if (!arcs.hub.empty()) {
+      bvh.arcs.resize(bvh.nodes.size());
+      if (one_hub && hub0 >= 0) bvh.arcs[it.node] = {hub0, lo, hi};
+    }
     if (it.end - it.begin <= 4) continue;
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-      if (cbox.hi[k] - cbox.lo[k] > cbox.hi[axis] - cbox.lo[axis]) axis = k;
-    const int mid = (it.begin + it.end) / 2;
-    std::nth_element(bvh.order.begin() + it.begin, bvh.order.begin() + mid, bvh.order.begin() + it.end,
-                     [&](int a, int b) { return centre[a][axis] < centre[b][axis]; });
+    auto first = bvh.order.begin() + it.begin, last = bvh.order.begin() + it.end;
+    int mid = (it.begin + it.end) / 2;
+    if (!one_hub) {
+      // Between hubs: grouped by hub (none first), cut at the group boundary nearest the middle.
+      std::sort(first, last, [&](int a, int b) { return arcs.hub[a] != arcs.hub[b] ? arcs.hub[a] < arcs.hub[b] : a < b; });
+      int best = -1;
+      for (int k = it.begin + 1; k < it.end; ++k)
+        if (arcs.hub[bvh.order[k]] != arcs.hub[bvh.order[k - 1]] &&
+            (best < 0 || std::abs(k - mid) < std::abs(best - mid)))
+          best = k;
+      mid = best;
+    } else if (hub0 >= 0 && mid_hi - mid_lo > arcs.split_width[hub0]) {
+      std::nth_element(first, bvh.order.begin() + mid, last, [&](int a, int b) {
+        return middle(a) != middle(b) ? middle(a) < middle(b) : a < b;
+      });
+    } else {
+      int axis = 0;
+      for (int k = 1; k < 3; ++k)
+        if (cbox.hi[k] - cbox.lo[k] > cbox.hi[axis] - cbox.lo[axis]) axis = k;
+      std::nth_element(first, bvh.order.begin() + mid, last,
+                       [&](int a, int b) { return centre[a][axis] < centre[b][axis]; });
+    }
     const int l = static_cast<int>(bvh.nodes.size());
     bvh.nodes.emplace_back();
     bvh.nodes.emplace_back();
@@ -517,11 +587,13 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
   });
   Tess t;
   std::vector<int> face_vertex_base(nf);
+  std::vector<std::array<int, 4>> face_corner_vertex(nf);  ///< the grid vertex at each corner of the domain
   for (int f = 0; f < nf; ++f) {
     const FaceTess& a = ft[f];
     const int base = static_cast<int>(t.pos.size());
     face_vertex_base[f] = base;
     const int nu = static_cast<int>(a.us.size()), nv = static_cast<int>(a.vs.size());
+    face_corner_vertex[f] = {base, base + (nu - 1) * nv, base + (nu - 1) * nv + nv - 1, base + nv - 1};
     for (int i = 0; i < nu; ++i)
       for (int j = 0; j < nv; ++j) {
         t.pos.push_back(a.pts[static_cast<size_t>(i) * nv + j]);
@@ -572,7 +644,93 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
     }
     t.tri_box[i] = b;
   }
-  const Bvh bvh = build_bvh(t);
+  // Hubs (SelfIntersectionOptions::hub_valence): a corner of more faces than that, its normal
+  // the sum of the unit normals of the triangles there. A triangle of a face at a hub gets its
+  // angular range around the hub, seen along that normal, when its projection misses the hub
+  // (its vertices, other than one at the hub, within a half-turn): two triangles whose ranges are
+  // apart have projections that are apart and cannot meet. A vertex welded to the hub counts as
+  // at it, so such ranges are exact up to the weld (1e-9 of the model size), where two faces at
+  // the hub touch anyway.
+  HubArcs arcs;  // empty without hubs
+  if (options.hub_valence > 0) {
+    struct Hub {
+      Vec p{}, n{0, 0, 0}, e1{}, e2{};
+    };
+    std::vector<Hub> hubs;
+    std::vector<int> hub_of(ps.corners.size(), -1), face_hub(nf, -1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 4 && face_hub[f] < 0; ++k) {
+        const int c = ps.patches[f].corners[k];
+        if (c < 0 || corner_faces[c] <= options.hub_valence) continue;
+        if (hub_of[c] < 0) {
+          hub_of[c] = static_cast<int>(hubs.size());
+          Hub hub;
+          hub.p = t.pos[face_corner_vertex[f][k]];
+          hubs.push_back(hub);
+          arcs.split_width.push_back(4 * kPi / corner_faces[c]);  // two faces' share of the turn
+        }
+        face_hub[f] = hub_of[c];
+      }
+    const double at_hub = 1e-9 * size;
+    for (const Tri& tri : t.tris) {
+      const int hb = face_hub[tri.face];
+      if (hb < 0) continue;
+      bool touches = false;
+      for (int k = 0; k < 3; ++k) touches = touches || norm(sub(t.pos[tri.g[k]], hubs[hb].p)) <= at_hub;
+      if (!touches) continue;
+      const Vec n = cross(sub(t.pos[tri.g[1]], t.pos[tri.g[0]]), sub(t.pos[tri.g[2]], t.pos[tri.g[0]]));
+      if (const double l = norm(n); l > 0) hubs[hb].n = add(hubs[hb].n, scale(n, 1 / l));
+    }
+    for (Hub& hub : hubs) {
+      const double l = norm(hub.n);
+      if (!(l > 0)) {  // no usable normal: its triangles stay unordered
+        hub.n = {0, 0, 0};
+        continue;
+      }
+      hub.n = scale(hub.n, 1 / l);
+      const int k = std::abs(hub.n[0]) < 0.6 ? 0 : std::abs(hub.n[1]) < 0.6 ? 1 : 2;
+      Vec axis{0, 0, 0};
+      axis[k] = 1;
+      hub.e1 = cross(hub.n, axis);
+      hub.e1 = scale(hub.e1, 1 / norm(hub.e1));
+      hub.e2 = cross(hub.n, hub.e1);
+    }
+    if (!hubs.empty()) {
+      arcs.hub.assign(t.tris.size(), -1);
+      arcs.lo.assign(t.tris.size(), 0.0f);
+      arcs.hi.assign(t.tris.size(), 0.0f);
+    }
+    for (size_t i = 0; i < t.tris.size() && !hubs.empty(); ++i) {
+      const Tri& tri = t.tris[i];
+      const int hb = face_hub[tri.face];
+      if (hb < 0 || norm(hubs[hb].n) == 0) continue;
+      double angle[3];
+      int m = 0;
+      bool ok = true;
+      for (int k = 0; k < 3 && ok; ++k) {
+        const Vec d = sub(t.pos[tri.g[k]], hubs[hb].p);
+        const double x = dot(d, hubs[hb].e1), y = dot(d, hubs[hb].e2), l = norm(d);
+        if (l <= at_hub) continue;
+        if (std::hypot(x, y) <= 1e-6 * l) ok = false;  // straight above or below the hub: no angle
+        angle[m++] = std::atan2(y, x);
+      }
+      if (!ok || m < 2) continue;
+      double dmin = 0, dmax = 0;
+      for (int k = 1; k < m; ++k) {
+        const double d = std::remainder(angle[k] - angle[0], 2 * kPi);
+        dmin = std::min(dmin, d);
+        dmax = std::max(dmax, d);
+      }
+      if (dmax - dmin >= kPi - 1e-6) continue;  // a half-turn or more: its projection may hold the hub
+      double lo = angle[0] + dmin;
+      lo -= 2 * kPi * std::floor(lo / (2 * kPi));
+      arcs.hub[i] = hb;
+      arcs.lo[i] = std::nextafter(static_cast<float>(lo), -1.0f);
+      arcs.hi[i] = std::nextafter(static_cast<float>(lo + (dmax - dmin)), 10.0f);
+    }
+    r.hubs = static_cast<int>(hubs.size());
+  }
+  const Bvh bvh = build_bvh(t, arcs);
   // Triangles this close to one plane are tested for lying on each other (the tessellations of
   // two flat sheets in one plane agree to rounding).
   const double coplanar = 1e-9 * size;
@@ -580,11 +738,15 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
   // Candidate triangle pairs, up to candidates_per_pair per pair of faces: the first ones in
   // the order of a depth-first walk over the pairs of BVH nodes whose boxes overlap.
   struct Found {
-    long long crossings = 0;
+    long long crossings = 0, tested = 0;
     std::map<uint64_t, std::vector<Candidate>> lists;
   };
   auto test_pair = [&](int ia, int ib, Found& out) {
     if (!t.tri_box[ia].overlaps(t.tri_box[ib])) return;
+    if (!arcs.hub.empty() && arcs.hub[ia] >= 0 && arcs.hub[ia] == arcs.hub[ib] &&
+        arcs_apart(arcs.lo[ia], arcs.hi[ia], arcs.lo[ib], arcs.hi[ib]))
+      return;
+    ++out.tested;
     const Tri* a = &t.tris[ia];
     const Tri* b = &t.tris[ib];
     if (a->face > b->face) std::swap(a, b), std::swap(ia, ib);
@@ -619,6 +781,10 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
       return;
     }
     if (!N.box.overlaps(M.box)) return;
+    if (!bvh.arcs.empty()) {
+      const NodeArc &a = bvh.arcs[n], &b = bvh.arcs[m];
+      if (a.hub >= 0 && a.hub == b.hub && arcs_apart(a.lo, a.hi, b.lo, b.hi)) return;
+    }
     if (N.left < 0 && M.left < 0) {
       for (int x = N.begin; x < N.end; ++x)
         for (int y = M.begin; y < M.end; ++y) test_pair(bvh.order[x], bvh.order[y], out);
@@ -633,7 +799,8 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
   // The walk is cut into tasks: node pairs of at most kTaskTriangles triangles between them, in
   // the order the walk reaches them. Each task walks its own part; taking the tasks' lists in
   // that order gives the same first candidates as one walk (a high-valence vertex's thin faces
-  // give millions of triangle pairs: catmark capsule of valence 1024, 40 % of its conversion).
+  // gave millions of triangle pairs: catmark capsule of valence 1024, 40 % of its conversion,
+  // before the hubs' angular order; a bipyramid of valence 256 now tests 10 M pairs, 50 M before).
   constexpr int kTaskTriangles = 4096;
   std::vector<NodePair> tasks;
   if (!bvh.nodes.empty()) {
@@ -663,6 +830,7 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
   std::map<uint64_t, std::vector<Candidate>> candidates;
   for (Found& f : task_found) {
     r.candidate_pairs += f.crossings;
+    r.tested_pairs += f.tested;
     for (auto& [key, list] : f.lists) {
       std::vector<Candidate>& all = candidates[key];
       for (const Candidate& c : list)

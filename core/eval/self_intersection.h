@@ -36,6 +36,11 @@ struct SelfIntersectionOptions {
   int max_graded_valence = 8;
   /// Candidate triangle pairs tried on the exact surfaces per pair of faces.
   int candidates_per_pair = 4;
+  /// Hubs: corners shared by more than this many faces (0: none). The triangles of a hub's faces
+  /// are ordered by their angle around it, seen along its normal, and two groups whose angular
+  /// ranges are apart are not compared (their projections are apart, so they cannot meet):
+  /// without it the thin faces at a vertex of valence n give ~n^2 pairs of overlapping boxes.
+  int hub_valence = 32;
 };
 
 /// Two faces whose surfaces cross (or, `inside`, a closed component inside another).
@@ -57,6 +62,8 @@ struct SelfIntersectionReport {
   std::vector<int> component;    ///< per face
   long long triangles = 0;       ///< of the tessellation
   long long candidate_pairs = 0; ///< triangle pairs that crossed, before the exact check
+  long long tested_pairs = 0;    ///< triangle pairs whose boxes overlap, tested for a crossing
+  int hubs = 0;                  ///< corners treated as hubs (SelfIntersectionOptions::hub_valence)
   /// Pairs of faces of one component whose surfaces cross or touch, one witness per pair (a
   /// crossing when there is one), sorted.
   std::vector<FaceCrossing> self;
