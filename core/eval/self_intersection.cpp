@@ -306,10 +306,10 @@ struct HubArcs {
 /// Two angular ranges around one hub, [a0, a1] and [b0, b1] (a0, b0 in [0, 2 pi)), that are
 /// apart on the circle.
 bool arcs_apart(double a0, double a1, double b0, double b1) {
-  constexpr double kTwoPi = 6.283185307179586, kGap = 1e-9;
-  if ((a1 - a0) + (b1 - b0) >= kTwoPi - 2 * kGap) return false;
+  constexpr double kGap = 1e-9;
+  if ((a1 - a0) + (b1 - b0) >= 2 * kPi - 2 * kGap) return false;
   for (int k = -1; k <= 1; ++k)  // widths below 2 pi: no other shift can overlap
-    if (b0 + k * kTwoPi <= a1 + kGap && a0 <= b1 + k * kTwoPi + kGap) return false;
+    if (b0 + 2 * k * kPi <= a1 + kGap && a0 <= b1 + 2 * k * kPi + kGap) return false;
   return true;
 }
 
@@ -700,7 +700,7 @@ SelfIntersectionReport find_self_intersections(const PatchSet& ps, const SelfInt
       arcs.lo.assign(t.tris.size(), 0.0f);
       arcs.hi.assign(t.tris.size(), 0.0f);
     }
-    for (size_t i = 0; i < t.tris.size() && !hubs.empty(); ++i) {
+    for (size_t i = 0; i < arcs.hub.size(); ++i) {
       const Tri& tri = t.tris[i];
       const int hb = face_hub[tri.face];
       if (hb < 0 || norm(hubs[hb].n) == 0) continue;
