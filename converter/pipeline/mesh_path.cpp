@@ -404,7 +404,7 @@ void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
             "feature_edges", r.feature_edges, "feature_chains_kept", r.feature_chains_kept, "corners", r.corners);
   w.members("coarse_quads", r.coarse_quads, "coarse_triangles", r.coarse_triangles, "flips", r.flips, "attempts", r.attempts);
   w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges, "relocations", r.relocations,
-            "concave_sectors", r.concave_sectors, "sliver_flips", r.sliver_flips, "cap_flips", r.cap_flips);
+            "concave_sectors", r.concave_sectors, "sliver_flips", r.sliver_flips, "cap_flips", r.cap_flips, "tight_loops", r.tight_loops);
   w.members("field_singularities", r.field_singularities, "position_dislocations", r.position_dislocations,
             "position_dislocations_left", r.position_dislocations_left);
   w.members("euler_characteristic", r.euler_cage, "boundaries", r.boundaries_cage, "components", r.components_cage);

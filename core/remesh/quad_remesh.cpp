@@ -1156,6 +1156,10 @@ struct Collapser {
   // its answer cannot change while neither u nor v is touched (collapse_to_lattice skips it).
   long epoch = 0;
   std::vector<long> touched;
+  // Tight closed loops (anchor_tight_loops): their chosen vertices never collapse; the loops'
+  // other vertices collapse along the loop into them at the end (collapse_to_lattice's stage 4).
+  std::vector<char> anchor;
+  std::vector<std::vector<int>> loops;
 
   Collapser(const Dense& d, const Fields& fields, double max_chain_sag)
       : p(d.p), fl(fields), f(d.t), feature(d.feature), chain_sag(max_chain_sag) {
@@ -1195,6 +1199,7 @@ struct Collapser {
     return true;
   }
 
+  bool anchored(int v) const { return !anchor.empty() && anchor[v]; }
   bool higher(int a, int b) const {  // priority of a above b
     if (fl.kind[a] != fl.kind[b]) return fl.kind[a] > fl.kind[b];
     if (dist[a] != dist[b]) return dist[a] < dist[b];
@@ -1262,7 +1267,7 @@ struct Collapser {
   // and the walk comes last.
   bool can_collapse(int u, int v, bool* chain_refused = nullptr) {
     if (chain_refused) *chain_refused = false;
-    if (fl.kind[u] == 2) return false;
+    if (fl.kind[u] == 2 || anchored(u)) return false;
     if (fl.kind[u] == 1 && !is_feature(u, v)) return false;
     int shared[2];
     int count = faces_with(u, v, shared);
@@ -1530,6 +1535,137 @@ Dense make_dense(const MeshInput& mesh, const FeatureSet& features, double& area
   return d;
 }
 
+// Tight closed loops (docs/remesh.md step 4, "Tight loops"). A closed feature loop without
+// corners whose mean radius is below kArcRadius x s (a small hole's rim, the rims of its
+// counterbore) lies within one or two lattice cells: the lattice cannot say which of its chain
+// vertices to keep, the collapses keep whichever the chain rule lets stay, and the rims of one
+// hole come out with different counts (featuretype.STL: 14, 16 and 18 on the three rims of one
+// counterbored hole), so the strips between them cannot pair into quads.
+struct TightLoop {
+  std::vector<int> v;  // its dense chain vertices, in order
+  V3 centroid, normal;
+  double radius = 0;  // mean: length / 2 pi
+  int group = -1;     // concentric loops share a group (-1: none)
+};
+
+std::vector<TightLoop> find_tight_loops(const Fields& fl, double s) {
+  std::vector<TightLoop> loops;
+  if (fl.chain.size() != size_t(fl.n)) return loops;
+  std::vector<char> seen(fl.n, 0);
+  for (int v = 0; v < fl.n; ++v) {
+    if (seen[v] || fl.kind[v] != 1 || fl.chain[v][0] < 0 || fl.chain[v][1] < 0) continue;
+    TightLoop loop;
+    loop.v.push_back(v);
+    seen[v] = 1;
+    int prev = v, w = fl.chain[v][1];
+    while (w >= 0 && w != v && fl.kind[w] == 1 && !seen[w]) {
+      seen[w] = 1;
+      loop.v.push_back(w);
+      const int next = chain_next(fl, prev, w);
+      prev = w;
+      w = next;
+    }
+    const int m = static_cast<int>(loop.v.size());
+    if (w != v || m < 3) continue;  // open, or through a corner
+    double length = 0;
+    V3 area = V3::Zero(), centroid = V3::Zero();
+    for (int i = 0; i < m; ++i) {
+      const V3 &a = fl.p[loop.v[i]], &b = fl.p[loop.v[(i + 1) % m]];
+      const double e = (b - a).norm();
+      length += e;
+      centroid += 0.5 * e * (a + b);
+      area += a.cross(b);
+    }
+    if (!(length > 0) || length >= 2 * kPi * kArcRadius * s || !(area.norm() > 0)) continue;
+    loop.centroid = centroid / length;
+    loop.normal = area.normalized();
+    int big = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(loop.normal[k]) > std::abs(loop.normal[big])) big = k;
+    if (loop.normal[big] < 0) loop.normal = -loop.normal;  // the same for parallel loops whichever way they run
+    loop.radius = length / (2 * kPi);
+    loops.push_back(std::move(loop));
+  }
+  // Concentric loops with no room for a lattice row between them (the strip a wall or an annulus
+  // narrower than kArcRoom x s): parallel planes (within 10 degrees), centroids on one axis
+  // (within a quarter of the smaller radius), the circles of their mean radii closer than
+  // kArcRoom x s. Across a wider strip the lattice keeps rows of its own, which anchors would fight.
+  std::vector<int> parent(loops.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (size_t a = 0; a < loops.size(); ++a)
+    for (size_t b = a + 1; b < loops.size(); ++b) {
+      const TightLoop &la = loops[a], &lb = loops[b];
+      const V3 d = lb.centroid - la.centroid;
+      const double along = la.normal.dot(d);
+      if (std::abs(la.normal.dot(lb.normal)) < std::cos(10 * kPi / 180) ||
+          std::hypot(along, la.radius - lb.radius) > kArcRoom * s ||
+          (d - along * la.normal).norm() > 0.25 * std::min(la.radius, lb.radius))
+        continue;
+      parent[find_root(parent, int(a))] = find_root(parent, int(b));
+    }
+  std::vector<int> size(loops.size(), 0);
+  for (size_t a = 0; a < loops.size(); ++a) ++size[find_root(parent, int(a))];
+  for (size_t a = 0; a < loops.size(); ++a) {
+    const int r = find_root(parent, int(a));
+    if (size[r] > 1) loops[a].group = r;
+  }
+  return loops;
+}
+
+// Anchors for each group of concentric tight loops: the loop on which a first extraction
+// (`kept`: alive after it) kept the fewest vertices is the group's reference; its kept vertices
+// are its anchors, and every other loop of the group gets as anchors its chain vertices nearest
+// the reference's angles (round each loop's own centroid, in a frame fixed by the reference's
+// plane): one vertex above the other on every rim. Anchors never collapse; the loops' other
+// vertices collapse along them into anchors after the lattice's stages (collapse_to_lattice's
+// stage 4). A loop alone is left to the lattice. Returns the loops anchored.
+int anchor_tight_loops(const Fields& fl, const std::vector<TightLoop>& loops, const std::vector<char>& kept,
+                       Collapser& col) {
+  col.anchor.assign(fl.n, 0);
+  col.loops.clear();
+  std::vector<int> reference(loops.size(), -1), kept_count(loops.size(), 0);
+  for (size_t a = 0; a < loops.size(); ++a) {
+    for (int v : loops[a].v) kept_count[a] += kept[v] != 0;
+    const int g = loops[a].group;
+    if (g < 0) continue;
+    int& r = reference[g];
+    if (r < 0 || kept_count[a] < kept_count[r] ||
+        (kept_count[a] == kept_count[r] && loops[a].radius > loops[r].radius))
+      r = static_cast<int>(a);
+  }
+  for (size_t a = 0; a < loops.size(); ++a) {
+    const int g = loops[a].group;
+    if (g < 0 || reference[g] < 0 || kept_count[reference[g]] < 3) continue;
+    const TightLoop& ref = loops[reference[g]];
+    const V3& n = ref.normal;
+    V3 e1 = std::abs(n.x()) > 0.9 ? V3(0, 1, 0) : V3(1, 0, 0);
+    e1 = (e1 - n * n.dot(e1)).normalized();
+    const V3 e2 = n.cross(e1);
+    auto angle = [&](const TightLoop& l, int v) {
+      const V3 d = fl.p[v] - l.centroid;
+      return std::atan2(d.dot(e2), d.dot(e1));
+    };
+    if (int(a) == reference[g]) {
+      for (int v : ref.v)
+        if (kept[v]) col.anchor[v] = 1;
+    } else {
+      for (int r : ref.v) {
+        if (!kept[r]) continue;
+        const double target = angle(ref, r);
+        int best = -1;
+        double best_d = INFINITY;
+        for (int v : loops[a].v) {
+          const double dd = std::abs(std::remainder(angle(loops[a], v) - target, 2 * kPi));
+          if (dd < best_d) best_d = dd, best = v;
+        }
+        col.anchor[best] = 1;
+      }
+    }
+    col.loops.push_back(loops[a].v);
+  }
+  return static_cast<int>(col.loops.size());
+}
+
 // Collapses every edge whose ends share a lattice point (link condition, features kept).
 // Clusters: vertices joined by edges whose ends share a lattice point (feature vertices only
 // along their chains); each grows from its centre, the vertex of highest priority, by collapsing
@@ -1650,6 +1786,32 @@ void collapse_to_lattice(const Dense& d, const Fields& fl, double s, bool merge_
           break;
         }
     }
+    check(0.9);
+    if (changed == 0) break;
+  }
+  // Stage 4 (anchor_tight_loops): a tight loop's vertices that are no anchors collapse along
+  // the loop into a neighbour on it, the nearer first, until only the anchors are left (or the
+  // usual tests refuse: a strip narrower than the spacing can make a collapse turn a face over).
+  for (int pass = 0; !col.loops.empty() && pass < 200; ++pass) {
+    int changed = 0;
+    for (const std::vector<int>& loop : col.loops)
+      for (int u : loop) {
+        if (!col.alive[u] || col.anchored(u) || col.vf[u].empty()) continue;
+        col.neighbours(u, nu);
+        cands.clear();
+        for (int v : nu)
+          if (col.is_feature(u, v)) cands.push_back(v);
+        std::sort(cands.begin(), cands.end(), [&](int a, int b) {
+          const double da = (d.p[a] - d.p[u]).norm(), db = (d.p[b] - d.p[u]).norm();
+          return da != db ? da < db : a < b;
+        });
+        for (int v : cands)
+          if (col.can_collapse(u, v)) {
+            col.collapse(u, v);
+            ++changed;
+            break;
+          }
+      }
     check(0.9);
     if (changed == 0) break;
   }
@@ -2529,6 +2691,14 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
         st.position_dislocations = tr.before;
         st.position_dislocations_left = tr.left;
         restretch_positions(fl, tr);
+      }
+      if (options.align_tight_loops) {
+        const std::vector<TightLoop> loops = find_tight_loops(fl, s);
+        if (std::any_of(loops.begin(), loops.end(), [](const TightLoop& l) { return l.group >= 0; })) {
+          Collapser probe(d, fl, kChainSag);  // the lattice's own choice on each rim
+          collapse_to_lattice(d, fl, s, options.cancel_dislocations, probe, check);
+          st.tight_loops = anchor_tight_loops(fl, loops, probe.alive, col);
+        }
       }
       collapse_to_lattice(d, fl, s, options.cancel_dislocations, col, check);
       std::vector<int> dense_of;

@@ -25,6 +25,7 @@ struct QuadRemeshOptions {
   bool regularize_valence = true;    ///< edge flips on the coarse triangles before pairing (fewer extraordinary vertices)
   bool cleanup = true;  ///< quad-dominant clean-up of the coarse quads and triangles before the split (core/remesh/quad_cleanup.h)
   bool relocate_stuck = true;  ///< move coarse vertices stuck beside a feature curve away from it before the split (docs/remesh.md step 6c)
+  bool align_tight_loops = true;  ///< concentric closed feature loops tighter than the lattice (a hole's rims) keep the same coarse vertices, one above the other (docs/remesh.md step 4)
   bool pin_tight_arcs = true;  ///< position field: lattice columns at the ends of feature arcs tighter than the lattice (docs/remesh.md step 3)
   bool cancel_dislocations = false;  ///< position field: cancel its dislocations in pairs away from features, and merge the knots the extraction leaves (docs/remesh.md step 3b; off: mixed on the CAD parts)
   /// With target_faces: the size check aims the cage's faces at the target (docs/remesh.md step 7:
@@ -77,6 +78,7 @@ struct QuadRemeshStats {
   int cleanup_rotations = 0;   ///< coarse edges rotated by the clean-up (cleanup)
   int cleanup_merges = 0;      ///< pairs of coarse triangles merged into quads by the clean-up
   int relocations = 0;         ///< coarse vertices stuck beside a feature curve moved away from it (relocate_stuck)
+  int tight_loops = 0;         ///< closed feature loops tighter than the lattice whose coarse vertices were aligned with concentric ones (align_tight_loops)
   int arc_pins = 0;            ///< chain vertices whose lattice point the position field kept at themselves (pin_tight_arcs)
   int position_dislocations = 0;       ///< dense triangles around which the lattice translations do not sum to zero (cancel_dislocations; before)
   int position_dislocations_left = 0;  ///< ... and after the cancelling (those near features are left alone)

@@ -168,16 +168,19 @@ inline MeshInput box(int n) {
   return b.mesh();
 }
 
+/// The point of the square [-1, 1]^2's boundary in direction a.
+inline std::array<double, 2> square_point(double a) {
+  double c = std::cos(a), s = std::sin(a);
+  double l = 1 / std::max(std::abs(c), std::abs(s));
+  return {l * c, l * s};
+}
+
 /// The box [-1, 1]^3 with a hole of radius r drilled along z: genus 1, sharp circular edges.
 /// m angular samples (a multiple of 8, so the square's corners are samples), k radial rings,
 /// nz layers along z.
 inline MeshInput drilled_box(double r, int m, int k, int nz) {
   MeshBuilder b;
-  auto square = [&](double a) {  // the point of the square's boundary in direction a
-    double c = std::cos(a), s = std::sin(a);
-    double l = 1 / std::max(std::abs(c), std::abs(s));
-    return std::array<double, 2>{l * c, l * s};
-  };
+  const auto square = square_point;
   auto angle = [&](double u) { return 2 * kTestPi * u; };
   for (int side = -1; side <= 1; side += 2)
     b.patch([&](double u, double v) {
@@ -232,6 +235,42 @@ inline MeshInput rounded_slab(double rho, double h, int m, int k, int nz) {
   b.patch([&](double u, double v) {
     const auto q = rounded_square(rho, u);
     return P3{q[0], q[1], h * (2 * v - 1)};
+  }, m, nz);
+  return b.mesh();
+}
+
+/// A counterbored box: the cube [-1, 1]^3 with a through hole of radius r1 along z and, from the
+/// top, a counterbore of radius r2 > r1 down to z = c: four circular rims (r1 at z = -1 and c, r2
+/// at z = c and 1) joined by two cylinder walls and the counterbore's flat annulus. m samples
+/// round every circle (the same angles), k rings on the top and bottom, nz layers on the walls.
+inline MeshInput counterbored_box(double r1, double r2, double c, int m, int k, int nz) {
+  MeshBuilder b;
+  const auto square = square_point;
+  auto angle = [&](double u) { return 2 * kTestPi * u; };
+  auto annulus = [&](double r, double z) {  // from the circle of radius r out to the square
+    b.patch([&, r, z](double u, double v) {
+      double a = angle(u);
+      auto q = square(a);
+      return P3{r * std::cos(a) + v * (q[0] - r * std::cos(a)), r * std::sin(a) + v * (q[1] - r * std::sin(a)), z};
+    }, m, k);
+  };
+  annulus(r2, 1);
+  annulus(r1, -1);
+  b.patch([&](double u, double v) {  // outer walls
+    auto q = square(angle(u));
+    return P3{q[0], q[1], 2 * v - 1};
+  }, m, nz);
+  b.patch([&](double u, double v) {  // the counterbore's floor
+    double a = angle(u), r = r1 + v * (r2 - r1);
+    return P3{r * std::cos(a), r * std::sin(a), c};
+  }, m, 2);
+  b.patch([&](double u, double v) {  // the counterbore's wall
+    double a = angle(u);
+    return P3{r2 * std::cos(a), r2 * std::sin(a), c + v * (1 - c)};
+  }, m, nz);
+  b.patch([&](double u, double v) {  // the through hole's wall
+    double a = angle(u);
+    return P3{r1 * std::cos(a), r1 * std::sin(a), -1 + v * (c + 1)};
   }, m, nz);
   return b.mesh();
 }
