@@ -1578,11 +1578,7 @@ std::vector<TightLoop> find_tight_loops(const Fields& fl, double s) {
     }
     if (!(length > 0) || length >= 2 * kPi * kArcRadius * s || !(area.norm() > 0)) continue;
     loop.centroid = centroid / length;
-    loop.normal = area.normalized();
-    int big = 0;
-    for (int k = 1; k < 3; ++k)
-      if (std::abs(loop.normal[k]) > std::abs(loop.normal[big])) big = k;
-    if (loop.normal[big] < 0) loop.normal = -loop.normal;  // the same for parallel loops whichever way they run
+    loop.normal = area.normalized();  // (its sign is never read: groups compare |n . n'|)
     loop.radius = length / (2 * kPi);
     loops.push_back(std::move(loop));
   }
@@ -1637,10 +1633,7 @@ int anchor_tight_loops(const Fields& fl, const std::vector<TightLoop>& loops, co
     const int g = loops[a].group;
     if (g < 0 || reference[g] < 0 || kept_count[reference[g]] < 3) continue;
     const TightLoop& ref = loops[reference[g]];
-    const V3& n = ref.normal;
-    V3 e1 = std::abs(n.x()) > 0.9 ? V3(0, 1, 0) : V3(1, 0, 0);
-    e1 = (e1 - n * n.dot(e1)).normalized();
-    const V3 e2 = n.cross(e1);
+    const V3 e1 = any_perpendicular(ref.normal), e2 = ref.normal.cross(e1);  // one frame for the group
     auto angle = [&](const TightLoop& l, int v) {
       const V3 d = fl.p[v] - l.centroid;
       return std::atan2(d.dot(e2), d.dot(e1));

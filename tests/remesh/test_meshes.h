@@ -180,19 +180,18 @@ inline std::array<double, 2> square_point(double a) {
 /// nz layers along z.
 inline MeshInput drilled_box(double r, int m, int k, int nz) {
   MeshBuilder b;
-  const auto square = square_point;
   auto angle = [&](double u) { return 2 * kTestPi * u; };
   for (int side = -1; side <= 1; side += 2)
     b.patch([&](double u, double v) {
       double a = angle(side > 0 ? u : 1 - u);
-      auto q = square(a);
+      auto q = square_point(a);
       double x = r * std::cos(a) + v * (q[0] - r * std::cos(a));
       double y = r * std::sin(a) + v * (q[1] - r * std::sin(a));
       return P3{x, y, double(side)};
     }, m, k);
   // outer walls: the square's boundary samples times z
   b.patch([&](double u, double v) {
-    auto q = square(angle(u));
+    auto q = square_point(angle(u));
     return P3{q[0], q[1], 2 * v - 1};
   }, m, nz);
   // the hole's wall, facing the axis
@@ -245,19 +244,18 @@ inline MeshInput rounded_slab(double rho, double h, int m, int k, int nz) {
 /// round every circle (the same angles), k rings on the top and bottom, nz layers on the walls.
 inline MeshInput counterbored_box(double r1, double r2, double c, int m, int k, int nz) {
   MeshBuilder b;
-  const auto square = square_point;
   auto angle = [&](double u) { return 2 * kTestPi * u; };
   auto annulus = [&](double r, double z) {  // from the circle of radius r out to the square
     b.patch([&, r, z](double u, double v) {
       double a = angle(u);
-      auto q = square(a);
+      auto q = square_point(a);
       return P3{r * std::cos(a) + v * (q[0] - r * std::cos(a)), r * std::sin(a) + v * (q[1] - r * std::sin(a)), z};
     }, m, k);
   };
   annulus(r2, 1);
   annulus(r1, -1);
   b.patch([&](double u, double v) {  // outer walls
-    auto q = square(angle(u));
+    auto q = square_point(angle(u));
     return P3{q[0], q[1], 2 * v - 1};
   }, m, nz);
   b.patch([&](double u, double v) {  // the counterbore's floor

@@ -630,12 +630,6 @@ TEST(QuadRemesh, CapsFlipWithoutMovingTheLattice) {
   EXPECT_EQ(on.cage.creases.size(), off.cage.creases.size());
 }
 
-// docs/remesh.md step 3: the position field pins a lattice column at each tight arc of a feature
-// chain, so the side under a rim that rounds a corner of the part (radius 0.06, a fifth of the
-// lattice spacing 0.3 at 1000 quads) has a row under each kept rim vertex and no vertex stays
-// stuck beside the crease. Without the pins the lowest wall quad along a rim is a sliver (its
-// height a quarter of its length, docs/remesh.md step 6c); with them it is at least 0.4 of its
-// length without moving any vertex afterwards (relocate_stuck off).
 // Tight closed loops (docs/remesh.md step 4): a counterbored hole much narrower than the lattice
 // (radii 0.15 and 0.3 against a spacing of ~0.5 .. 0.7) has four circular rims. The three with no
 // room for a lattice row between them (the through hole's top rim, the floor's outer rim, the
@@ -707,6 +701,12 @@ TEST(QuadRemesh, TightLoopsLineUpTheRimsOfAHole) {
   EXPECT_LT(irregular_on, irregular_off);
 }
 
+// docs/remesh.md step 3: the position field pins a lattice column at each tight arc of a feature
+// chain, so the side under a rim that rounds a corner of the part (radius 0.06, a fifth of the
+// lattice spacing 0.3 at 1000 quads) has a row under each kept rim vertex and no vertex stays
+// stuck beside the crease. Without the pins the lowest wall quad along a rim is a sliver (its
+// height a quarter of its length, docs/remesh.md step 6c); with them it is at least 0.4 of its
+// length without moving any vertex afterwards (relocate_stuck off).
 TEST(QuadRemesh, TightArcPinsALatticeColumn) {
   const double rho = 0.06, h = 0.3;
   MeshInput m = test::rounded_slab(rho, h, 256, 16, 24);
