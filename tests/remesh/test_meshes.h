@@ -175,6 +175,13 @@ inline std::array<double, 2> square_point(double a) {
   return {l * c, l * s};
 }
 
+/// The point a fraction v of the way from the circle of radius r out to the square's boundary
+/// (square_point), in direction a: an annulus between a hole's rim and the box's outline.
+inline std::array<double, 2> circle_to_square(double r, double a, double v) {
+  const auto q = square_point(a);
+  return {r * std::cos(a) + v * (q[0] - r * std::cos(a)), r * std::sin(a) + v * (q[1] - r * std::sin(a))};
+}
+
 /// The box [-1, 1]^3 with a hole of radius r drilled along z: genus 1, sharp circular edges.
 /// m angular samples (a multiple of 8, so the square's corners are samples), k radial rings,
 /// nz layers along z.
@@ -183,11 +190,8 @@ inline MeshInput drilled_box(double r, int m, int k, int nz) {
   auto angle = [&](double u) { return 2 * kTestPi * u; };
   for (int side = -1; side <= 1; side += 2)
     b.patch([&](double u, double v) {
-      double a = angle(side > 0 ? u : 1 - u);
-      auto q = square_point(a);
-      double x = r * std::cos(a) + v * (q[0] - r * std::cos(a));
-      double y = r * std::sin(a) + v * (q[1] - r * std::sin(a));
-      return P3{x, y, double(side)};
+      const auto p = circle_to_square(r, angle(side > 0 ? u : 1 - u), v);
+      return P3{p[0], p[1], double(side)};
     }, m, k);
   // outer walls: the square's boundary samples times z
   b.patch([&](double u, double v) {
@@ -247,9 +251,8 @@ inline MeshInput counterbored_box(double r1, double r2, double c, int m, int k, 
   auto angle = [&](double u) { return 2 * kTestPi * u; };
   auto annulus = [&](double r, double z) {  // from the circle of radius r out to the square
     b.patch([&, r, z](double u, double v) {
-      double a = angle(u);
-      auto q = square_point(a);
-      return P3{r * std::cos(a) + v * (q[0] - r * std::cos(a)), r * std::sin(a) + v * (q[1] - r * std::sin(a)), z};
+      const auto p = circle_to_square(r, angle(u), v);
+      return P3{p[0], p[1], z};
     }, m, k);
   };
   annulus(r2, 1);
