@@ -402,7 +402,8 @@ void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
   w.begin_object();
   w.members("faces", r.faces, "vertices", r.vertices, "extraordinary_vertices", r.extraordinary_vertices,
             "feature_edges", r.feature_edges, "feature_chains_kept", r.feature_chains_kept, "corners", r.corners);
-  w.members("coarse_quads", r.coarse_quads, "coarse_triangles", r.coarse_triangles, "flips", r.flips, "attempts", r.attempts);
+  w.members("coarse_quads", r.coarse_quads, "coarse_triangles", r.coarse_triangles, "flips", r.flips, "attempts", r.attempts,
+            "spacing", r.spacing);
   w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges, "relocations", r.relocations,
             "concave_sectors", r.concave_sectors, "sliver_flips", r.sliver_flips, "cap_flips", r.cap_flips, "tight_loops", r.tight_loops);
   w.members("field_singularities", r.field_singularities, "position_dislocations", r.position_dislocations,
@@ -521,6 +522,7 @@ MeshCage mesh_to_cage(const LoadedCage& mesh, const MeshPathSettings& settings, 
     ro.aim_at_target = settings.aim_at_target;
   } else if (settings.edge_length > 0) {
     ro.edge_length = settings.edge_length;
+    ro.exact_spacing = settings.exact_spacing;
   } else {
     ro.target_faces = automatic_target_faces(tri);
     size_rule = settings.fit_tolerance > 0 ? "fit_tolerance" : "automatic";

@@ -40,8 +40,8 @@ InputKind input_kind(const std::string& name);
 /// Triangles from other than an STL, PLY, OFF or glTF file take the mesh path from this many (rule 5).
 constexpr int kMinMeshTriangles = 200;
 
-/// The mesh path's settings (the settings table's rows "input", "target_faces", "edge_length",
-/// "fit_tolerance", "feature_angle").
+/// The mesh path's settings (the settings table's rows "input", "target_faces", "aim_at_target",
+/// "edge_length", "exact_spacing", "fit_tolerance", "feature_angle").
 struct MeshPathSettings {
   InputKind input = InputKind::Auto;
   int target_faces = 0;        ///< quads of the cage wanted; 0 with edge_length 0: automatic
@@ -50,6 +50,9 @@ struct MeshPathSettings {
   /// otherwise target_faces is approximate (often 10 .. 30 % over). Ignored without target_faces.
   bool aim_at_target = false;
   double edge_length = 0;      ///< the cage's edge length in model units (used when target_faces is 0)
+  /// With edge_length: one extraction at exactly that spacing, no second run at a coarser one
+  /// when the faces exceed area / edge_length^2 by 30 % (QuadRemeshOptions::exact_spacing).
+  bool exact_spacing = false;
   /// With the automatic size: the two-sided max distance between the fitted limit surface and
   /// the mesh to reach, relative to the bounding-box diagonal; the cage is remeshed at a size
   /// predicted from the measured distance until it is met (the size rule below); 0: off (one

@@ -290,7 +290,7 @@ void add_limit_rows(std::vector<SettingRow>& t) {
 }
 
 /// The mesh path (converter/pipeline/mesh_path.h): input, target_faces, aim_at_target, edge_length,
-/// fit_tolerance, feature_angle.
+/// exact_spacing, fit_tolerance, feature_angle.
 void add_mesh_rows(std::vector<SettingRow>& t) {
   {
     SettingRow& r = add_row(t, "input", SettingType::Word, std::string(to_string(InputKind::Auto)));
@@ -342,6 +342,17 @@ void add_mesh_rows(std::vector<SettingRow>& t) {
       if (s.mesh.edge_length == 0) return std::monostate{};
       return s.mesh.edge_length;
     };
+  }
+  {
+    SettingRow& r = add_row(t, "exact_spacing", SettingType::Flag, false);
+    r.help = "Mesh input with edge_length: one remesh at exactly that edge length. Without it a cage with more "
+             "than 1.3 x area / edge_length^2 quads (the lattice's irregularities, feature curves) is remeshed "
+             "once at a coarser spacing; ignored without edge_length";
+    r.cli = "--exact-spacing";
+    r.property = {"ExactSpacing", "Mesh", "Mesh input with EdgeLength: one remesh at exactly that edge length "
+                  "(otherwise remeshed once coarser when the cage has over 1.3 x the quads it implies)", {}, false};
+    r.set = [](Settings& s, const SettingValue& v) { s.mesh.exact_spacing = flag(v); };
+    r.get = [](const Settings& s) -> SettingValue { return s.mesh.exact_spacing; };
   }
   {
     SettingRow& r = add_row(t, "fit_tolerance", SettingType::Number, 1e-3);

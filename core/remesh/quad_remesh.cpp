@@ -2740,9 +2740,10 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       result.cage = split_into_quads(mesh, d, fl, *projector, polygons, dense_of, coarse_feature);
       st.extract_seconds += seconds_since(t1);
       st.attempts = attempt + 1;
+      st.spacing = s;
       if (!aim) {
         double ratio = split_faces * h * h / area;
-        if (attempt == 0 && ratio > 1.3) {
+        if (attempt == 0 && ratio > 1.3 && !(options.exact_spacing && options.edge_length > 0)) {
           s *= std::sqrt(ratio);
           continue;
         }

@@ -35,6 +35,13 @@ struct QuadRemeshOptions {
   /// mesh path's quality tests were measured on (on, a drilled box's rims and an acute tip at
   /// --target-faces 300 come out worse: docs/remesh.md step 7).
   bool aim_at_target = false;
+  /// With edge_length: one extraction at exactly that spacing (2 x edge_length before the split),
+  /// without the size check's second run when the faces exceed area / edge_length^2 by 30 %
+  /// (docs/remesh.md step 7). The faces then carry the lattice's irregularities (up to 2 x area /
+  /// edge_length^2 at coarse sizes: the drilled cube of QuadRemesh.ExactSpacingKeepsTheEdgeLength),
+  /// but the edges have the length asked for, and a change of the extraction can be compared at
+  /// one lattice (without a second run's new draw).
+  bool exact_spacing = false;
   /// Soft features (FeatureOptions::soft_angle_degrees): edges bending by more than this fraction
   /// of the feature angle, with the bend concentrated within the cage's edge length, are
   /// features too (used when features.soft_angle_degrees and soft_reach are 0; 0 = off).
@@ -84,6 +91,7 @@ struct QuadRemeshStats {
   int position_dislocations_left = 0;  ///< ... and after the cancelling (those near features are left alone)
   double cleanup_seconds = 0;  ///< wall time of the clean-up (part of extract_seconds)
   int attempts = 0;            ///< position field + extraction runs (the size check, docs/remesh.md step 7)
+  double spacing = 0;          ///< the kept run's lattice spacing (model units; the split halves it: the cage's edges are about spacing / 2)
   int concave_sectors = 0;     ///< corner sectors split by a crease edge (split_concave_sectors)
   int sliver_flips = 0;        ///< coarse slivers along a feature chain flipped open (flip_chain_slivers)
   int cap_flips = 0;           ///< coarse caps (an angle above 160 degrees) flipped (flip_caps)

@@ -326,8 +326,8 @@ class Workbench(unittest.TestCase):
         # Defaults: nothing given, so the converter's defaults apply.
         self.assertEqual(features.object_settings(nurbs), {"polar": "on", "fit": "approximate", "faces": "packed",
                                                            "planar_faces": "merge", "input": "auto",
-                                                           "aim_at_target": False, "fit_tolerance": 0.001,
-                                                           "feature_angle": 30.0})
+                                                           "aim_at_target": False, "exact_spacing": False,
+                                                           "fit_tolerance": 0.001, "feature_angle": 30.0})
         dummy = {"name": "dummy_setting", "type": "number", "default": None, "default_text": "", "help": "a test row",
                  "choices": [], "cli": None, "python": True,
                  "property": {"name": "DummySetting", "group": "Conversion", "tooltip": "only this test has it",

@@ -842,6 +842,29 @@ TEST(MeshPath, AimAtTargetHonoursTheCount) {
   }
 }
 
+/// --exact-spacing (the settings table's exact_spacing) reaches the remesher: with --edge-length L
+/// the report's cage has one run at the lattice spacing 2 L (the request is the oracle), where
+/// without it the drilled box runs again at a coarser spacing for one of the lengths at least
+/// (so the check is able to fail).
+TEST(MeshPath, ExactSpacingIsTheEdgeLengthAskedFor) {
+  TempDir dir;
+  const std::string stl = dir.file("part.stl");
+  write_stl(tessellate(box_with_hole(), 0.01), stl);
+  int reruns = 0;
+  for (const double length : {4.0, 6.0, 8.0}) {
+    const std::string size = "--edge-length " + std::to_string(length);
+    const std::string loose = convert_with_report(dir, stl, "loose", size);
+    const std::string exact = convert_with_report(dir, stl, "exact", size + " --exact-spacing");
+    reruns += json_number(loose, {"mesh", "cage", "attempts"}) == 2;
+    EXPECT_EQ(json_number(exact, {"mesh", "cage", "attempts"}), 1);
+    EXPECT_NEAR(json_number(exact, {"mesh", "cage", "spacing"}), 2 * length, 1e-9 * length);
+    std::printf("  edge length %g: %g runs at spacing %g without, %g quads; %g quads exact\n", length,
+                json_number(loose, {"mesh", "cage", "attempts"}), json_number(loose, {"mesh", "cage", "spacing"}),
+                json_number(loose, {"mesh", "cage", "faces"}), json_number(exact, {"mesh", "cage", "faces"}));
+  }
+  EXPECT_GE(reruns, 1) << "no second run without --exact-spacing: the test cannot fail";
+}
+
 TEST(MeshPath, FitToleranceOffGivenSizeAndCoarsening) {
   TempDir dir;
   const CapsuleCase k;

@@ -483,6 +483,43 @@ TEST(QuadRemesh, EdgeLengthSetsTheSize) {
   check_cage(m, r, static_cast<int>(4 * test::kTestPi / 0.04));
 }
 
+// exact_spacing (docs/remesh.md step 7): one extraction at the spacing asked for. The drilled
+// cube [-1, 1]^3 at edge length 0.5 has more faces than 1.3 x area / 0.25 (the hole's rims keep
+// vertices of their own), so by default the extraction runs again at a coarser spacing. With
+// exact_spacing it runs once, at the lattice spacing 2 x 0.5 (the request is the oracle), and
+// the cube's twelve straight edges (length 2) are cut into segments of about the edge length:
+// 24 / 0.5 = 48 cage edges along them within 20 % (by default 24: half as many).
+TEST(QuadRemesh, ExactSpacingKeepsTheEdgeLength) {
+  const double length = 0.5;
+  const MeshInput m = test::drilled_box(0.2, 64, 6, 16);
+  auto box_edges = [](const QuadRemeshResult& r) {  // crease edges on the cube's edges (two coordinates +-1)
+    int n = 0;
+    for (const auto& c : r.cage.creases) {
+      const P3 &p = r.cage.positions[c.v0], &q = r.cage.positions[c.v1];
+      int fixed = 0;
+      for (int k = 0; k < 3; ++k)
+        fixed += std::abs(std::abs(p[k]) - 1) < 1e-9 && std::abs(std::abs(q[k]) - 1) < 1e-9 && p[k] * q[k] > 0;
+      n += fixed == 2;
+    }
+    return n;
+  };
+  QuadRemeshOptions o;
+  o.edge_length = length;
+  const QuadRemeshResult loose = quad_remesh(m, o);
+  o.exact_spacing = true;
+  const QuadRemeshResult exact = quad_remesh(m, o);
+  check_cage(m, exact, 0);  // manifold, oriented, its components (its count is far above 24 / 0.25: the point)
+  std::printf("  edge length %g: by default %d runs, spacing %.4g, %d quads, %d edges along the cube's; exact: %d run, "
+              "spacing %.4g, %d quads, %d edges\n", length, loose.stats.attempts, loose.stats.spacing,
+              loose.cage.num_faces(), box_edges(loose), exact.stats.attempts, exact.stats.spacing, exact.cage.num_faces(),
+              box_edges(exact));
+  EXPECT_EQ(loose.stats.attempts, 2) << "no second run by default: the test cannot fail";
+  EXPECT_EQ(exact.stats.attempts, 1);
+  EXPECT_EQ(exact.stats.spacing, 2 * length);
+  EXPECT_NEAR(box_edges(exact), 24 / length, 0.2 * 24 / length);
+  EXPECT_LT(box_edges(loose), 0.8 * 24 / length);
+}
+
 TEST(QuadRemesh, SettingsAndCancel) {
   MeshInput m = test::icosphere(2);
   QuadRemeshOptions none;
