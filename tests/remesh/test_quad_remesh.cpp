@@ -69,6 +69,14 @@ std::vector<std::pair<int, int>> components(const MeshInput& m) {
   return out;
 }
 
+// The coordinates in which the cage edge a - b lies on one face plane (+-1) of the cube [-1, 1]^3:
+// 2 along one of its twelve edges.
+int cube_planes_of_edge(const P3& a, const P3& b) {
+  int fixed = 0;
+  for (int k = 0; k < 3; ++k) fixed += std::abs(std::abs(a[k]) - 1) < 1e-9 && std::abs(a[k] - b[k]) < 1e-9;
+  return fixed;
+}
+
 // The checks every cage must pass.
 void check_cage(const MeshInput& input, const QuadRemeshResult& r, int target) {
   const MeshInput& cage = r.cage;
@@ -249,12 +257,10 @@ TEST(QuadRemesh, DrilledBoxKeepsGenusEdgesAndCircles) {
     double l = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
     bool on_circle = std::abs(std::abs(a[2]) - 1) < 1e-9 && a[2] == b[2] && std::abs(std::hypot(a[0], a[1]) - hole) < 0.01 * hole &&
                      std::abs(std::hypot(b[0], b[1]) - hole) < 0.01 * hole;
-    int fixed = 0;
-    for (int k = 0; k < 3; ++k) fixed += std::abs(std::abs(a[k]) - 1) < 1e-9 && std::abs(a[k] - b[k]) < 1e-9;
     if (on_circle) {
       circle[a[2] > 0] += l;
     } else {
-      EXPECT_EQ(fixed, 2) << "tagged edge neither on a circle nor on a box edge";
+      EXPECT_EQ(cube_planes_of_edge(a, b), 2) << "tagged edge neither on a circle nor on a box edge";
       box_edges += l;
     }
   }
@@ -492,15 +498,9 @@ TEST(QuadRemesh, EdgeLengthSetsTheSize) {
 TEST(QuadRemesh, ExactSpacingKeepsTheEdgeLength) {
   const double length = 0.5;
   const MeshInput m = test::drilled_box(0.2, 64, 6, 16);
-  auto box_edges = [](const QuadRemeshResult& r) {  // crease edges on the cube's edges (two coordinates +-1)
+  auto box_edges = [](const QuadRemeshResult& r) {  // crease edges on the cube's edges
     int n = 0;
-    for (const auto& c : r.cage.creases) {
-      const P3 &p = r.cage.positions[c.v0], &q = r.cage.positions[c.v1];
-      int fixed = 0;
-      for (int k = 0; k < 3; ++k)
-        fixed += std::abs(std::abs(p[k]) - 1) < 1e-9 && std::abs(std::abs(q[k]) - 1) < 1e-9 && p[k] * q[k] > 0;
-      n += fixed == 2;
-    }
+    for (const auto& c : r.cage.creases) n += cube_planes_of_edge(r.cage.positions[c.v0], r.cage.positions[c.v1]) == 2;
     return n;
   };
   QuadRemeshOptions o;
