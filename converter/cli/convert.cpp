@@ -162,7 +162,9 @@ void print_summary(std::ostream& err, const ConversionResult& c, OutputKind kind
         << (c.brep.valid ? "valid" : "NOT valid") << "\n";
   if (c.has_brep && c.brep.planar_faces > 0)
     err << "  planes     " << c.brep.planar_faces << " planar faces in place of " << c.brep.merged_patches
-        << " coplanar faces\n";
+        << " coplanar faces"
+        << (c.brep.folded_planar_patches > 0 ? " (" + std::to_string(c.brep.folded_planar_patches) + " of them folded in their plane)" : std::string())
+        << "\n";
   const ContinuityReport& k = c.continuity;
   err << "  gaps       max " << short_number(k.max_gap) << " (" << short_number(k.max_gap / size)
       << " of the model size)\n";

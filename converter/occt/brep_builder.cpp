@@ -678,6 +678,7 @@ BrepResult build_brep(const PatchSet& ps, const std::function<void(double)>& pro
     for (const auto& loop : f.loops)
       for (const LoopCurve& c : loop) on_loop[c.curve] = 1;
     result.merged_patches += static_cast<int>(f.patches.size());
+    for (int p : f.patches) result.folded_planar_patches += planar.folded_patch[p];
     ++result.planar_faces;
   }
   const int step = std::max(1, num_patches / 100);

@@ -29,6 +29,7 @@ struct BrepResult {
   double tolerance = 0;    ///< vertex / edge / face tolerance used (model units)
   int planar_faces = 0;    ///< planar faces made of coplanar patches (BrepOptions::merge_planar)
   int merged_patches = 0;  ///< patches inside those planar faces
+  int folded_planar_patches = 0;  ///< of those, patches folded over themselves in the plane (the face is the region its loops enclose)
   int rejected_planar_faces = 0;  ///< coplanar sets whose planar face BRepCheck rejected (a boundary
                                   ///< crossing itself): written one face per patch instead
   int split_planar_sets = 0;  ///< coplanar sets whose loops crossed in the plane (patches overlapping: a

@@ -330,7 +330,7 @@ std::string report_json(const ConversionResult& c) {
     w.members("faces", b.num_faces, "edges", b.num_edges, "vertices", b.num_vertices,
               "type", b.is_solid ? "solid" : "shell", "solids", b.num_solids, "shells", b.num_shells,
               "valid", b.valid, "tolerance", b.tolerance);
-    w.members("planar_faces", b.planar_faces, "merged_patches", b.merged_patches,
+    w.members("planar_faces", b.planar_faces, "merged_patches", b.merged_patches, "folded_planar_patches", b.folded_planar_patches,
               "rejected_planar_faces", b.rejected_planar_faces, "split_planar_sets", b.split_planar_sets);
     w.end_object();
   } else {

@@ -60,8 +60,9 @@ bool on_plane(const NurbsPatch& p, const Point3& origin, const Point3& normal, c
 }
 
 /// Whether the patch's normal X_u x X_v points along `normal` all over it (sampled at 4 x 4
-/// points inside every knot span): a planar patch can still fold over itself (a sheet
-/// doubled back at its rim), and a folded patch is not the region its boundary encloses.
+/// points inside every knot span): a planar patch can still fold over itself in its plane (a
+/// sheet doubled back at its rim, a fitted quad slid over its neighbour). Counted, not refused:
+/// the planar face is the region the set's loops enclose (find_planar_faces).
 bool unfolded(const NurbsPatch& p, const Point3& normal) {
   const PatchEvaluator eval(p);
   const auto& U = p.knots_u.knots;
@@ -381,9 +382,10 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
     if (!(len > 0)) continue;
     origin[p] = pole_mean(patch);
     normal[p] = scaled(net[p], 1 / len);
-    planar[p] = on_plane(patch, origin[p], normal[p], tolerance) && unfolded(patch, normal[p]);
+    planar[p] = on_plane(patch, origin[p], normal[p], tolerance);
     out.planar_patches += planar[p];
   }
+  out.folded_patch.assign(n, 0);
   // Neighbours across shared curves, grown breadth first from the lowest patch of each set.
   const std::vector<std::vector<int>> neighbours = curve_neighbours(ps, planar);
   std::vector<char> reached(n, 0);
@@ -413,6 +415,7 @@ PlanarFaces find_planar_faces(const PatchSet& ps, double relative_tolerance) {
       continue;
     }
     f.tolerance = tolerance.of(f.normal);
+    for (int p : f.patches) out.folded_patch[p] = !unfolded(ps.patches[p], f.normal);
     std::vector<PlanarFace> regions;
     out.skipped += add_regions(ps, std::move(f), kMaxSplits, regions, out.split);
     for (PlanarFace& r : regions) {

@@ -40,12 +40,20 @@ struct PlanarFaces {
   int planar_patches = 0;          ///< patches whose poles lie on a plane (merged or not)
   int skipped = 0;                 ///< coplanar sets left as they are: their boundary touches itself
   int split = 0;  ///< coplanar sets whose loops crossed in the plane, split by leaving out the patches along the crossings
+  /// Per patch: in a set, and its normal X_u x X_v turns against the set's somewhere (sampled 4 x 4
+  /// per knot span): folded over itself in the plane. Its planar face is still the region the
+  /// set's loops enclose (find_planar_faces).
+  std::vector<char> folded_patch;
 };
 
 /// The coplanar sets of patches of `ps` (a set may be one patch). A patch is planar when its poles lie on
 /// the plane through their mean with the normal of its control net
-/// (the sum of the net's cell cross products, which points the way X_u x X_v does) and its
-/// normal X_u x X_v points that way at every sample (4 x 4 per knot span): no fold. Neighbours
+/// (the sum of the net's cell cross products, which points the way X_u x X_v does). A planar
+/// patch may fold over itself in the plane (its normal turning against the net's somewhere); it
+/// joins its set all the same: where the set's loops are simple curves that do not cross, the
+/// patches cover every point they enclose (each such point's winding number is 1) and the planar
+/// face is that region, covered once: a fold's doubled layers, and any flap out past the loops,
+/// are not in it (`folded_patch` marks such patches). Neighbours
 /// across a shared curve join a set when their poles lie on the set's first patch's plane and
 /// their normals point the same way. "On a plane" with unit normal n means within
 /// relative_tolerance x sum_i |n_i| s_i, where s_i is the largest |coordinate i| of any pole

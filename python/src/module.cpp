@@ -549,7 +549,7 @@ struct Conversion {
     set_items(b, "valid", r.valid, "is_solid", r.is_solid, "faces", r.num_faces, "edges", r.num_edges,
                  "vertices", r.num_vertices, "solids", r.num_solids, "shells", r.num_shells,
                  "check_message", r.check_message, "tolerance", r.tolerance, "planar_faces", r.planar_faces,
-                 "merged_patches", r.merged_patches);
+                 "merged_patches", r.merged_patches, "folded_planar_patches", r.folded_planar_patches);
     return std::move(b);
   }
 

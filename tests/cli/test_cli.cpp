@@ -423,7 +423,7 @@ TEST(CliConvert, ReportDescribesTheSample) {
       "r['fans']['smooth'] == 8 and r['fans']['approximate'] == 0 and r['fans']['approximate_fans'] == []",
       // One face per side of the box (its 2 x 2 quads, each at a valence-3 corner, join across
       // the side's C2 edges; the fan rays along the box's edges stay edges): a box's topology.
-      "r['brep'] == {'faces': 6, 'edges': 12, 'vertices': 8, 'type': 'solid', 'solids': 1, 'shells': 1, 'valid': True, 'tolerance': r['brep']['tolerance'], 'planar_faces': 0, 'merged_patches': 0, 'rejected_planar_faces': 0, 'split_planar_sets': 0}",
+      "r['brep'] == {'faces': 6, 'edges': 12, 'vertices': 8, 'type': 'solid', 'solids': 1, 'shells': 1, 'valid': True, 'tolerance': r['brep']['tolerance'], 'planar_faces': 0, 'merged_patches': 0, 'folded_planar_patches': 0, 'rejected_planar_faces': 0, 'split_planar_sets': 0}",
       "r['continuity']['max_gap'] < 1e-12 and r['continuity']['max_normal_angle_deg'] < 1e-6",
       "abs(r['continuity']['max_gap_relative'] * r['model_size'] - r['continuity']['max_gap']) <= 1e-15 * r['model_size']",
       "0 < r['deviation']['mean'] < r['deviation']['max'] < 0.01 * r['model_size']",

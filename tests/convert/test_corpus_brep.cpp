@@ -15,6 +15,9 @@
 #include <vector>
 
 #include "convert/corpus_brep.h"
+#include "core/nurbs/nurbs_eval.h"
+#include "core/patch/planar_faces.h"
+#include "core/util/tolerances.h"
 
 using namespace subd2nurbs;
 using namespace subd2nurbs::testing;
@@ -99,8 +102,33 @@ TEST_P(CorpusBrepTest, ValidWatertightAndSmooth) { check(GetParam()); }
 TEST_P(CorpusBrepTest, PackedValidWatertightAndSmooth) { check(GetParam(), true); }
 TEST_P(CorpusBrepSlowTest, ValidWatertightAndSmooth) { check(GetParam()); }
 
+// How much area a planar patch covers twice: the integral of the part of its area element
+// dot(X_u x X_v, n) that is negative (a fold in its plane), by the midpoint rule on 32 x 32
+// points per knot span (catmark_val2_back2back: 96 x 96 changes it by 8e-5 of itself).
+double folded_area(const NurbsPatch& patch, const Point3& n) {
+  const PatchEvaluator eval(patch);
+  const auto& U = patch.knots_u.knots;
+  const auto& V = patch.knots_v.knots;
+  constexpr int k = 32;
+  double folded = 0;
+  for (size_t i = 0; i + 1 < U.size(); ++i)
+    for (size_t j = 0; j + 1 < V.size(); ++j) {
+      const double du = (U[i + 1] - U[i]) / k, dv = (V[j + 1] - V[j]) / k;
+      for (int a = 0; a < k; ++a)
+        for (int b = 0; b < k; ++b) {
+          const SurfaceDerivs d = eval.derivs(U[i] + (a + 0.5) * du, V[j] + (b + 0.5) * dv, 1);
+          const Eigen::Vector3d x(d.du[0], d.du[1], d.du[2]), y(d.dv[0], d.dv[1], d.dv[2]);
+          folded += std::max(0.0, -x.cross(y).dot(Eigen::Vector3d(n[0], n[1], n[2]))) * du * dv;
+        }
+    }
+  return folded;
+}
+
 // Coplanar packed faces merged into planar faces (what `convert` writes by default): the same
-// solid as the faces it replaces, with as many fewer faces as were merged.
+// solid as the faces it replaces, with as many fewer faces as were merged. The same area too,
+// less twice what folded faces cover twice (core/patch/planar_faces.h: the planar face covers
+// its region once; a fold's three layers count +1 -1 +1 in the faces' signed area, which is the
+// region's, and three times in their area).
 TEST_P(CorpusBrepTest, PlanarFacesMergedSameSolid) {
   const CorpusBrep r = corpus_brep(GetParam(), 8, true);
   occt::BrepOptions merge;
@@ -115,7 +143,17 @@ TEST_P(CorpusBrepTest, PlanarFacesMergedSameSolid) {
   EXPECT_EQ(sm.solids, sp.solids);
   EXPECT_EQ(sm.shells, sp.shells);
   EXPECT_LE(sm.free_edges, sp.free_edges);
-  EXPECT_NEAR(sm.area, sp.area, 1e-9 * sp.area);
+  double twice = 0;
+  if (m.folded_planar_patches > 0) {
+    const PlanarFaces planar = find_planar_faces(r.packed.set, tolerances::kSameSurface);
+    for (size_t p = 0; p < r.packed.set.patches.size(); ++p)
+      if (planar.folded_patch[p]) twice += 2 * folded_area(r.packed.set.patches[p], planar.faces[planar.face_of_patch[p]].normal);
+    std::printf("  %d folded faces: area %.9g -> %.9g, twice covered %.9g\n", m.folded_planar_patches, sp.area, sm.area, twice / 2);
+    EXPECT_GT(twice, 0);
+  }
+  // (OCCT integrates a folded face's area element, which has a kink where it changes sign, to
+  // about 1e-6 here: catmark_val2_back2back, 1.4e-3 less area, 1.1e-6 off the prediction.)
+  EXPECT_NEAR(sm.area, sp.area - twice, 1e-9 * sp.area + 2e-3 * twice);
   EXPECT_NEAR(sm.volume, sp.volume, 1e-9 * std::abs(sp.volume) + 1e-12);
   EXPECT_LE(sm.max_gap, kMaxRelativeGap * r.expected.diagonal);
 }
