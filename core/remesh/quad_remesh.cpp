@@ -11,7 +11,6 @@
 #include <optional>
 #include <queue>
 #include <string>
-#include <type_traits>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
@@ -514,15 +513,15 @@ void init_position_field(Fields& fl, Check&& check) {
       [&](int v) { fl.o[v] = fl.p[v]; }, check);
 }
 
-// What the position field's sweeps on one level read but never change (the cross field and
-// the positions are fixed by then): each vertex's second lattice direction n x q, and for each
-// neighbour entry of the adjacency the middle point of the two vertices' tangent planes.
 // What a position sweep reads of a neighbour, side by side (one or two cache lines instead of
 // three arrays' worth: the sweeps visit neighbours all over the dense mesh).
 struct PositionNode {
   V3 o, q, t;  // the lattice point, the lattice directions q and t = n x q
 };
 
+// What the position field's sweeps on one level read: per vertex its node (q and t never change
+// then: the cross field is fixed; o follows the sweeps), and for each neighbour entry of the
+// adjacency the middle point of the two vertices' tangent planes (the positions are fixed too).
 struct PositionFrame {
   std::vector<PositionNode> node;  // per vertex; node[v].o follows fl.o[v] through the sweeps
   std::vector<V3> mid;             // per adjacency entry i of v (neighbour adj[i]): middle_point(v, adj[i])
@@ -654,20 +653,15 @@ void build_hierarchy(Hierarchy& h) {
   }
 }
 
-// A sweep takes (fields, vertex) or (fields, vertex, step): step +1 or -1, the sweep's direction.
-template <class Sweep>
-void call_sweep(Sweep& sweep, Fields& fl, int v, int step) {
-  if constexpr (std::is_invocable_v<Sweep&, Fields&, int, int>) sweep(fl, v, step);
-  else sweep(fl, v);
-}
-
+// Gauss-Seidel sweeps, forwards and backwards in turn: sweep(fields, vertex, step), step +1 or
+// -1 the sweep's direction (so that it can fetch the vertices ahead).
 template <class Sweep, class Check>
 void sweeps(Fields& fl, int iterations, Sweep&& sweep, Check&& check) {
   for (int it = 0; it < iterations; ++it) {
     if (it % 2 == 0)
-      for (int v = 0; v < fl.n; ++v) call_sweep(sweep, fl, v, 1);
+      for (int v = 0; v < fl.n; ++v) sweep(fl, v, 1);
     else
-      for (int v = fl.n - 1; v >= 0; --v) call_sweep(sweep, fl, v, -1);
+      for (int v = fl.n - 1; v >= 0; --v) sweep(fl, v, -1);
     check();
   }
 }
@@ -860,8 +854,10 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
     if (cross) {
       std::vector<V3> nq(fl.n);
       for (int v = 0; v < fl.n; ++v) nq[v] = fl.normal[v].cross(fl.q[v]);
+      // The neighbours of the vertex two ahead in the sweep are fetched into the cache while this
+      // one is smoothed (they lie all over the dense mesh: ~15 % less time, the same arithmetic).
       sweeps(fl, iterations, [&](Fields& f, int v, int step) {
-        const int ahead = v + 2 * step;  // as for the positions below
+        const int ahead = v + 2 * step;
         if (ahead >= 0 && ahead < fl.n)
           for (int i = fl.offsets[ahead]; i < fl.offsets[ahead + 1]; ++i) {
             __builtin_prefetch(&fl.q[fl.adj[i]]);
@@ -871,14 +867,10 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
       }, check);
     } else {
       PositionFrame frame = position_frame(fl);
-      // The neighbours of the vertex two ahead in the sweep are fetched into the cache while this
-      // one is smoothed (they lie all over the dense mesh: ~15 % less time, the same arithmetic).
-      auto prefetch = [&](int v) {
-        if (v < 0 || v >= fl.n) return;
-        for (int i = fl.offsets[v]; i < fl.offsets[v + 1]; ++i) __builtin_prefetch(&frame.node[fl.adj[i]]);
-      };
       sweeps(fl, iterations, [&](Fields& f, int v, int step) {
-        prefetch(v + 2 * step);
+        const int ahead = v + 2 * step;  // (as for the cross field)
+        if (ahead >= 0 && ahead < fl.n)
+          for (int i = fl.offsets[ahead]; i < fl.offsets[ahead + 1]; ++i) __builtin_prefetch(&frame.node[fl.adj[i]]);
         smooth_position_vertex(f, frame, v);
       }, check);
     }
