@@ -653,15 +653,23 @@ void build_hierarchy(Hierarchy& h) {
   }
 }
 
-// Gauss-Seidel sweeps, forwards and backwards in turn: sweep(fields, vertex, step), step +1 or
-// -1 the sweep's direction (so that it can fetch the vertices ahead).
-template <class Sweep, class Check>
-void sweeps(Fields& fl, int iterations, Sweep&& sweep, Check&& check) {
+// Gauss-Seidel sweeps, forwards and backwards in turn: sweep(fields, vertex). While a vertex is
+// smoothed, fetch(w) is called for each neighbour w of the vertex two ahead in the sweep, to
+// bring what the sweep will read of w into the cache (neighbours lie all over the dense mesh:
+// ~15 % less time, the same arithmetic).
+template <class Sweep, class Fetch, class Check>
+void sweeps(Fields& fl, int iterations, Sweep&& sweep, Fetch&& fetch, Check&& check) {
+  auto visit = [&](int v, int step) {
+    const int ahead = v + 2 * step;
+    if (ahead >= 0 && ahead < fl.n)
+      for (int i = fl.offsets[ahead]; i < fl.offsets[ahead + 1]; ++i) fetch(fl.adj[i]);
+    sweep(fl, v);
+  };
   for (int it = 0; it < iterations; ++it) {
     if (it % 2 == 0)
-      for (int v = 0; v < fl.n; ++v) sweep(fl, v, 1);
+      for (int v = 0; v < fl.n; ++v) visit(v, 1);
     else
-      for (int v = fl.n - 1; v >= 0; --v) sweep(fl, v, -1);
+      for (int v = fl.n - 1; v >= 0; --v) visit(v, -1);
     check();
   }
 }
@@ -854,25 +862,18 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
     if (cross) {
       std::vector<V3> nq(fl.n);
       for (int v = 0; v < fl.n; ++v) nq[v] = fl.normal[v].cross(fl.q[v]);
-      // The neighbours of the vertex two ahead in the sweep are fetched into the cache while this
-      // one is smoothed (they lie all over the dense mesh: ~15 % less time, the same arithmetic).
-      sweeps(fl, iterations, [&](Fields& f, int v, int step) {
-        const int ahead = v + 2 * step;
-        if (ahead >= 0 && ahead < fl.n)
-          for (int i = fl.offsets[ahead]; i < fl.offsets[ahead + 1]; ++i) {
-            __builtin_prefetch(&fl.q[fl.adj[i]]);
-            __builtin_prefetch(&nq[fl.adj[i]]);
-          }
-        smooth_cross_vertex(f, nq, v);
-      }, check);
+      sweeps(
+          fl, iterations, [&](Fields& f, int v) { smooth_cross_vertex(f, nq, v); },
+          [&](int w) {
+            __builtin_prefetch(&fl.q[w]);
+            __builtin_prefetch(&nq[w]);
+          },
+          check);
     } else {
       PositionFrame frame = position_frame(fl);
-      sweeps(fl, iterations, [&](Fields& f, int v, int step) {
-        const int ahead = v + 2 * step;  // (as for the cross field)
-        if (ahead >= 0 && ahead < fl.n)
-          for (int i = fl.offsets[ahead]; i < fl.offsets[ahead + 1]; ++i) __builtin_prefetch(&frame.node[fl.adj[i]]);
-        smooth_position_vertex(f, frame, v);
-      }, check);
+      sweeps(
+          fl, iterations, [&](Fields& f, int v) { smooth_position_vertex(f, frame, v); },
+          [&](int w) { __builtin_prefetch(&frame.node[w]); }, check);
     }
   }
 }
