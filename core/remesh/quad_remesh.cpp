@@ -2751,6 +2751,16 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       int quads_counted = st.coarse_quads;
       if (st.cap_flips > 0) pair_triangles(d, fl, s, before_caps, dense_of, coarse_feature, quads_counted);
       const int split_faces = 3 * static_cast<int>(tris.size()) - 2 * quads_counted;
+      if (!aim) {  // without a target to aim at, one more run only when the faces clearly exceed the spacing's
+        const double ratio = split_faces * h * h / area;
+        if (attempt == 0 && ratio > 1.3 && !(options.exact_spacing && options.edge_length > 0)) {
+          // This run's cage is not kept: the clean-up, the relocation and the split would be
+          // thrown away (none of them changes the dense mesh or its fields).
+          st.extract_seconds += seconds_since(t1);
+          s *= std::sqrt(ratio);
+          continue;
+        }
+      }
       if (options.cleanup) {  // quad-dominant clean-up (core/remesh/quad_cleanup.h, docs/remesh.md step 6b)
         std::vector<V3> positions, normals;
         std::vector<char> corner;
@@ -2777,14 +2787,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       st.extract_seconds += seconds_since(t1);
       st.attempts = attempt + 1;
       st.spacing = s;
-      if (!aim) {
-        double ratio = split_faces * h * h / area;
-        if (attempt == 0 && ratio > 1.3 && !(options.exact_spacing && options.edge_length > 0)) {
-          s *= std::sqrt(ratio);
-          continue;
-        }
-        break;
-      }
+      if (!aim) break;  // (the one rerun was decided above)
       if (size_aim.add(s, result.cage.num_faces())) {
         best_cage = result.cage;
         best_stats = st;
