@@ -12,6 +12,8 @@ Per mesh and repetition, each in a fresh process:
   * ours: `subd2nurbs convert MESH -o X.step --report R.json --keep-cage C.obj -q`: wall time and
     peak memory (GNU time), the report's remesh time, cage quads and extraordinary vertices,
     B-rep faces, two-sided distance to the mesh after the fit, the feature angle difference;
+    then the same with `--threads 1`, for its remesh time alone (the remesher's field sweeps use
+    the conversion's threads; Blender builds QuadriFlow single-threaded);
   * QuadriFlow: `blender -b --python` with bpy.ops.object.quadriflow_remesh(target_faces = our
     cage's quads, use_preserve_sharp, use_preserve_boundary, seed 0): its own remesh time, quads,
     extraordinary vertices, boundary loops (spurious holes: more loops than the mesh has); then
@@ -296,6 +298,15 @@ def main():
                    "vertices": m["cage"]["vertices"], "brep_faces": r["brep"]["faces"],
                    "distance": two_sided(m["fit"]["after"]), "feature_diff": m["feature_angles"]["max_difference_deg"],
                    "triangles": m["input_triangles"], "boundaries_in": None}
+            # The same conversion on one thread: our remesh's field sweeps use the conversion's
+            # threads (docs/remesh.md "Threads"); Blender builds QuadriFlow without threads.
+            one_report = os.path.join(tmp, "r1.json")
+            run([exe, "convert", src, "-o", step, "--report", one_report, "-q", "--threads", "1"] + extra, tmp)
+            m1 = json.load(open(one_report))["mesh"]
+            size1 = m1.get("size", {})
+            kept1 = size1["rounds"][size1["kept_round"]] if size1.get("rounds") else None
+            row["remesh_kept_1t_s"] = (kept1["remesh_ms"] if kept1 and "remesh_ms" in kept1 else m1["ms"]["remesh"]) / 1000
+            row["field_threads"] = m["cage"].get("field_threads")
             if original and rep == 0:  # a scan of a known cage's limit: our fitted limit against that
                 # limit (once: the cages are deterministic)
                 row["limit_max"], row["limit_rms"] = distance_to_limit(exe, cage, original[0], tmp)
@@ -347,22 +358,25 @@ def print_table(results, reps):
           "extraordinary vertices / all vertices.\n" % reps)
     print("| mesh | triangles | ours: wall | peak RSS | remesh: kept round (all rounds) | quads | EV | B-rep faces | distance | feature angle "
           "error | QuadriFlow: remesh (Blender process wall, peak RSS) | quads (+ other) | EV | boundary loops | distance after our fit | B-rep faces | "
-          "remesh time ratio ours/theirs |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "remesh time ratio ours/theirs | ours on one thread: remesh (field threads before) | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for res in results:
         rows = res["runs"]
         ev = med(rows, "ev") / max(1, med(rows, "vertices"))
         qf_ev = med(rows, "qf_ev")
         qf_fraction = None if qf_ev is None else qf_ev / max(1, med(rows, "qf_quads"))  # V ~ F for closed quads
         ratio = None if med(rows, "qf_s") is None else med(rows, "remesh_kept_s") / med(rows, "qf_s")
-        print("| %s | %d | %s s | %s MB | %s s (%s s, %s) | %d | %s | %d | %s | %s deg | %s s (%s s, %s MB) | %s (+%s) | %s | %s | %s | %s | %s |" % (
+        ratio_1t = None if med(rows, "qf_s") is None or med(rows, "remesh_kept_1t_s") is None else \
+            med(rows, "remesh_kept_1t_s") / med(rows, "qf_s")
+        print("| %s | %d | %s s | %s MB | %s s (%s s, %s) | %d | %s | %d | %s | %s deg | %s s (%s s, %s MB) | %s (+%s) | %s | %s | %s | %s | %s | %s s (%s) | %s |" % (
             res["mesh"], med(rows, "triangles"), fmt(med(rows, "wall"), ".2f"), fmt(med(rows, "rss") / 1024, ".0f"),
             fmt(med(rows, "remesh_kept_s"), ".2f"), fmt(med(rows, "remesh_s"), ".2f"), fmt(med(rows, "rounds"), ".0f"), med(rows, "quads"), fmt(ev, ".3f"), med(rows, "brep_faces"),
             fmt(med(rows, "distance"), ".2e"), fmt(med(rows, "feature_diff"), ".1f"), fmt(med(rows, "qf_s"), ".2f"), fmt(med(rows, "qf_wall"), ".1f"),
             fmt(None if med(rows, "qf_rss") is None else med(rows, "qf_rss") / 1024, ".0f"),
             fmt(med(rows, "qf_quads"), "d"), fmt(med(rows, "qf_other"), "d"), fmt(qf_fraction, ".3f"),
             fmt(med(rows, "qf_loops"), "d"), fmt(med(rows, "qf_distance"), ".2e"), fmt(med(rows, "qf_brep_faces"), "d"),
-            fmt(ratio, ".2f")))
+            fmt(ratio, ".2f"), fmt(med(rows, "remesh_kept_1t_s"), ".2f"), fmt(med(rows, "field_threads"), ".0f"),
+            fmt(ratio_1t, ".2f")))
     print()
     known = [res for res in results if res.get("original_cage_faces")]
     if known:

@@ -407,7 +407,7 @@ void write_stats(JsonWriter& w, const QuadRemeshStats& r) {
   w.members("cleanup_rotations", r.cleanup_rotations, "cleanup_merges", r.cleanup_merges, "relocations", r.relocations,
             "concave_sectors", r.concave_sectors, "sliver_flips", r.sliver_flips, "cap_flips", r.cap_flips, "tight_loops", r.tight_loops);
   w.members("field_singularities", r.field_singularities, "position_dislocations", r.position_dislocations,
-            "position_dislocations_left", r.position_dislocations_left);
+            "position_dislocations_left", r.position_dislocations_left, "field_threads", r.field_threads);
   w.members("euler_characteristic", r.euler_cage, "boundaries", r.boundaries_cage, "components", r.components_cage);
   w.end_object();
 }

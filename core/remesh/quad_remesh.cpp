@@ -21,6 +21,8 @@
 #include "core/remesh/quad_cleanup.h"
 #include "core/util/constants.h"
 #include "core/util/error.h"
+#include "core/util/parallel.h"
+#include "core/util/wave_sweeps.h"
 
 namespace subd2nurbs {
 namespace {
@@ -654,24 +656,16 @@ void build_hierarchy(Hierarchy& h) {
 }
 
 // Gauss-Seidel sweeps, forwards and backwards in turn: sweep(fields, vertex). While a vertex is
-// smoothed, fetch(w) is called for each neighbour w of the vertex two ahead in the sweep, to
-// bring what the sweep will read of w into the cache (neighbours lie all over the dense mesh:
-// ~15 % less time, the same arithmetic).
+// smoothed, fetch(w) is called for each neighbour w of the vertex two ahead, to bring what the
+// sweep will read of w into the cache (neighbours lie all over the dense mesh: ~15 % less time,
+// the same arithmetic). On the threads the conversion may use, in waves of vertices that are no
+// neighbours of each other, with the sequential sweeps' result bit for bit (core/util/wave_sweeps.h).
+// Returns the threads used.
 template <class Sweep, class Fetch, class Check>
-void sweeps(Fields& fl, int iterations, Sweep&& sweep, Fetch&& fetch, Check&& check) {
-  auto visit = [&](int v, int step) {
-    const int ahead = v + 2 * step;
-    if (ahead >= 0 && ahead < fl.n)
-      for (int i = fl.offsets[ahead]; i < fl.offsets[ahead + 1]; ++i) fetch(fl.adj[i]);
-    sweep(fl, v);
-  };
-  for (int it = 0; it < iterations; ++it) {
-    if (it % 2 == 0)
-      for (int v = 0; v < fl.n; ++v) visit(v, 1);
-    else
-      for (int v = fl.n - 1; v >= 0; --v) visit(v, -1);
-    check();
-  }
+int sweeps(Fields& fl, int iterations, Sweep&& sweep, Fetch&& fetch, Check&& check) {
+  const int threads = std::min(loop_threads(), available_threads());
+  return gauss_seidel_sweeps(
+      fl.offsets, fl.adj, iterations, threads, [&](int v) { sweep(fl, v); }, fetch, check);
 }
 
 // Lattice columns at feature arcs tighter than the lattice (docs/remesh.md step 3). Where a chain
@@ -827,8 +821,10 @@ void pin_tight_arcs(Hierarchy& h) {
 
 // Both fields solved coarse to fine: initialised on the coarsest level, smoothed there, carried
 // to each finer level (projected onto its tangent planes, constraints applied) and smoothed again.
+// Returns the threads the finest (dense) level's sweeps used.
 template <class Check>
-void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
+int solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
+  int threads = 1;
   int top = static_cast<int>(h.levels.size()) - 1;
   if (!cross) pin_tight_arcs(h);
   if (cross)
@@ -862,7 +858,7 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
     if (cross) {
       std::vector<V3> nq(fl.n);
       for (int v = 0; v < fl.n; ++v) nq[v] = fl.normal[v].cross(fl.q[v]);
-      sweeps(
+      threads = sweeps(
           fl, iterations, [&](Fields& f, int v) { smooth_cross_vertex(f, nq, v); },
           [&](int w) {
             __builtin_prefetch(&fl.q[w]);
@@ -871,11 +867,12 @@ void solve_fields(Hierarchy& h, int iterations, bool cross, Check&& check) {
           check);
     } else {
       PositionFrame frame = position_frame(fl);
-      sweeps(
+      threads = sweeps(
           fl, iterations, [&](Fields& f, int v) { smooth_position_vertex(f, frame, v); },
           [&](int w) { __builtin_prefetch(&frame.node[w]); }, check);
     }
   }
+  return threads;
 }
 
 V3 closest_on_segment(const V3& x, const V3& a, const V3& b) {
@@ -2695,7 +2692,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
     build_hierarchy(hier);
     Fields& fl = hier.levels[0];
     int iterations = options.smoothing_iterations > 0 ? options.smoothing_iterations : 30;
-    solve_fields(hier, iterations, true, [&]() { check(0.25); });
+    st.field_threads = solve_fields(hier, iterations, true, [&]() { check(0.25); });
     count_singularities(d, hier.levels[0], st);
     // Position field and extraction, and the size check (docs/remesh.md step 7): with a target
     // count (aim_at_target), until the faces are within the band (SizeAim), the spacing corrected
@@ -2711,7 +2708,7 @@ QuadRemeshResult quad_remesh(const MeshInput& mesh, const QuadRemeshOptions& opt
       result.cage = MeshInput{};
       auto t_position = Clock::now();
       for (Fields& level : hier.levels) level.s = s;
-      solve_fields(hier, iterations, false, [&]() { check(0.5); });
+      st.field_threads = std::max(st.field_threads, solve_fields(hier, iterations, false, [&]() { check(0.5); }));
       st.field_seconds += seconds_since(attempt == 0 ? t0 : t_position);
       auto t1 = Clock::now();
       Collapser col(d, fl, kChainSag);

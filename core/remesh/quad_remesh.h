@@ -78,6 +78,10 @@ struct QuadRemeshStats {
   /// closed mesh 4 x its Euler characteristic (Poincare-Hopf: the test QuadRemesh.FieldSingularitiesSumToEuler).
   int field_index_sum = 0;
   double field_seconds = 0, extract_seconds = 0;  ///< wall time per stage
+  /// Threads the fields' sweeps on the dense mesh ran on (the conversion's threads, 1 where the
+  /// mesh's vertex order leaves too little to share; the cage is the same either way:
+  /// core/util/wave_sweeps.h, docs/remesh.md "Threads").
+  int field_threads = 1;
   int dense_vertices = 0;      ///< vertices of the input after long edges were split (the fields' domain)
   int coarse_triangles = 0;    ///< triangles left unpaired after the extraction (each becomes 3 quads)
   int coarse_quads = 0;        ///< quads paired by the extraction (each becomes 4 quads)
