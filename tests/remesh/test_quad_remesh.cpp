@@ -470,16 +470,21 @@ TEST(QuadRemesh, TargetCountIsMet) {
   }
 }
 
+// The same cage bit for bit: positions, faces and crease tags.
+void expect_same_cage(const MeshInput& a, const MeshInput& b) {
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.face_indices, b.face_indices);
+  ASSERT_EQ(a.creases.size(), b.creases.size());
+  for (size_t i = 0; i < a.creases.size(); ++i) {
+    EXPECT_EQ(a.creases[i].v0, b.creases[i].v0);
+    EXPECT_EQ(a.creases[i].v1, b.creases[i].v1);
+  }
+}
+
 TEST(QuadRemesh, Deterministic) {
   MeshInput m = test::drilled_box(0.4, 32, 6, 8);
   QuadRemeshResult a = remesh(m, 250), b = remesh(m, 250);
-  EXPECT_EQ(a.cage.positions, b.cage.positions);
-  EXPECT_EQ(a.cage.face_indices, b.cage.face_indices);
-  ASSERT_EQ(a.cage.creases.size(), b.cage.creases.size());
-  for (size_t i = 0; i < a.cage.creases.size(); ++i) {
-    EXPECT_EQ(a.cage.creases[i].v0, b.cage.creases[i].v0);
-    EXPECT_EQ(a.cage.creases[i].v1, b.cage.creases[i].v1);
-  }
+  expect_same_cage(a.cage, b.cage);
 }
 
 // m with its vertices relabelled at random (as an STL's welded triangle soup numbers them), the
@@ -513,13 +518,7 @@ TEST(QuadRemesh, ThreadsGiveTheSameCage) {
   check_cage(m, two, 250);
   EXPECT_EQ(one.stats.field_threads, 1);
   EXPECT_EQ(two.stats.field_threads, std::min(2, hardware_threads()));
-  EXPECT_EQ(one.cage.positions, two.cage.positions);
-  EXPECT_EQ(one.cage.face_indices, two.cage.face_indices);
-  ASSERT_EQ(one.cage.creases.size(), two.cage.creases.size());
-  for (size_t i = 0; i < one.cage.creases.size(); ++i) {
-    EXPECT_EQ(one.cage.creases[i].v0, two.cage.creases[i].v0);
-    EXPECT_EQ(one.cage.creases[i].v1, two.cage.creases[i].v1);
-  }
+  expect_same_cage(one.cage, two.cage);
 }
 
 TEST(QuadRemesh, EdgeLengthSetsTheSize) {
