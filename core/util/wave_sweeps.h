@@ -98,13 +98,14 @@ int gauss_seidel_sweeps(const std::vector<int>& offsets, const std::vector<int>&
     for (int i = offsets[w]; i < offsets[w + 1]; ++i) prefetch(adj[i]);
   };
   SweepWaves waves[2];
-  if (threads > 1 && n >= 2 * kMinWavePerThread * threads) {
+  if (n < 2 * kMinWavePerThread * threads) threads = 1;  // too few vertices to share
+  if (threads > 1) {  // as many threads as the waves are wide enough for
     waves[0] = sweep_waves(offsets, adj, true);
     waves[1] = sweep_waves(offsets, adj, false);
     const int deepest = std::max(waves[0].count(), waves[1].count());
     threads = std::min(threads, n / (std::max(deepest, 1) * kMinWavePerThread));
   }
-  if (threads <= 1 || n < 2 * kMinWavePerThread * threads) {
+  if (threads <= 1) {
     for (int it = 0; it < iterations; ++it) {
       const int step = it % 2 == 0 ? 1 : -1;
       for (int k = 0; k < n; ++k) {
