@@ -288,11 +288,8 @@ def main():
             r = json.load(open(report))
             m = r["mesh"]
             size = m.get("size", {})
-            kept = size["rounds"][size["kept_round"]] if size.get("rounds") else None
             row = {"wall": wall, "rss": rss, "remesh_s": m["ms"]["remesh"] / 1000, "fit_s": m["ms"]["fit"] / 1000,
-                   # The kept round's remesh alone (the size rule may remesh more than once; QuadriFlow
-                   # runs once, at the kept cage's size): the like-for-like remesh time.
-                   "remesh_kept_s": kept["remesh_ms"] / 1000 if kept and "remesh_ms" in kept else m["ms"]["remesh"] / 1000,
+                   "remesh_kept_s": kept_remesh_seconds(m),
                    "rounds": len(size.get("rounds", [])) or 1,
                    "quads": m["cage"]["faces"], "ev": m["cage"]["extraordinary_vertices"],
                    "vertices": m["cage"]["vertices"], "brep_faces": r["brep"]["faces"],
@@ -302,10 +299,7 @@ def main():
             # threads (docs/remesh.md "Threads"); Blender builds QuadriFlow without threads.
             one_report = os.path.join(tmp, "r1.json")
             run([exe, "convert", src, "-o", step, "--report", one_report, "-q", "--threads", "1"] + extra, tmp)
-            m1 = json.load(open(one_report))["mesh"]
-            size1 = m1.get("size", {})
-            kept1 = size1["rounds"][size1["kept_round"]] if size1.get("rounds") else None
-            row["remesh_kept_1t_s"] = (kept1["remesh_ms"] if kept1 and "remesh_ms" in kept1 else m1["ms"]["remesh"]) / 1000
+            row["remesh_kept_1t_s"] = kept_remesh_seconds(json.load(open(one_report))["mesh"])
             row["field_threads"] = m["cage"].get("field_threads")
             if original and rep == 0:  # a scan of a known cage's limit: our fitted limit against that
                 # limit (once: the cages are deterministic)
@@ -338,6 +332,14 @@ def main():
     if os.environ.get("BENCH_MESHES_RAW"):
         json.dump(results, open(os.environ["BENCH_MESHES_RAW"], "w"), indent=1)
     print_table(results, reps)
+
+
+def kept_remesh_seconds(mesh_report):
+    """The kept round's remesh alone, from a report's `mesh` member (the size rule may remesh more
+    than once; QuadriFlow runs once, at the kept cage's size): the like-for-like remesh time."""
+    size = mesh_report.get("size", {})
+    kept = size["rounds"][size["kept_round"]] if size.get("rounds") else None
+    return (kept["remesh_ms"] if kept and "remesh_ms" in kept else mesh_report["ms"]["remesh"]) / 1000
 
 
 def med(rows, key):
